@@ -1,0 +1,294 @@
+"""Steady-motion analysis on the stroboscopic section σn: period, detachments, stability.
+
+Everything here works on numbers the kernel hands over (section points, one-
+revolution Jacobians, per-revolution statistics); nothing here integrates.
+
+History layout (filled by the kernel, one row per revolution):
+
+* ``xs[j]`` — section point (y, y') at θ = 0 after j revolutions (xs[0] = start);
+* ``jac[j-1]`` — Jacobian of the one-revolution map P at xs[j-1], row-major 4;
+* ``revs[j-1]`` — statistics of revolution j (columns ``REV_*``).
+
+Transient policy ("converged"): after every revolution, for each candidate
+period n ≤ n_max, the fixed point z of P^n is estimated by one Newton step
+from xs[k-n] → xs[k] with M = DP^n (product of the last n Jacobians). The
+cell has converged with period n when z lies within ``conv_tol`` of xs[k] and
+within ``window_tol`` of xs[k-n] and M is stable. Unlike a plain repeat test
+|xs[k] − xs[k−n]| < tol, this measures the distance to the cycle itself, so a
+slowly converging 1-cycle (multiplier near −1) cannot pass as a 2-cycle. Where
+no period has converged yet, a capped Newton jump to z of the smallest
+plausible period shortens the transient; the jump is only a new start, the
+cycle is accepted by the same test afterwards.
+"""
+
+import math
+
+from numba import njit
+
+from .hermite import hermite_extremum
+from .status import CHAOTIC, QUASIPERIODIC, UNCONVERGED
+
+# Columns of the per-revolution statistics.
+REV_T_FREE = 0  # time with ε < 0 (separated)
+REV_DETACH = 1  # detachments (ε crossing 0 downward)
+REV_EPS_MIN = 2
+REV_EPS_MAX = 3
+REV_PN_MAX = 4
+REV_LOG_STRETCH = 5  # growth of the tangent vector (Lyapunov exponent)
+N_REV_STATS = 6
+
+
+@njit(cache=True)
+def mat2_mul(a, b):
+    """Product of 2×2 matrices given as row-major 4-tuples."""
+    return (
+        a[0] * b[0] + a[1] * b[2],
+        a[0] * b[1] + a[1] * b[3],
+        a[2] * b[0] + a[3] * b[2],
+        a[2] * b[1] + a[3] * b[3],
+    )
+
+
+@njit(cache=True)
+def eig2(m):
+    """Eigenvalues of a real 2×2 matrix: (re0, im0, re1, im1), |λ0| ≥ |λ1|."""
+    tr = m[0] + m[3]
+    det = m[0] * m[3] - m[1] * m[2]
+    disc = 0.25 * tr * tr - det
+    if disc >= 0.0:
+        s = math.sqrt(disc)
+        l0 = 0.5 * tr + s if tr >= 0.0 else 0.5 * tr - s
+        # the smaller root from det / l0 avoids cancellation
+        l1 = det / l0 if l0 != 0.0 else 0.5 * tr - s
+        if abs(l1) > abs(l0):
+            l0, l1 = l1, l0
+        return l0, 0.0, l1, 0.0
+    s = math.sqrt(-disc)
+    return 0.5 * tr, s, 0.5 * tr, -s
+
+
+@njit(cache=True)
+def spectral_radius(m):
+    re0, im0, _, _ = eig2(m)
+    return math.hypot(re0, im0)
+
+
+@njit(cache=True)
+def jacobian_at(jac, j):
+    """The one-revolution Jacobian stored in row j as a 4-tuple."""
+    return jac[j, 0], jac[j, 1], jac[j, 2], jac[j, 3]
+
+
+@njit(cache=True)
+def cycle_jacobian(jac, k, n):
+    """DP^n at xs[k-n]: the product J_k ⋯ J_{k-n+1} of the last n revolutions."""
+    m = jacobian_at(jac, k - 1)
+    for j in range(k - 2, k - n - 1, -1):
+        m = mat2_mul(m, jacobian_at(jac, j))
+    return m
+
+
+@njit(cache=True)
+def newton_fixed_point(x_now0, x_now1, x_then0, x_then1, m):
+    """Fixed point z of P^n by one Newton step, given P^n(x_then) = x_now and M = DP^n.
+
+    Solves (I − M) δ = x_now − x_then, z = x_then + δ. Returns (z0, z1,
+    |z − x_now|∞, |z − x_then|∞); infinite distances when I − M is singular.
+    """
+    r0 = x_now0 - x_then0
+    r1 = x_now1 - x_then1
+    a00 = 1.0 - m[0]
+    a01 = -m[1]
+    a10 = -m[2]
+    a11 = 1.0 - m[3]
+    det = a00 * a11 - a01 * a10
+    if det == 0.0 or not math.isfinite(det):
+        return x_now0, x_now1, math.inf, math.inf
+    d0 = (a11 * r0 - a01 * r1) / det
+    d1 = (a00 * r1 - a10 * r0) / det
+    z0 = x_then0 + d0
+    z1 = x_then1 + d1
+    return z0, z1, max(abs(z0 - x_now0), abs(z1 - x_now1)), max(abs(d0), abs(d1))
+
+
+@njit(cache=True)
+def assess_revolution(xs, jac, k, base, n_max, conv_tol, window_tol, jump_r_max, jump_cap):
+    """Decide, after revolution k, whether the motion has converged to a cycle.
+
+    Only revolutions after ``base`` (the last restart) are used. Returns
+    (period, jump_period, z0, z1): period > 0 when the cycle of that period has
+    converged; otherwise jump_period > 0 proposes a Newton jump to (z0, z1).
+    """
+    jump_n = 0
+    jz0 = 0.0
+    jz1 = 0.0
+    avail = min(n_max, k - base)
+    if avail < 1:
+        return 0, 0, 0.0, 0.0
+    m = jacobian_at(jac, k - 1)
+    for n in range(1, avail + 1):
+        if n > 1:
+            m = mat2_mul(m, jacobian_at(jac, k - n))
+        r = max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1]))
+        if not r <= jump_r_max:
+            continue
+        if not spectral_radius(m) < 1.0:
+            continue  # an unstable cycle cannot be the steady motion
+        z0, z1, dist_now, dist_then = newton_fixed_point(
+            xs[k, 0], xs[k, 1], xs[k - n, 0], xs[k - n, 1], m
+        )
+        if dist_now <= conv_tol and dist_then <= window_tol:
+            return n, 0, z0, z1
+        if jump_n == 0 and dist_now <= jump_cap:
+            jump_n = n
+            jz0 = z0
+            jz1 = z1
+    return 0, jump_n, jz0, jz1
+
+
+@njit(cache=True)
+def distinct_period(xs, k, n, tol):
+    """Number of distinct points (within tol, ∞-norm) of the n-cycle xs[k-n+1..k].
+
+    The smallest divisor m of n with xs[i] ≈ xs[i+m] around the cycle.
+    """
+    for m in range(1, n):
+        if n % m != 0:
+            continue
+        same = True
+        for i in range(k - n + 1, k + 1):
+            j = i + m
+            if j > k:
+                j -= n
+            if abs(xs[i, 0] - xs[j, 0]) > tol or abs(xs[i, 1] - xs[j, 1]) > tol:
+                same = False
+                break
+        if same:
+            return m
+    return n
+
+
+@njit(cache=True)
+def repeat_period(xs, first, last, n_max, tol):
+    """Smallest n ≤ n_max with |xs[j] − xs[j−n]| ≤ tol for every j in (first+n … last].
+
+    The plain repeat test of a fixed transient; needs last − first ≥ 2n so the
+    pattern is seen twice. Returns 0 when no such n exists.
+    """
+    for n in range(1, n_max + 1):
+        if last - first < 2 * n:
+            break
+        ok = True
+        for j in range(first + n, last + 1):
+            if abs(xs[j, 0] - xs[j - n, 0]) > tol or abs(xs[j, 1] - xs[j - n, 1]) > tol:
+                ok = False
+                break
+        if ok:
+            return n
+    return 0
+
+
+@njit(cache=True)
+def reset_revolution_stats(row):
+    row[REV_T_FREE] = 0.0
+    row[REV_DETACH] = 0.0
+    row[REV_EPS_MIN] = math.inf
+    row[REV_EPS_MAX] = -math.inf
+    row[REV_PN_MAX] = 0.0
+    row[REV_LOG_STRETCH] = 0.0
+
+
+@njit(cache=True)
+def cubic_extremes(g0, d0, g1, d1):
+    """Min and max over [0, 1] of the cubic Hermite model (slopes per unit θ)."""
+    lo = min(g0, g1)
+    hi = max(g0, g1)
+    th, val = hermite_extremum(g0, d0, g1, d1, True)
+    if th > 0.0:
+        lo = min(lo, val)
+    th, val = hermite_extremum(g0, d0, g1, d1, False)
+    if th > 0.0:
+        hi = max(hi, val)
+    return lo, hi
+
+
+@njit(cache=True)
+def add_step_stats(row, h, free, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
+    """Fold one step into a revolution's statistics (ε and Pn with rates at both ends).
+
+    Extremes inside the step come from cubic Hermite models, accurate to O(h⁴).
+    """
+    if free:
+        row[REV_T_FREE] += h
+    lo, hi = cubic_extremes(e0, de0 * h, e1, de1 * h)
+    row[REV_EPS_MIN] = min(row[REV_EPS_MIN], lo)
+    row[REV_EPS_MAX] = max(row[REV_EPS_MAX], hi)
+    if not free:
+        _, pn_hi = cubic_extremes(pn0, dpn0 * h, pn1, dpn1 * h)
+        row[REV_PN_MAX] = max(row[REV_PN_MAX], pn_hi)
+
+
+@njit(cache=True)
+def window_stats(revs, first, count):
+    """Combine revolutions first … first+count−1: (time separated, detachments,
+    ε min, ε max, Pn max, mean log-stretch per revolution)."""
+    t_free = 0.0
+    detach = 0.0
+    eps_min = math.inf
+    eps_max = -math.inf
+    pn_max = 0.0
+    stretch = 0.0
+    for j in range(first, first + count):
+        t_free += revs[j, REV_T_FREE]
+        detach += revs[j, REV_DETACH]
+        eps_min = min(eps_min, revs[j, REV_EPS_MIN])
+        eps_max = max(eps_max, revs[j, REV_EPS_MAX])
+        pn_max = max(pn_max, revs[j, REV_PN_MAX])
+        stretch += revs[j, REV_LOG_STRETCH]
+    return t_free, detach, eps_min, eps_max, pn_max, stretch / max(count, 1)
+
+
+@njit(cache=True)
+def stretch_tangent(j, u):
+    """Apply a one-revolution Jacobian to the unit tangent u; return log of the growth."""
+    w0 = j[0] * u[0] + j[1] * u[1]
+    w1 = j[2] * u[0] + j[3] * u[1]
+    norm = math.hypot(w0, w1)
+    if not (norm > 0.0 and math.isfinite(norm)):
+        u[0] = 1.0
+        u[1] = 0.0
+        return -math.inf if norm == 0.0 else math.inf
+    u[0] = w0 / norm
+    u[1] = w1 / norm
+    return math.log(norm)
+
+
+@njit(cache=True)
+def nonperiodic_kind(lyapunov_per_revolution, lyap_tol):
+    """Kind of a motion without period ≤ n_max, from its largest Lyapunov exponent.
+
+    > tol: chaotic; within ±tol: quasi-periodic (an invariant circle has a zero
+    exponent); < −tol: a stable orbit not yet reached or of longer period.
+    """
+    if lyapunov_per_revolution > lyap_tol:
+        return CHAOTIC
+    if lyapunov_per_revolution >= -lyap_tol:
+        return QUASIPERIODIC
+    return UNCONVERGED
+
+
+@njit(cache=True)
+def multipliers_of(m, out):
+    """Floquet multipliers (eigenvalues of DP^n) into out[0..1, re/im]."""
+    re0, im0, re1, im1 = eig2(m)
+    out[0, 0] = re0
+    out[0, 1] = im0
+    out[1, 0] = re1
+    out[1, 1] = im1
+
+
+@njit(cache=True)
+def near_unit_circle(m, margin):
+    """True when a multiplier of M lies within margin of the unit circle."""
+    re0, im0, re1, im1 = eig2(m)
+    return abs(math.hypot(re0, im0) - 1.0) < margin or abs(math.hypot(re1, im1) - 1.0) < margin

@@ -1,0 +1,400 @@
+"""Explicit Runge–Kutta stepping with dense output, step control and event location.
+
+Methods: Dormand–Prince 5(4) (Dormand & Prince 1980) with the 4th-order
+continuous extension of Shampine (1986) and Hairer's PI step-size control, and
+the classical fixed-step RK4 (the paper's method family) with cubic Hermite
+dense output.
+
+The integrator knows nothing of cams. It sees
+
+* ``rhs(t, y, p, mode, dy)`` — a vector field that is smooth while ``mode``
+  (an int array, the discrete state of a hybrid system) is fixed;
+* ``events(t, y, p, mode, g) -> m`` and ``event_rates(t, y, f, p, mode, dg)`` —
+  m event functions, positive while the mode holds, and their time rates;
+* ``t_end`` — a breakpoint that a step must end on exactly.
+
+``advance`` takes one accepted step and ends it early, exactly on the first
+root of an event function, so every step integrates a smooth field. Roots are
+found on the dense output; a pair of roots inside one step is caught from the
+cubic Hermite model of g built from its values and rates at both ends.
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from .hermite import hermite_extremum
+from .status import NONFINITE, OK, STEP_UNDERFLOW
+
+DP54 = 0
+RK4 = 1
+
+# Dormand–Prince 5(4) tableau (Butcher notation: nodes C, matrix A, weights B).
+C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
+A = np.array(
+    [
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [1 / 5, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [3 / 40, 9 / 40, 0.0, 0.0, 0.0, 0.0],
+        [44 / 45, -56 / 15, 32 / 9, 0.0, 0.0, 0.0],
+        [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0.0, 0.0],
+        [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0.0],
+        [35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84],
+    ]
+)
+B = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0.0])
+# Error weights: 5th-order minus embedded 4th-order solution (7 stages, FSAL).
+E = np.array([-71 / 57600, 0.0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525, 1 / 40])
+# Dense output: y(t + θh) = y + h Σ_j (K^T P)_j θ^{j+1} (Shampine 1986, as in SciPy).
+P = np.array(
+    [
+        [1.0, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799],
+        [0.0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072],
+        [0.0, 127303824393 / 49829197408, -318862633887 / 49829197408, 701980252875 / 199316789632],
+        [0.0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
+        [0.0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
+    ]
+)
+N_STAGES = 7
+
+# Step-size control (Hairer, Nørsett & Wanner, DOPRI5): PI controller.
+SAFETY = 0.9  # aim below the tolerance so the next step is likely accepted
+MIN_FACTOR = 0.2  # never shrink by more than 5× at once
+MAX_FACTOR = 10.0  # never grow by more than 10× at once
+PI_BETA = 0.04  # weight of the previous error; damps oscillation at the stability limit
+ERROR_EXPONENT = 0.2 - 0.75 * PI_BETA
+MAX_REJECTS = 60  # consecutive rejections before the step is declared underflowed
+# A step that would leave less than this fraction of itself before t_end is stretched.
+STRETCH = 0.01
+LOCATE_MAX_ITER = 80
+
+
+class SolverOptions(NamedTuple):
+    """Integrator settings; times in the dimensionless units of the field."""
+
+    method: int  # DP54 or RK4
+    rtol: float
+    atol: float
+    h_fixed: float  # RK4 step size (DP54: unused)
+    h_min: float  # step-size floor; below it the step underflows
+    event_tol: float  # absolute tolerance of an event time
+    n_err: int  # the first n_err components are error-controlled
+
+
+class StepWork(NamedTuple):
+    """Caller-owned buffers for ``advance``; build with ``make_work``."""
+
+    K: np.ndarray  # (7, n) stage derivatives; K[6] = f at the step end (FSAL)
+    y_new: np.ndarray  # (n,) state at the step end
+    y_stage: np.ndarray  # (n,) stage argument, dense value
+    g0: np.ndarray  # event values and rates at the step start
+    dg0: np.ndarray
+    g1: np.ndarray  # … at the step end
+    dg1: np.ndarray
+    g_tmp: np.ndarray
+    ctrl: np.ndarray  # [proposed h, previous error norm]
+    counts: np.ndarray  # [accepted steps, rejected steps, field evaluations]
+
+
+@njit(cache=True)
+def make_work(n, max_events, h0):
+    """Buffers for an n-dimensional state with up to max_events event functions."""
+    counts = np.zeros(3, dtype=np.int64)
+    ctrl = np.array([h0, 1e-4])
+    return StepWork(
+        np.zeros((N_STAGES, n)),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros(max_events),
+        np.zeros(max_events),
+        np.zeros(max_events),
+        np.zeros(max_events),
+        np.zeros(max_events),
+        ctrl,
+        counts,
+    )
+
+
+@njit(cache=True)
+def dp54_step(rhs, t, y, f, h, p, mode, w):
+    """One Dormand–Prince step of size h from (t, y) with f = rhs(t, y).
+
+    Fills w.K (all 7 stages, K[6] = rhs at the new point) and w.y_new.
+    """
+    n = y.shape[0]
+    K = w.K
+    for i in range(n):
+        K[0, i] = f[i]
+    for s in range(1, N_STAGES):
+        for i in range(n):
+            acc = 0.0
+            for j in range(s):
+                acc += A[s, j] * K[j, i]
+            w.y_stage[i] = y[i] + h * acc
+        rhs(t + C[s] * h, w.y_stage, p, mode, K[s])
+    for i in range(n):  # stage 7 is evaluated at y_new (A[6] = B)
+        w.y_new[i] = w.y_stage[i]
+    w.counts[2] += N_STAGES - 1
+
+
+@njit(cache=True)
+def rk4_step(rhs, t, y, f, h, p, mode, w):
+    """One classical RK4 step; K[0..3] hold the stages, K[6] = rhs at the new point."""
+    n = y.shape[0]
+    K = w.K
+    for i in range(n):
+        K[0, i] = f[i]
+        w.y_stage[i] = y[i] + 0.5 * h * K[0, i]
+    rhs(t + 0.5 * h, w.y_stage, p, mode, K[1])
+    for i in range(n):
+        w.y_stage[i] = y[i] + 0.5 * h * K[1, i]
+    rhs(t + 0.5 * h, w.y_stage, p, mode, K[2])
+    for i in range(n):
+        w.y_stage[i] = y[i] + h * K[2, i]
+    rhs(t + h, w.y_stage, p, mode, K[3])
+    for i in range(n):
+        w.y_new[i] = y[i] + h / 6.0 * (K[0, i] + 2.0 * K[1, i] + 2.0 * K[2, i] + K[3, i])
+    rhs(t + h, w.y_new, p, mode, K[6])
+    w.counts[2] += 4
+
+
+@njit(cache=True)
+def error_norm(K, h, y, y_new, rtol, atol, n_err):
+    """RMS of the DP54 error estimate scaled by atol + rtol·max(|y|, |y_new|)."""
+    acc = 0.0
+    for i in range(n_err):
+        e = 0.0
+        for s in range(N_STAGES):
+            e += E[s] * K[s, i]
+        scale = atol + rtol * max(abs(y[i]), abs(y_new[i]))
+        r = h * e / scale
+        acc += r * r
+    return np.sqrt(acc / n_err)
+
+
+@njit(cache=True)
+def dense_eval(method, K, y, y_new, h, theta, out):
+    """State at t + θh (0 ≤ θ ≤ 1) from the last step's dense output into ``out``."""
+    n = y.shape[0]
+    if method == DP54:
+        for i in range(n):
+            q1 = 0.0
+            q2 = 0.0
+            q3 = 0.0
+            q4 = 0.0
+            for s in range(N_STAGES):
+                k = K[s, i]
+                q1 += k * P[s, 0]
+                q2 += k * P[s, 1]
+                q3 += k * P[s, 2]
+                q4 += k * P[s, 3]
+            out[i] = y[i] + h * theta * (q1 + theta * (q2 + theta * (q3 + theta * q4)))
+    else:
+        # cubic Hermite through (y, f) at both ends
+        t2 = theta * theta
+        t3 = t2 * theta
+        h00 = 2.0 * t3 - 3.0 * t2 + 1.0
+        h10 = t3 - 2.0 * t2 + theta
+        h01 = -2.0 * t3 + 3.0 * t2
+        h11 = t3 - t2
+        for i in range(n):
+            out[i] = h00 * y[i] + h10 * h * K[0, i] + h01 * y_new[i] + h11 * h * K[6, i]
+
+
+@njit(cache=True)
+def event_value(events, method, t, y, h, theta, p, mode, w, which):
+    """Event function ``which`` on the dense output of the last trial step."""
+    dense_eval(method, w.K, y, w.y_new, h, theta, w.y_stage)
+    events(t + theta * h, w.y_stage, p, mode, w.g_tmp)
+    return w.g_tmp[which]
+
+
+@njit(cache=True)
+def locate_event(events, method, t, y, h, p, mode, w, which, a, fa, b, fb, theta_tol):
+    """Root of event ``which`` in [a, b] (fractions of the step) with fa > 0 ≥ fb.
+
+    Illinois variant of regula falsi on the dense output. Returns the final
+    bracket (lo, hi); a step ended at hi has g ≤ 0, so the next mode's own event
+    function starts at ≥ 0.
+    """
+    side = 0
+    for _ in range(LOCATE_MAX_ITER):
+        if b - a <= theta_tol:
+            break
+        m = (a * fb - b * fa) / (fb - fa)
+        if not (a < m < b):
+            m = 0.5 * (a + b)
+        fm = event_value(events, method, t, y, h, m, p, mode, w, which)
+        if fm > 0.0:
+            a, fa = m, fm
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b, fb = m, fm
+            if side == 1:
+                fa *= 0.5
+            side = 1
+    return a, b
+
+
+@njit(cache=True)
+def first_crossing(events, method, t, y, h, p, mode, w, m, theta_tol):
+    """Earliest event root in the trial step, from g and g' at both step ends.
+
+    Returns (event index or -1, θ of the root). A g that is ≤ 0 at the start by
+    rounding just after a mode switch counts as positive when its rate points
+    into the mode.
+    """
+    first = -1
+    first_theta = 2.0
+    for i in range(m):
+        g0 = w.g0[i]
+        g1 = w.g1[i]
+        d0 = w.dg0[i] * h
+        d1 = w.dg1[i] * h
+        a = 0.0
+        fa = g0
+        b = -1.0
+        fb = 0.0
+        if g1 <= 0.0:
+            b = 1.0
+            fb = g1
+            if g0 <= 0.0:
+                # the mode holds only inside the step, if at all: bracket from its peak
+                th, _ = hermite_extremum(g0, d0, g1, d1, False)
+                if th > 0.0:
+                    gm = event_value(events, method, t, y, h, th, p, mode, w, i)
+                    if gm > 0.0:
+                        a = th
+                        fa = gm
+                if fa <= 0.0:  # never inside: the event is at the step start
+                    if 0.0 < first_theta:
+                        first = i
+                        first_theta = 0.0
+                    continue
+        else:
+            # both ends positive: look for a dip below zero in between
+            th, val = hermite_extremum(g0, d0, g1, d1, True)
+            if th <= 0.0 or val > 0.1 * max(abs(g0), abs(g1)):
+                continue
+            gm = event_value(events, method, t, y, h, th, p, mode, w, i)
+            if gm > 0.0:
+                continue
+            b = th
+            fb = gm
+            if g0 <= 0.0:
+                continue
+        if a >= first_theta:
+            continue
+        lo, hi = locate_event(events, method, t, y, h, p, mode, w, i, a, fa, b, fb, theta_tol)
+        if hi < first_theta:
+            first = i
+            first_theta = hi
+    return first, first_theta
+
+
+@njit(cache=True)
+def take_step(rhs, method, t, y, f, h, p, mode, w):
+    if method == DP54:
+        dp54_step(rhs, t, y, f, h, p, mode, w)
+    else:
+        rk4_step(rhs, t, y, f, h, p, mode, w)
+
+
+@njit(cache=True)
+def all_finite(x):
+    for i in range(x.shape[0]):
+        if not np.isfinite(x[i]):
+            return False
+    return True
+
+
+@njit(cache=True)
+def advance(rhs, events, event_rates, t, t_end, y, f, p, mode, opt, w):
+    """One accepted step from t toward the breakpoint t_end, ending at the first event.
+
+    y and f (= rhs(t, y)) are updated in place. Returns (status, t_new, event):
+    event is the index of the event function whose root ends the step, or -1.
+    An event at the very start returns t_new = t with y unchanged.
+    """
+    n = y.shape[0]
+    m = events(t, y, p, mode, w.g0)
+    event_rates(t, y, f, p, mode, w.dg0)
+    rejects = 0
+    adaptive = opt.method == DP54
+    while True:
+        remaining = t_end - t
+        h = w.ctrl[0] if adaptive else opt.h_fixed
+        if h >= remaining * (1.0 - STRETCH):
+            h = remaining
+        if h < opt.h_min and h < remaining:
+            return STEP_UNDERFLOW, t, -1
+        take_step(rhs, opt.method, t, y, f, h, p, mode, w)
+        err = 0.0
+        if adaptive:
+            err = error_norm(w.K, h, y, w.y_new, opt.rtol, opt.atol, opt.n_err)
+            if not err <= 1.0:  # also catches NaN
+                rejects += 1
+                w.counts[1] += 1
+                if rejects > MAX_REJECTS:
+                    if not all_finite(w.y_new):
+                        return NONFINITE, t, -1
+                    return STEP_UNDERFLOW, t, -1
+                fac = SAFETY * err**-0.2 if np.isfinite(err) else MIN_FACTOR
+                w.ctrl[0] = h * max(MIN_FACTOR, min(1.0, fac))
+                continue
+        elif not all_finite(w.y_new):
+            return NONFINITE, t, -1
+        t_new = t_end if h == remaining else t + h
+        events(t_new, w.y_new, p, mode, w.g1)
+        event_rates(t_new, w.y_new, w.K[6], p, mode, w.dg1)
+        theta_tol = opt.event_tol / h
+        which, theta = first_crossing(events, opt.method, t, y, h, p, mode, w, m, theta_tol)
+        if which >= 0 and theta < 1.0:
+            if theta * h <= opt.event_tol:
+                return OK, t, which
+            # redo the step to end on the root: the field stays smooth inside it
+            h_event = theta * h
+            take_step(rhs, opt.method, t, y, f, h_event, p, mode, w)
+            if adaptive:
+                err_event = error_norm(w.K, h_event, y, w.y_new, opt.rtol, opt.atol, opt.n_err)
+                if not err_event <= 1.0:
+                    rejects += 1
+                    w.counts[1] += 1
+                    w.ctrl[0] = h_event * 0.5
+                    continue
+            t_new = t + h_event
+        elif adaptive:
+            # PI control of the next step from this accepted step's error
+            err = max(err, 1e-10)
+            fac = err**ERROR_EXPONENT / w.ctrl[1] ** PI_BETA / SAFETY
+            fac = max(1.0 / MAX_FACTOR, min(1.0 / MIN_FACTOR, fac))
+            w.ctrl[0] = h / fac
+            w.ctrl[1] = max(err, 1e-4)
+        for i in range(n):
+            y[i] = w.y_new[i]
+            f[i] = w.K[6, i]
+        w.counts[0] += 1
+        return OK, t_new, which
+
+
+@njit(cache=True)
+def initial_step(rhs, t, y, f, p, mode, rtol, atol, n_err, h_max):
+    """Starting step size (Hairer, Nørsett & Wanner, II.4), capped at h_max."""
+    d0 = 0.0
+    d1 = 0.0
+    for i in range(n_err):
+        scale = atol + rtol * abs(y[i])
+        d0 += (y[i] / scale) ** 2
+        d1 += (f[i] / scale) ** 2
+    d0 = np.sqrt(d0 / n_err)
+    d1 = np.sqrt(d1 / n_err)
+    if d0 < 1e-5 or d1 < 1e-5:
+        h0 = 1e-6
+    else:
+        h0 = 0.01 * d0 / d1
+    return min(h0, h_max)

@@ -1,0 +1,290 @@
+"""Job files: the YAML schema, its defaults and validation, and the grid axes.
+
+A job is parsed in one place (``load_job`` / ``Job.from_dict``) into frozen,
+validated settings; nothing else in campar sees raw dicts. Every field has a
+default, so a job file only states what differs from the paper's set-up.
+Errors name the offending key and what is allowed, e.g.
+
+    job file jobs/x.yaml: sweep.mu_cn.to: must be in (0, 1), got 1.5
+"""
+
+import hashlib
+import json
+import math
+from pathlib import Path
+from typing import Annotated, Literal
+
+import numpy as np
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from .errors import JobError
+
+PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
+# The paper's base values (MODEL.md) for parameters a job does not sweep or fix.
+PAPER_VALUES = {"f0": 0.5, "mu_kn": 0.8, "mu_cn": 0.8, "zeta": 0.2}
+
+OUTPUT_NAMES = ("label", "dc", "eps", "pn", "sections", "multipliers", "lyapunov")
+DEFAULT_OUTPUTS = ("label", "dc", "eps", "pn")
+
+
+def check_parameter(name: str, value: float) -> float:
+    """Raise ValueError with the allowed range when a model parameter is out of range."""
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value}")
+    if name == "omega" and not value > 0.0:
+        raise ValueError(f"omega must be > 0, got {value}")
+    if name in ("mu_kn", "mu_cn") and not 0.0 < value < 1.0:
+        raise ValueError(f"{name} must be in (0, 1), got {value}")
+    if name == "zeta" and not value >= 0.0:
+        raise ValueError(f"zeta must be ≥ 0, got {value}")
+    if name == "f0" and not value >= 0.0:
+        raise ValueError(f"f0 must be ≥ 0, got {value}")
+    return value
+
+
+class Settings(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+
+
+class Axis(Settings):
+    """A grid axis: ``points`` values from ``from`` to ``to`` inclusive, evenly spaced."""
+
+    start: float = Field(alias="from")
+    stop: float = Field(alias="to")
+    points: Annotated[int, Field(ge=1, le=100_000)]
+
+    def values(self) -> np.ndarray:
+        return np.linspace(self.start, self.stop, self.points)
+
+
+class ModelSettings(Settings):
+    tensile: Literal["clamp", "allow"] = "clamp"
+    """clamp: Pn = max(0, …), contact cannot pull (default); allow: the paper's literal formula."""
+
+
+class InitialState(Settings):
+    y: float = 0.0
+    v: float = 0.0
+
+    @field_validator("y", "v")
+    @classmethod
+    def finite(cls, value: float) -> float:
+        if not math.isfinite(value):
+            raise ValueError("must be a finite number")
+        return value
+
+
+class IntegratorSettings(Settings):
+    method: Literal["dp54", "rk4"] = "dp54"
+    rtol: Annotated[float, Field(gt=1e-15, lt=1.0)] = 1e-8
+    atol: Annotated[float, Field(gt=0.0, lt=1.0)] = 1e-10
+    rk4_steps: Annotated[int, Field(ge=6, le=10_000_000)] = 600
+    """RK4 steps per revolution (a multiple of 6 lands on every cam phase boundary)."""
+    event_tol: Annotated[float, Field(gt=0.0, lt=1e-3)] = 1e-12
+    """Event times are located to event_tol × max(1, revolution period)."""
+    max_steps: Annotated[int, Field(ge=1000)] = 5_000_000
+    """Steps per cell before the cell fails with 'step budget'."""
+
+
+class TransientSettings(Settings):
+    mode: Literal["converged", "fixed"] = "converged"
+    """converged: stop once the section has converged to a cycle; fixed: the paper's recipe."""
+    max_revolutions: Annotated[int, Field(ge=1, le=1_000_000)] = 500
+    """converged: the revolution budget; fixed: revolutions discarded before the read window."""
+    newton: bool = True
+    """Shorten the transient with capped Newton jumps to the estimated cycle (converged only)."""
+    jump_cap: Annotated[float, Field(gt=0.0)] = 0.02
+    jump_residual: Annotated[float, Field(gt=0.0)] = 0.05
+    """Newton jumps are tried only where |x_k − x_{k−n}| is below this."""
+    max_jumps: Annotated[int, Field(ge=0)] = 20
+    conv_tol: Annotated[float, Field(gt=0.0, lt=1e-2)] = 1e-8
+    """Distance to the cycle (Newton estimate) at which a cell has converged."""
+    window_tol: Annotated[float, Field(gt=0.0, lt=1e-1)] = 1e-6
+    """… and the distance of the read window's first point from it."""
+    extrapolate: bool = True
+    """Start a cell from the linear extrapolation of the two previous fixed points."""
+
+
+class ClassifySettings(Settings):
+    n_max: Annotated[int, Field(ge=1, le=256)] = 32
+    chatter_p: Annotated[int, Field(ge=1)] = 7
+    window_revolutions: Annotated[int, Field(ge=1, le=100_000)] = 64
+    """Read window: fixed transient, and non-periodic verdicts (Lyapunov exponent)."""
+    period_tol: Annotated[float, Field(gt=0.0, lt=1.0)] = 1e-6
+    """Section points closer than this (∞-norm) count as one point of σn."""
+    lyap_tol: Annotated[float, Field(gt=0.0)] = 0.01
+    """|largest Lyapunov exponent per revolution| below this: quasi-periodic; above: chaos."""
+    sections: Annotated[int, Field(ge=1, le=100_000)] | None = None
+    """σn points stored per cell (default n_max)."""
+
+    @model_validator(mode="after")
+    def window_sees_longest_period_twice(self):
+        if self.window_revolutions < 2:
+            raise ValueError("window_revolutions must be ≥ 2")
+        return self
+
+
+class TileSettings(Settings):
+    rows: Annotated[int, Field(ge=1)] = 4
+    """Continuation chains (values of the second parameter) per tile."""
+
+
+class Job(Settings):
+    name: Annotated[str, Field(min_length=1, max_length=200, pattern=r"^[A-Za-z0-9_.\-]+$")]
+    sweep: dict[str, Axis]
+    fixed: dict[str, float] = {}
+    model: ModelSettings = ModelSettings()
+    initial: InitialState = InitialState()
+    integrator: IntegratorSettings = IntegratorSettings()
+    transient: TransientSettings = TransientSettings()
+    classify: ClassifySettings = ClassifySettings()
+    outputs: tuple[str, ...] = DEFAULT_OUTPUTS
+    tiles: TileSettings = TileSettings()
+    store: str | None = None
+    """Path of the result store; '.h5'/'.hdf5' selects HDF5, anything else Zarr."""
+
+    @model_validator(mode="before")
+    @classmethod
+    def fill_fixed(cls, data):
+        # The normalised job states every parameter: unswept, unfixed ones take the paper's value.
+        if isinstance(data, dict) and isinstance(data.get("sweep"), dict):
+            fixed = data.get("fixed") or {}
+            if isinstance(fixed, dict):
+                fixed = dict(fixed)
+                for name, value in PAPER_VALUES.items():
+                    if name not in data["sweep"]:
+                        fixed.setdefault(name, value)
+                data = {**data, "fixed": fixed}
+        return data
+
+    @field_validator("sweep")
+    @classmethod
+    def omega_and_one_more(cls, sweep: dict[str, Axis]) -> dict[str, Axis]:
+        keys = list(sweep)
+        unknown = [k for k in keys if k not in PARAMETERS]
+        if unknown:
+            raise ValueError(f"unknown parameter {unknown[0]!r}; allowed: {', '.join(PARAMETERS)}")
+        if len(keys) != 2 or keys[0] != "omega":
+            raise ValueError(
+                "must list omega (the continuation axis) first and exactly one second "
+                f"parameter, got {keys}"
+            )
+        for name, axis in sweep.items():
+            for end in (axis.start, axis.stop):
+                try:
+                    check_parameter(name, end)
+                except ValueError as exc:
+                    raise ValueError(f"{name}: {exc}") from None
+        return sweep
+
+    @field_validator("fixed")
+    @classmethod
+    def known_fixed(cls, fixed: dict[str, float]) -> dict[str, float]:
+        for name, value in fixed.items():
+            if name not in PAPER_VALUES:
+                raise ValueError(
+                    f"unknown parameter {name!r}; allowed: {', '.join(PAPER_VALUES)}"
+                )
+            try:
+                check_parameter(name, value)
+            except ValueError as exc:
+                raise ValueError(str(exc)) from None
+        return fixed
+
+    @field_validator("outputs")
+    @classmethod
+    def known_outputs(cls, outputs: tuple[str, ...]) -> tuple[str, ...]:
+        for name in outputs:
+            if name not in OUTPUT_NAMES:
+                raise ValueError(f"unknown output {name!r}; allowed: {', '.join(OUTPUT_NAMES)}")
+        if "label" not in outputs:
+            outputs = ("label", *outputs)
+        return tuple(dict.fromkeys(outputs))
+
+    @model_validator(mode="after")
+    def sweep_and_fixed_disjoint(self):
+        both = set(self.sweep) & set(self.fixed)
+        if both:
+            raise ValueError(f"{sorted(both)[0]} is both swept and fixed")
+        return self
+
+    # -- derived views -------------------------------------------------------
+
+    @property
+    def second(self) -> str:
+        """Name of the second (non-continuation) parameter."""
+        return list(self.sweep)[1]
+
+    @property
+    def omega(self) -> np.ndarray:
+        return self.sweep["omega"].values()
+
+    @property
+    def second_values(self) -> np.ndarray:
+        return self.sweep[self.second].values()
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(second, omega): the layout of every per-cell array."""
+        return self.sweep[self.second].points, self.sweep["omega"].points
+
+    def parameter(self, name: str) -> float:
+        """Value of a parameter that is not swept."""
+        return self.fixed[name]
+
+    @property
+    def n_sections(self) -> int:
+        return self.classify.sections or self.classify.n_max
+
+    def wants(self, output: str) -> bool:
+        return output in self.outputs
+
+    def to_dict(self) -> dict:
+        """The normalised job: every field explicit, as stored with the results."""
+        return self.model_dump(mode="json", by_alias=True)
+
+    def digest(self) -> str:
+        """Hash of everything that changes the numbers (not the store path)."""
+        data = self.to_dict()
+        data.pop("store", None)
+        text = json.dumps(data, sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    @classmethod
+    def from_dict(cls, data: dict, source: str = "job") -> "Job":
+        if not isinstance(data, dict):
+            raise JobError(f"{source}: a job is a mapping of keys, got {type(data).__name__}")
+        try:
+            return cls.model_validate(data)
+        except ValidationError as exc:
+            raise JobError(format_validation_error(exc, source)) from None
+
+
+def format_validation_error(exc: ValidationError, source: str) -> str:
+    lines = []
+    for err in exc.errors():
+        where = ".".join(str(part) for part in err["loc"]) or "(top level)"
+        message = err["msg"].removeprefix("Value error, ")
+        if err["type"] == "extra_forbidden":
+            message = "unknown key (check the spelling; see jobs/README or campar.job)"
+        elif err["type"] == "missing":
+            message = "required key is missing"
+        got = err.get("input")
+        detail = "" if err["type"] in ("extra_forbidden", "missing") or isinstance(got, dict) else f", got {got!r}"
+        lines.append(f"{source}: {where}: {message}{detail}")
+    return "\n".join(lines)
+
+
+def load_job(path: str | Path) -> Job:
+    """Read and validate a YAML job file."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise JobError(f"cannot read job file {path}: {exc.strerror}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise JobError(f"job file {path}: not valid YAML: {exc}") from None
+    return Job.from_dict(data, source=f"job file {path}")

@@ -1,0 +1,485 @@
+"""The compiled kernel: one revolution, one cell, one continuation chain of cells.
+
+``run_chain`` is the entry the runners call: it computes a chain of cells in
+order (ω decreasing along the chain in a map), each warm-started from the
+previous cell's final state at θ = 0, and fills preallocated output arrays.
+No Python objects, no allocation per step; failures are status codes.
+Entry points take only arrays, numbers and named tuples, so numba's on-disk
+cache serves every new process. The field and event functions are handed to
+the integrator as ``model.rhs`` (a module attribute): a dispatcher imported by
+name and passed as an argument makes numba refuse to cache the caller
+("dynamic globals"), measured with numba 0.68.
+"""
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from .analysis import (
+    N_REV_STATS,
+    REV_DETACH,
+    REV_LOG_STRETCH,
+    add_step_stats,
+    assess_revolution,
+    cycle_jacobian,
+    distinct_period,
+    multipliers_of,
+    near_unit_circle,
+    nonperiodic_kind,
+    repeat_period,
+    reset_revolution_stats,
+    spectral_radius,
+    stretch_tangent,
+    window_stats,
+)
+from . import model
+from .integrator import SolverOptions, StepWork, advance, initial_step, make_work
+from .model import (
+    FREE,
+    MAX_EVENTS,
+    N_PHASES,
+    N_STATE,
+    N_STATE_VARIATIONAL,
+    PHASE_BOUNDS,
+    RISE,
+    TWO_PI,
+    contact_kinematics,
+    contact_mode,
+    gap,
+    is_detachment,
+    make_params,
+    mode_after_event,
+)
+from .status import EVENT_LOOP, FAILED, NONFINITE, OK, PERIODIC, STEP_LIMIT
+
+# Transient policies.
+CONVERGED = 0  # stop once the section has converged to a cycle (Newton-accelerated)
+FIXED = 1  # a fixed number of revolutions, then a read window (the paper's recipe)
+
+# Output selection bits: a label-only map computes none of these.
+OUT_STATS = 1  # duty cycle, ε extremes, Pn max
+OUT_SECTIONS = 2  # σn points of the steady motion
+OUT_MULTIPLIERS = 4  # Floquet multipliers of periodic cells
+OUT_LYAPUNOV = 8  # largest Lyapunov exponent
+
+# Flags (campar.status.Flag).
+FLAG_NEWTON = 1
+FLAG_SLOW = 2
+FLAG_WARM_EXTRAPOLATED = 8
+FLAG_RESTARTED = 16
+
+MAX_STUCK_EVENTS = 8  # zero-length events in a row before a cell is declared stuck
+SLOW_MARGIN = 0.02  # a multiplier this close to the unit circle marks a slow cell
+EXTRAPOLATE_MAX = 0.05  # extrapolate the warm start only between close fixed points
+
+
+class CellSettings(NamedTuple):
+    """How one cell is run and classified (see campar.job for the meaning of each)."""
+
+    transient: int  # CONVERGED or FIXED
+    max_revolutions: int  # CONVERGED: budget of revolutions; FIXED: transient length
+    window: int  # revolutions read for a non-periodic verdict (FIXED: after the transient)
+    n_max: int
+    conv_tol: float
+    window_tol: float
+    period_tol: float
+    newton: bool
+    jump_r_max: float
+    jump_cap: float
+    max_jumps: int
+    lyap_tol: float
+    max_steps: int
+    extrapolate: bool
+    rk4_steps: int  # RK4 steps per revolution
+    outputs: int
+
+
+class CellOutputs(NamedTuple):
+    """Per-cell result arrays of a chain; optional ones may have length 0."""
+
+    n: np.ndarray  # int32: period in revolutions (0: not periodic)
+    p: np.ndarray  # int32: detachments in n revolutions (non-periodic: in the window)
+    kind: np.ndarray  # int8: campar.status.Kind
+    status: np.ndarray  # int8: campar.status.Status
+    flags: np.ndarray  # int16: campar.status.Flag
+    dc: np.ndarray  # duty cycle: fraction of time separated
+    eps_min: np.ndarray
+    eps_max: np.ndarray
+    pn_max: np.ndarray
+    state: np.ndarray  # (cells, 2) final (y, y') at θ = 0
+    revolutions: np.ndarray  # int32
+    steps: np.ndarray  # int64 accepted steps
+    lyapunov: np.ndarray  # per unit dimensionless time
+    multipliers: np.ndarray  # (cells, 2, 2): (re, im) of both multipliers
+    sections: np.ndarray  # (cells, S, 2) σn points, NaN-padded
+
+
+class ChainWork(NamedTuple):
+    """Buffers reused by every cell of a chain."""
+
+    w2: StepWork  # integrator buffers without variational equations
+    w6: StepWork  # … with them
+    x2: np.ndarray
+    f2: np.ndarray
+    x6: np.ndarray
+    f6: np.ndarray
+    mode: np.ndarray  # [cam phase, contact mode]
+    xs: np.ndarray  # (R+1, 2) section points
+    jac: np.ndarray  # (R, 4) one-revolution Jacobians
+    revs: np.ndarray  # (R, N_REV_STATS)
+    u: np.ndarray  # tangent vector for the Lyapunov exponent
+
+
+@njit(cache=True)
+def make_chain_work(cs):
+    rows = cs.max_revolutions + cs.window + 2
+    return ChainWork(
+        make_work(N_STATE, MAX_EVENTS, 0.0),
+        make_work(N_STATE_VARIATIONAL, MAX_EVENTS, 0.0),
+        np.zeros(N_STATE),
+        np.zeros(N_STATE),
+        np.zeros(N_STATE_VARIATIONAL),
+        np.zeros(N_STATE_VARIATIONAL),
+        np.zeros(2, dtype=np.int64),
+        np.zeros((rows + 1, 2)),
+        np.zeros((rows, 4)),
+        np.zeros((rows, N_REV_STATS)),
+        np.array([1.0, 0.0]),
+    )
+
+
+@njit(cache=True)
+def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit):
+    """Integrate one cam revolution from θ = 0 to 2π, in place on x.
+
+    Steps end on every cam phase boundary and every contact event; with the
+    variational part, Φ starts at I, so x[2:6] ends as the Jacobian of the
+    one-revolution map. Fills the revolution's statistics in ``row``; fails with
+    STEP_LIMIT once the workspace has counted more than step_limit steps.
+    """
+    if x.shape[0] == N_STATE_VARIATIONAL:
+        x[2] = 1.0
+        x[3] = 0.0
+        x[4] = 0.0
+        x[5] = 1.0
+    reset_revolution_stats(row)
+    eps, deps = gap(0.0, x, p, RISE)
+    mode[1] = contact_mode(eps, deps, p)
+    t = 0.0
+    for phase in range(N_PHASES):
+        mode[0] = phase
+        t_end = PHASE_BOUNDS[phase + 1] / p.omega
+        model.rhs(t, x, p, mode, f)
+        w.counts[2] += 1
+        stuck = 0
+        while t < t_end:
+            if w.counts[0] + w.counts[1] > step_limit:
+                return STEP_LIMIT
+            t_prev = t
+            contact = mode[1]
+            if want_stats:
+                e0, de0, pn0, dpn0 = contact_kinematics(t, x, f, p, mode)
+            status, t, which = advance(model.rhs, model.events, model.event_rates, t, t_end, x, f, p, mode, opt, w)
+            if status != OK:
+                return status
+            if t > t_prev:
+                stuck = 0
+                if want_stats:
+                    e1, de1, pn1, dpn1 = contact_kinematics(t, x, f, p, mode)
+                    add_step_stats(
+                        row, t - t_prev, contact == FREE, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1
+                    )
+            elif which >= 0:
+                stuck += 1
+                if stuck > MAX_STUCK_EVENTS:
+                    return EVENT_LOOP
+            if which >= 0:
+                if is_detachment(contact, which):
+                    row[REV_DETACH] += 1.0
+                mode[1] = mode_after_event(contact, which)
+                model.rhs(t, x, p, mode, f)
+                w.counts[2] += 1
+    return OK
+
+
+@njit(cache=True)
+def solver_options(base, p, cs):
+    """Per-cell integrator options: RK4's step and the floors scale with the period."""
+    period = TWO_PI / p.omega
+    return SolverOptions(
+        base.method,
+        base.rtol,
+        base.atol,
+        period / cs.rk4_steps,
+        1e-12 * max(1.0, period),
+        base.event_tol * max(1.0, period),
+        N_STATE,
+    )
+
+
+@njit(cache=True)
+def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
+    """Revolution k+1 from xs[k]: fills xs[k+1], jac[k] (if variational), revs[k]."""
+    if variational:
+        x, f, w = cw.x6, cw.f6, cw.w6
+    else:
+        x, f, w = cw.x2, cw.f2, cw.w2
+    x[0] = cw.xs[k, 0]
+    x[1] = cw.xs[k, 1]
+    limit = w.counts[0] + w.counts[1] + (step_budget - spend(cw))
+    status = run_revolution(x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit)
+    if status != OK:
+        return status
+    if not (math.isfinite(x[0]) and math.isfinite(x[1])):
+        return NONFINITE
+    cw.xs[k + 1, 0] = x[0]
+    cw.xs[k + 1, 1] = x[1]
+    if variational:
+        for j in range(4):
+            cw.jac[k, j] = x[2 + j]
+        cw.revs[k, REV_LOG_STRETCH] = stretch_tangent(cw.jac[k], cw.u)
+    return OK
+
+
+@njit(cache=True)
+def spend(cw):
+    return cw.w2.counts[0] + cw.w2.counts[1] + cw.w6.counts[0] + cw.w6.counts[1]
+
+
+@njit(cache=True)
+def share_step_size(src, dst):
+    dst.ctrl[0] = src.ctrl[0]
+    dst.ctrl[1] = src.ctrl[1]
+
+
+@njit(cache=True)
+def transient_converged(cw, p, opt, cs, want_stats, step_budget):
+    """Revolutions until assess_revolution accepts a cycle or the budget ends.
+
+    Returns (status, k, period, base, jumps).
+    """
+    k = 0
+    base = 0
+    jumps = 0
+    while k < cs.max_revolutions:
+        status = step_revolution(cw, k, True, p, opt, cs, want_stats, step_budget)
+        if status != OK:
+            return status, k, 0, base, jumps
+        k += 1
+        period, jump_n, z0, z1 = assess_revolution(
+            cw.xs, cw.jac, k, base, cs.n_max, cs.conv_tol, cs.window_tol, cs.jump_r_max, cs.jump_cap
+        )
+        if period > 0:
+            return OK, k, period, base, jumps
+        if jump_n > 0 and cs.newton and jumps < cs.max_jumps:
+            cw.xs[k, 0] = z0
+            cw.xs[k, 1] = z1
+            base = k
+            jumps += 1
+    return OK, k, 0, base, jumps
+
+
+@njit(cache=True)
+def transient_fixed(cw, p, opt, cs, want_stats, step_budget):
+    """cs.max_revolutions plain revolutions, then a window with variational equations.
+
+    Returns (status, k, period) with the period from the plain repeat test.
+    """
+    k = 0
+    total = cs.max_revolutions + cs.window
+    while k < total:
+        variational = k >= cs.max_revolutions
+        if k == cs.max_revolutions:
+            share_step_size(cw.w2, cw.w6)
+        status = step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget)
+        if status != OK:
+            return status, k, 0
+        k += 1
+    period = repeat_period(cw.xs, cs.max_revolutions, k, cs.n_max, cs.period_tol)
+    return OK, k, period
+
+
+@njit(cache=True)
+def fail_cell(out, i, status, k, steps):
+    out.n[i] = 0
+    out.p[i] = 0
+    out.kind[i] = FAILED
+    out.status[i] = status
+    out.flags[i] = 0
+    out.dc[i] = np.nan
+    out.eps_min[i] = np.nan
+    out.eps_max[i] = np.nan
+    out.pn_max[i] = np.nan
+    out.state[i, 0] = np.nan
+    out.state[i, 1] = np.nan
+    out.revolutions[i] = k
+    out.steps[i] = steps
+    if out.lyapunov.shape[0] > 0:
+        out.lyapunov[i] = np.nan
+    if out.multipliers.shape[0] > 0:
+        out.multipliers[i, :, :] = np.nan
+    if out.sections.shape[0] > 0:
+        out.sections[i, :, :] = np.nan
+
+
+@njit(cache=True)
+def record_window(out, i, cw, first, count, period):
+    """Statistics of revolutions first … first+count−1 into the outputs of cell i."""
+    t_free, detach, eps_min, eps_max, pn_max, stretch = window_stats(cw.revs, first, count)
+    out.p[i] = int(detach + 0.5)
+    out.dc[i] = t_free / (count * period)
+    out.eps_min[i] = eps_min
+    out.eps_max[i] = eps_max
+    out.pn_max[i] = pn_max
+    return stretch
+
+
+@njit(cache=True)
+def record_sections(out, i, cw, last, count):
+    s = out.sections.shape[1]
+    out.sections[i, :, :] = np.nan
+    for j in range(min(count, s)):
+        out.sections[i, j, 0] = cw.xs[last - count + 1 + j, 0]
+        out.sections[i, j, 1] = cw.xs[last - count + 1 + j, 1]
+
+
+@njit(cache=True)
+def run_cell(x_start, p, opt, cs, cw, out, i):
+    """Compute cell i from x_start; returns (status, index of the final state in xs)."""
+    period_time = TWO_PI / p.omega
+    want_stats = (cs.outputs & OUT_STATS) != 0
+    c2 = cw.w2.counts
+    c6 = cw.w6.counts
+    steps0 = c2[0] + c6[0]
+    step_budget = spend(cw) + cs.max_steps
+    cw.xs[0, 0] = x_start[0]
+    cw.xs[0, 1] = x_start[1]
+    cw.u[0] = 1.0
+    cw.u[1] = 0.0
+    flags = 0
+    if cs.transient == CONVERGED:
+        status, k, n, base, jumps = transient_converged(cw, p, opt, cs, want_stats, step_budget)
+        if jumps > 0:
+            flags |= FLAG_NEWTON
+        variational_from = 0
+    else:
+        status, k, n = transient_fixed(cw, p, opt, cs, want_stats, step_budget)
+        base = cs.max_revolutions
+        variational_from = cs.max_revolutions
+    steps = c2[0] + c6[0] - steps0
+    if status != OK:
+        fail_cell(out, i, status, k, steps)
+        return status, 0
+    out.revolutions[i] = k
+    out.steps[i] = steps
+    out.status[i] = OK
+    final = k
+    if n > 0:
+        m = distinct_period(cw.xs, k, n, cs.period_tol)
+        record_window(out, i, cw, k - m, m, period_time)
+        out.n[i] = m
+        out.kind[i] = PERIODIC
+        have_jacobian = k - m >= variational_from
+        if have_jacobian:
+            dpn = cycle_jacobian(cw.jac, k, m)
+            if near_unit_circle(dpn, SLOW_MARGIN):
+                flags |= FLAG_SLOW
+            if out.multipliers.shape[0] > 0:
+                multipliers_of(dpn, out.multipliers[i])
+            if out.lyapunov.shape[0] > 0:
+                out.lyapunov[i] = math.log(spectral_radius(dpn)) / (m * period_time)
+        elif out.lyapunov.shape[0] > 0:
+            out.lyapunov[i] = np.nan
+        if out.sections.shape[0] > 0:
+            record_sections(out, i, cw, k, m)
+        # of the cycle's points, continue from the one nearest the start
+        best = math.inf
+        for j in range(k - m + 1, k + 1):
+            d = abs(cw.xs[j, 0] - x_start[0]) + abs(cw.xs[j, 1] - x_start[1])
+            if d < best:
+                best = d
+                final = j
+    else:
+        count = min(cs.window, k - max(base, variational_from))
+        count = max(count, 1)
+        stretch = record_window(out, i, cw, k - count, count, period_time)
+        out.n[i] = 0
+        out.kind[i] = nonperiodic_kind(stretch, cs.lyap_tol)
+        if out.lyapunov.shape[0] > 0:
+            out.lyapunov[i] = stretch / period_time
+        if out.multipliers.shape[0] > 0:
+            out.multipliers[i, :, :] = np.nan
+        if out.sections.shape[0] > 0:
+            record_sections(out, i, cw, k, min(k, out.sections.shape[1]))
+    if not want_stats:
+        out.dc[i] = np.nan
+        out.eps_min[i] = np.nan
+        out.eps_max[i] = np.nan
+        out.pn_max[i] = np.nan
+    out.flags[i] = flags
+    out.state[i, 0] = cw.xs[final, 0]
+    out.state[i, 1] = cw.xs[final, 1]
+    return OK, final
+
+
+@njit(cache=True)
+def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
+    """Compute a continuation chain of cells in order; outputs are filled in place.
+
+    Cell i has parameters (omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i]). Cell 0
+    starts from x_init, every later cell from the final state of the one before
+    (extrapolated from the two before when both were periodic and close), and
+    the cell after a failure from x_init again.
+    """
+    cw = make_chain_work(cs)
+    x_start = np.empty(2)
+    prev1 = np.empty(2)
+    prev2 = np.empty(2)
+    have1 = False
+    have2 = False
+    prev_periodic = False
+    prev_n = 0
+    h_started = False
+    for i in range(omega.shape[0]):
+        p = make_params(omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i], clamp)
+        opt = solver_options(solver, p, cs)
+        flags = 0
+        if not have1:
+            x_start[:] = x_init
+            if i > 0:
+                flags |= FLAG_RESTARTED
+        elif have2 and cs.extrapolate and (
+            abs(prev1[0] - prev2[0]) + abs(prev1[1] - prev2[1]) < EXTRAPOLATE_MAX
+        ):
+            x_start[0] = 2.0 * prev1[0] - prev2[0]
+            x_start[1] = 2.0 * prev1[1] - prev2[1]
+            flags |= FLAG_WARM_EXTRAPOLATED
+        else:
+            x_start[:] = prev1
+        if not h_started:
+            cw.x2[0] = x_start[0]
+            cw.x2[1] = x_start[1]
+            cw.mode[0] = RISE
+            eps, deps = gap(0.0, cw.x2, p, RISE)
+            cw.mode[1] = contact_mode(eps, deps, p)
+            model.rhs(0.0, cw.x2, p, cw.mode, cw.f2)
+            h0 = initial_step(model.rhs, 0.0, cw.x2, cw.f2, p, cw.mode, solver.rtol, solver.atol, 2, 0.1)
+            cw.w2.ctrl[0] = h0
+            cw.w6.ctrl[0] = h0
+            h_started = True
+        status, final = run_cell(x_start, p, opt, cs, cw, out, i)
+        out.flags[i] |= flags
+        if status != OK:
+            have1 = False
+            have2 = False
+            continue
+        periodic = out.kind[i] == PERIODIC
+        have2 = have1 and periodic and prev_periodic and out.n[i] == prev_n
+        prev2[:] = prev1
+        prev1[0] = cw.xs[final, 0]
+        prev1[1] = cw.xs[final, 1]
+        have1 = True
+        prev_periodic = periodic
+        prev_n = out.n[i]

@@ -1,0 +1,243 @@
+"""The cam with flat-bottomed follower: cam law, Hunt–Crossley contact, vector field.
+
+Dimensionless equation of motion (MODEL.md, paper eq. 11):
+
+    y'' + 2 ζ y' + y = Pn − f0,    Pn = k ε^{3/2} (1 + c ε')  for ε = yc − y > 0
+
+Time t is scaled by the natural frequency; the cam angle is θ = ω t. Every
+revolution is integrated from t = 0, so inside the kernel θ ∈ [0, 2π] and the
+time of a phase boundary is its angle divided by ω.
+
+The hybrid state is carried in a small int array ``mode``: ``mode[0]`` is the
+cam phase (the formula of yc in use, so the field stays smooth across a step)
+and ``mode[1]`` the contact mode. Each contact mode has its own smooth field
+and its own event functions g_i, positive while the mode holds; the integrator
+ends a step where a g_i reaches zero and the kernel switches mode there
+(Hunt & Crossley 1975 for the force law; the field is continuous across every
+switching surface, so the variational equations need no saltation).
+"""
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+# Cam phases of the cosine-acceleration law with stroke 1.
+RISE = 0
+FAR_DWELL = 1
+FALL = 2
+NEAR_DWELL = 3
+N_PHASES = 4
+# Phase boundaries in cam angle θ; phase i spans [PHASE_BOUNDS[i], PHASE_BOUNDS[i+1]].
+PHASE_BOUNDS = np.array([0.0, math.pi / 3.0, math.pi, 4.0 * math.pi / 3.0, 2.0 * math.pi])
+TWO_PI = 2.0 * math.pi
+
+# Contact modes.
+FREE = 0  # separated, ε ≤ 0, Pn = 0
+PUSH = 1  # in contact and pushing: ε > 0 (and 1 + c ε' > 0 when clamped)
+SLACK = 2  # clamp only: ε > 0 but 1 + c ε' ≤ 0, so the force is zero
+MAX_EVENTS = 2  # event functions per contact mode, at most
+
+# Layout of the state vector: y, y', then optionally the 2×2 fundamental
+# matrix Φ row-major (variational equations Φ' = A Φ, Φ(0) = I).
+N_STATE = 2
+N_STATE_VARIATIONAL = 6
+
+
+class ModelParams(NamedTuple):
+    """Parameters of one grid cell, in the form the vector field uses."""
+
+    omega: float  # cam angular speed / natural frequency
+    zeta: float  # spring damping ratio ζ
+    f0: float  # preload / (K1 h)
+    k: float  # contact stiffness μkn / (1 − μkn)
+    c: float  # contact damping 2 ζ μcn / (1 − μcn)
+    clamp: bool  # True: no tensile force, Pn = max(0, …)
+
+
+@njit(cache=True)
+def make_params(omega, zeta, f0, mu_kn, mu_cn, clamp):
+    """Pack the physical parameters (μkn, μcn ∈ (0, 1)) into ModelParams."""
+    k = mu_kn / (1.0 - mu_kn)
+    c = 2.0 * zeta * mu_cn / (1.0 - mu_cn)
+    return ModelParams(omega, zeta, f0, k, c, clamp)
+
+
+@njit(cache=True)
+def phase_of(theta):
+    """Cam phase containing angle θ ∈ [0, 2π) (a boundary belongs to the next phase)."""
+    if theta < PHASE_BOUNDS[1]:
+        return RISE
+    if theta < PHASE_BOUNDS[2]:
+        return FAR_DWELL
+    if theta < PHASE_BOUNDS[3]:
+        return FALL
+    return NEAR_DWELL
+
+
+@njit(cache=True)
+def cam(theta, phase):
+    """Cam lift yc(θ) and its first two θ-derivatives with the formula of ``phase``.
+
+    The formula is used as given even a rounding error outside the phase, so
+    within a step the cam is a smooth function of time.
+    """
+    if phase == RISE:
+        s3 = math.sin(3.0 * theta)
+        c3 = math.cos(3.0 * theta)
+        return 0.5 * (1.0 - c3), 1.5 * s3, 4.5 * c3
+    if phase == FALL:
+        u = 3.0 * (theta - math.pi)
+        s3 = math.sin(u)
+        c3 = math.cos(u)
+        return 0.5 * (1.0 + c3), -1.5 * s3, -4.5 * c3
+    if phase == FAR_DWELL:
+        return 1.0, 0.0, 0.0
+    return 0.0, 0.0, 0.0
+
+
+@njit(cache=True)
+def cam_at(theta):
+    """yc, dyc/dθ, d²yc/dθ² at any angle θ (taken modulo 2π)."""
+    th = theta % TWO_PI
+    return cam(th, phase_of(th))
+
+
+@njit(cache=True)
+def contact_force(eps, deps, p):
+    """Hunt–Crossley force Pn for penetration ε and its rate ε' (MODEL.md eq. 12)."""
+    if eps <= 0.0:
+        return 0.0
+    force = p.k * eps * math.sqrt(eps) * (1.0 + p.c * deps)
+    if p.clamp and force < 0.0:
+        return 0.0
+    return force
+
+
+@njit(cache=True)
+def gap(t, y, p, phase):
+    """Penetration ε = yc − y and its rate ε' = ẏc − y' at time t."""
+    yc, dyc, _ = cam(p.omega * t, phase)
+    return yc - y[0], p.omega * dyc - y[1]
+
+
+@njit(cache=True)
+def contact_mode(eps, deps, p):
+    """The contact mode a state is in (used where no event history exists)."""
+    if eps <= 0.0:
+        return FREE
+    if p.clamp and 1.0 + p.c * deps <= 0.0:
+        return SLACK
+    return PUSH
+
+
+@njit(cache=True)
+def rhs(t, y, p, mode, dy):
+    """Vector field of the current mode into ``dy``; variational part if len(y) == 6."""
+    yc, dyc, _ = cam(p.omega * t, mode[0])
+    v = y[1]
+    acc = -2.0 * p.zeta * v - y[0] - p.f0
+    dfdy = 0.0
+    dfdv = 0.0
+    if mode[1] == PUSH:
+        eps = yc - y[0]
+        deps = p.omega * dyc - v
+        if eps < 0.0:  # a stage point just past an event: extend by zero force
+            eps = 0.0
+        s = math.sqrt(eps)
+        bracket = 1.0 + p.c * deps
+        acc += p.k * eps * s * bracket
+        dfdy = -1.5 * p.k * s * bracket
+        dfdv = -p.k * eps * s * p.c
+    dy[0] = v
+    dy[1] = acc
+    if y.shape[0] == N_STATE_VARIATIONAL:
+        a10 = -1.0 + dfdy
+        a11 = -2.0 * p.zeta + dfdv
+        dy[2] = y[4]
+        dy[3] = y[5]
+        dy[4] = a10 * y[2] + a11 * y[4]
+        dy[5] = a10 * y[3] + a11 * y[5]
+
+
+@njit(cache=True)
+def divergence(t, y, p, mode):
+    """div f = tr A of the (y, y') field in the current mode (Liouville's formula)."""
+    if mode[1] != PUSH:
+        return -2.0 * p.zeta
+    eps, _ = gap(t, y, p, mode[0])
+    eps = max(eps, 0.0)
+    return -2.0 * p.zeta - p.k * eps * math.sqrt(eps) * p.c
+
+
+@njit(cache=True)
+def events(t, y, p, mode, g):
+    """Event functions of the current contact mode into ``g``; returns how many.
+
+    Each g_i is positive while the mode holds; the mode ends where one reaches 0.
+    FREE: g0 = −ε (impact). PUSH: g0 = ε (detachment), g1 = 1 + c ε' (force
+    reaches zero, clamp only). SLACK: g0 = ε (detachment), g1 = −(1 + c ε').
+    """
+    eps, deps = gap(t, y, p, mode[0])
+    if mode[1] == FREE:
+        g[0] = -eps
+        return 1
+    g[0] = eps
+    if not p.clamp:
+        return 1
+    if mode[1] == PUSH:
+        g[1] = 1.0 + p.c * deps
+    else:
+        g[1] = -(1.0 + p.c * deps)
+    return 2
+
+
+@njit(cache=True)
+def event_rates(t, y, f, p, mode, dg):
+    """Time derivatives of the event functions, given the field value ``f``."""
+    _, dyc, d2yc = cam(p.omega * t, mode[0])
+    deps = p.omega * dyc - y[1]
+    d2eps = p.omega * p.omega * d2yc - f[1]
+    if mode[1] == FREE:
+        dg[0] = -deps
+        return
+    dg[0] = deps
+    if p.clamp:
+        dg[1] = p.c * d2eps if mode[1] == PUSH else -p.c * d2eps
+
+
+@njit(cache=True)
+def mode_after_event(contact, which):
+    """Contact mode after event ``which`` of mode ``contact`` fired."""
+    if contact == FREE:
+        return PUSH  # impact: ε' ≥ 0 there, so 1 + c ε' > 0
+    if which == 0:
+        return FREE  # detachment
+    return SLACK if contact == PUSH else PUSH
+
+
+@njit(cache=True)
+def is_detachment(contact, which):
+    """True when event ``which`` of mode ``contact`` is a contact → separation."""
+    return contact != FREE and which == 0
+
+
+@njit(cache=True)
+def contact_kinematics(t, y, f, p, mode):
+    """ε, ε', Pn and dPn/dt at a state with field value f, in the current mode.
+
+    Pn is the force of the mode's own field (zero unless pushing), so its rate
+    is continuous inside a step.
+    """
+    yc, dyc, d2yc = cam(p.omega * t, mode[0])
+    eps = yc - y[0]
+    deps = p.omega * dyc - y[1]
+    if mode[1] != PUSH or eps <= 0.0:
+        return eps, deps, 0.0, 0.0
+    d2eps = p.omega * p.omega * d2yc - f[1]
+    s = math.sqrt(eps)
+    bracket = 1.0 + p.c * deps
+    pn = p.k * eps * s * bracket
+    dpn = p.k * (1.5 * s * deps * bracket + eps * s * p.c * d2eps)
+    return eps, deps, pn, dpn

@@ -1,0 +1,59 @@
+"""Tiles and chains of a job's grid.
+
+A chain is one row of the grid: one value of the second parameter, every ω in
+the job's order (the continuation direction, ω decreasing in the paper's
+planes). A tile is ``tiles.rows`` consecutive chains. Tiles are fixed by the
+job alone, so the numbers never depend on how many ranks ran it or where it
+was interrupted; a tile is the unit of work, of storage (one chunk) and of the
+``done`` commit flag.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .job import Job
+
+
+@dataclass(frozen=True)
+class Tile:
+    index: int
+    row_start: int  # first chain (index along the second axis)
+    row_stop: int  # one past the last
+
+    @property
+    def rows(self) -> slice:
+        return slice(self.row_start, self.row_stop)
+
+    @property
+    def n_rows(self) -> int:
+        return self.row_stop - self.row_start
+
+
+def plan_tiles(job: Job) -> list[Tile]:
+    """Every tile of the job, in index order; together they cover each cell once."""
+    n_rows, _ = job.shape
+    size = job.tiles.rows
+    return [
+        Tile(i, start, min(start + size, n_rows))
+        for i, start in enumerate(range(0, n_rows, size))
+    ]
+
+
+def pending_tiles(job: Job, done: np.ndarray) -> list[Tile]:
+    """Tiles whose ``done`` flag is unset, in index order."""
+    tiles = plan_tiles(job)
+    if done.shape != (len(tiles),):
+        raise ValueError(f"done mask has shape {done.shape}, the job has {len(tiles)} tiles")
+    return [tile for tile in tiles if not done[tile.index]]
+
+
+def chain_parameters(job: Job, row: int) -> dict[str, np.ndarray]:
+    """Per-cell parameter arrays (length = ω points) of chain ``row``."""
+    omega = job.omega
+    values = {"omega": omega}
+    second_value = job.second_values[row]
+    for name in ("f0", "mu_kn", "mu_cn", "zeta"):
+        value = second_value if name == job.second else job.parameter(name)
+        values[name] = np.full(omega.shape, value)
+    return values

@@ -1,0 +1,94 @@
+"""Status codes of a cell and kinds of steady motion: one table, text given once here.
+
+A leaf module: njit code returns these integers, Python code translates them.
+"""
+
+import enum
+
+
+# Plain ints for njit code (numba folds module-level ints into constants).
+OK = 0
+STEP_UNDERFLOW = 1
+NONFINITE = 2
+STEP_LIMIT = 3
+EVENT_LOOP = 4
+
+PERIODIC = 0
+QUASIPERIODIC = 1
+CHAOTIC = 2
+UNCONVERGED = 3
+FAILED = 4
+
+
+class Status(enum.IntEnum):
+    """Why a cell ended; anything but OK marks a failed cell (its numbers are NaN)."""
+
+    OK = OK
+    STEP_UNDERFLOW = STEP_UNDERFLOW
+    NONFINITE = NONFINITE
+    STEP_LIMIT = STEP_LIMIT
+    EVENT_LOOP = EVENT_LOOP
+
+
+STATUS_MESSAGES = {
+    Status.OK: "ok",
+    Status.STEP_UNDERFLOW: "step size fell below the floor (stiff or singular field)",
+    Status.NONFINITE: "the state became NaN or infinite",
+    Status.STEP_LIMIT: "the cell ran over its step budget",
+    Status.EVENT_LOOP: "contact events repeated at one instant (grazing without progress)",
+}
+
+
+class Kind(enum.IntEnum):
+    """What the steady motion of a cell was classified as."""
+
+    PERIODIC = PERIODIC
+    QUASIPERIODIC = QUASIPERIODIC
+    CHAOTIC = CHAOTIC
+    UNCONVERGED = UNCONVERGED
+    FAILED = FAILED
+
+
+KIND_NAMES = {
+    Kind.PERIODIC: "periodic",
+    Kind.QUASIPERIODIC: "quasi-periodic",
+    Kind.CHAOTIC: "chaotic",
+    Kind.UNCONVERGED: "unconverged",
+    Kind.FAILED: "failed",
+}
+
+# Short labels used in maps for the non-periodic kinds.
+KIND_LABELS = {
+    Kind.QUASIPERIODIC: "QP",
+    Kind.CHAOTIC: "chaos",
+    Kind.UNCONVERGED: "unconverged",
+    Kind.FAILED: "failed",
+}
+
+
+class Flag(enum.IntFlag):
+    """Remarks on a cell that a reader of a map should know about."""
+
+    NONE = 0
+    NEWTON = 1  # the transient was shortened by Newton jumps on the section map
+    SLOW = 2  # a multiplier lies within 0.02 of the unit circle: slow convergence
+    GRAZING = 4  # the steady orbit touches ε = 0 within 1e-6: p is sensitive
+    WARM_EXTRAPOLATED = 8  # the start was extrapolated from the two previous cells
+    RESTARTED = 16  # the previous cell failed; this one started from the job's state
+
+
+def status_message(code: int) -> str:
+    """Text for a status code, also for codes from a newer campar."""
+    try:
+        return STATUS_MESSAGES[Status(code)]
+    except ValueError:
+        return f"unknown status {code}"
+
+
+def cell_label(kind: int, n: int, p: int, chatter_p: int = 7) -> str:
+    """The map label of a cell: "2-2", "1-7~" (chattering), "QP", "chaos", …"""
+    if kind != Kind.PERIODIC:
+        return KIND_LABELS.get(Kind(kind), "failed")
+    if p >= chatter_p:
+        return f"{n}-{p}~"
+    return f"{n}-{p}"
