@@ -424,14 +424,15 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     return OK, final
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
     """Compute a continuation chain of cells in order; outputs are filled in place.
 
     Cell i has parameters (omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i]). Cell 0
     starts from x_init, every later cell from the final state of the one before
     (extrapolated from the two before when both were periodic and close), and
-    the cell after a failure from x_init again.
+    the cell after a failure from x_init again. Releases the GIL, so a thread
+    can compute while another one talks MPI.
     """
     cw = make_chain_work(cs)
     x_start = np.empty(2)
