@@ -6,6 +6,10 @@ compiled with numba; ``simulate_point`` runs one cell from Python.
 
 __version__ = "0.1.0"
 
+from .jit import ensure_fresh_cache
+
+ensure_fresh_cache()
+
 
 def __getattr__(name):
     # Lazy: importing campar for its version or CLI must not compile the kernel.

@@ -23,9 +23,8 @@ cycle is accepted by the same test afterwards.
 
 import math
 
-from numba import njit
-
 from .hermite import hermite_extremum
+from .jit import hot
 from .status import CHAOTIC, QUASIPERIODIC, UNCONVERGED
 
 # Columns of the per-revolution statistics.
@@ -38,7 +37,7 @@ REV_LOG_STRETCH = 5  # growth of the tangent vector (Lyapunov exponent)
 N_REV_STATS = 6
 
 
-@njit(cache=True)
+@hot
 def mat2_mul(a, b):
     """Product of 2×2 matrices given as row-major 4-tuples."""
     return (
@@ -49,7 +48,7 @@ def mat2_mul(a, b):
     )
 
 
-@njit(cache=True)
+@hot
 def eig2(m):
     """Eigenvalues of a real 2×2 matrix: (re0, im0, re1, im1), |λ0| ≥ |λ1|."""
     tr = m[0] + m[3]
@@ -67,19 +66,19 @@ def eig2(m):
     return 0.5 * tr, s, 0.5 * tr, -s
 
 
-@njit(cache=True)
+@hot
 def spectral_radius(m):
     re0, im0, _, _ = eig2(m)
     return math.hypot(re0, im0)
 
 
-@njit(cache=True)
+@hot
 def jacobian_at(jac, j):
     """The one-revolution Jacobian stored in row j as a 4-tuple."""
     return jac[j, 0], jac[j, 1], jac[j, 2], jac[j, 3]
 
 
-@njit(cache=True)
+@hot
 def cycle_jacobian(jac, k, n):
     """DP^n at xs[k-n]: the product J_k ⋯ J_{k-n+1} of the last n revolutions."""
     m = jacobian_at(jac, k - 1)
@@ -88,7 +87,7 @@ def cycle_jacobian(jac, k, n):
     return m
 
 
-@njit(cache=True)
+@hot
 def newton_fixed_point(x_now0, x_now1, x_then0, x_then1, m):
     """Fixed point z of P^n by one Newton step, given P^n(x_then) = x_now and M = DP^n.
 
@@ -111,7 +110,7 @@ def newton_fixed_point(x_now0, x_now1, x_then0, x_then1, m):
     return z0, z1, max(abs(z0 - x_now0), abs(z1 - x_now1)), max(abs(d0), abs(d1))
 
 
-@njit(cache=True)
+@hot
 def assess_revolution(xs, jac, k, base, n_max, conv_tol, window_tol, jump_r_max, jump_cap):
     """Decide, after revolution k, whether the motion has converged to a cycle.
 
@@ -146,7 +145,7 @@ def assess_revolution(xs, jac, k, base, n_max, conv_tol, window_tol, jump_r_max,
     return 0, jump_n, jz0, jz1
 
 
-@njit(cache=True)
+@hot
 def distinct_period(xs, k, n, tol):
     """Number of distinct points (within tol, ∞-norm) of the n-cycle xs[k-n+1..k].
 
@@ -168,7 +167,7 @@ def distinct_period(xs, k, n, tol):
     return n
 
 
-@njit(cache=True)
+@hot
 def repeat_period(xs, first, last, n_max, tol):
     """Smallest n ≤ n_max with |xs[j] − xs[j−n]| ≤ tol for every j in (first+n … last].
 
@@ -188,7 +187,7 @@ def repeat_period(xs, first, last, n_max, tol):
     return 0
 
 
-@njit(cache=True)
+@hot
 def reset_revolution_stats(row):
     row[REV_T_FREE] = 0.0
     row[REV_DETACH] = 0.0
@@ -198,7 +197,7 @@ def reset_revolution_stats(row):
     row[REV_LOG_STRETCH] = 0.0
 
 
-@njit(cache=True)
+@hot
 def cubic_extremes(g0, d0, g1, d1):
     """Min and max over [0, 1] of the cubic Hermite model (slopes per unit θ)."""
     lo = min(g0, g1)
@@ -212,7 +211,7 @@ def cubic_extremes(g0, d0, g1, d1):
     return lo, hi
 
 
-@njit(cache=True)
+@hot
 def add_step_stats(row, h, free, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
     """Fold one step into a revolution's statistics (ε and Pn with rates at both ends).
 
@@ -228,7 +227,7 @@ def add_step_stats(row, h, free, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
         row[REV_PN_MAX] = max(row[REV_PN_MAX], pn_hi)
 
 
-@njit(cache=True)
+@hot
 def window_stats(revs, first, count):
     """Combine revolutions first … first+count−1: (time separated, detachments,
     ε min, ε max, Pn max, mean log-stretch per revolution)."""
@@ -248,7 +247,7 @@ def window_stats(revs, first, count):
     return t_free, detach, eps_min, eps_max, pn_max, stretch / max(count, 1)
 
 
-@njit(cache=True)
+@hot
 def stretch_tangent(j, u):
     """Apply a one-revolution Jacobian to the unit tangent u; return log of the growth."""
     w0 = j[0] * u[0] + j[1] * u[1]
@@ -263,7 +262,7 @@ def stretch_tangent(j, u):
     return math.log(norm)
 
 
-@njit(cache=True)
+@hot
 def nonperiodic_kind(lyapunov_per_revolution, lyap_tol):
     """Kind of a motion without period ≤ n_max, from its largest Lyapunov exponent.
 
@@ -277,7 +276,7 @@ def nonperiodic_kind(lyapunov_per_revolution, lyap_tol):
     return UNCONVERGED
 
 
-@njit(cache=True)
+@hot
 def multipliers_of(m, out):
     """Floquet multipliers (eigenvalues of DP^n) into out[0..1, re/im]."""
     re0, im0, re1, im1 = eig2(m)
@@ -287,7 +286,7 @@ def multipliers_of(m, out):
     out[1, 1] = im1
 
 
-@njit(cache=True)
+@hot
 def near_unit_circle(m, margin):
     """True when a multiplier of M lies within margin of the unit circle."""
     re0, im0, re1, im1 = eig2(m)

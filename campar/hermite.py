@@ -5,10 +5,11 @@ analysis (extremes of ε and Pn inside a step).
 """
 
 import numpy as np
-from numba import njit
+
+from .jit import hot
 
 
-@njit(cache=True)
+@hot
 def hermite_extremum(g0, d0, g1, d1, want_min):
     """Interior extremum of the cubic with values g0, g1 and slopes d0, d1 on [0, 1].
 

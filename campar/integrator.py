@@ -9,8 +9,9 @@ The integrator knows nothing of cams. It sees
 
 * ``rhs(t, y, p, mode, dy)`` — a vector field that is smooth while ``mode``
   (an int array, the discrete state of a hybrid system) is fixed;
-* ``events(t, y, p, mode, g) -> m`` and ``event_rates(t, y, f, p, mode, dg)`` —
-  m event functions, positive while the mode holds, and their time rates;
+* ``events(t, y, f, p, mode, g, dg) -> m`` — m event functions, positive while
+  the mode holds, into g, and their time rates (given f = rhs(t, y)) into dg;
+  they may read only the error-controlled components y[:n_err];
 * ``t_end`` — a breakpoint that a step must end on exactly.
 
 ``advance`` takes one accepted step and ends it early, exactly on the first
@@ -22,9 +23,9 @@ cubic Hermite model of g built from its values and rates at both ends.
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from .hermite import hermite_extremum
+from .jit import compiled, hot
 from .status import NONFINITE, OK, STEP_UNDERFLOW
 
 DP54 = 0
@@ -70,6 +71,7 @@ MAX_REJECTS = 60  # consecutive rejections before the step is declared underflow
 # A step that would leave less than this fraction of itself before t_end is stretched.
 STRETCH = 0.01
 LOCATE_MAX_ITER = 80
+HERMITE_BOUND = 4.0 / 27.0
 
 
 class SolverOptions(NamedTuple):
@@ -95,19 +97,21 @@ class StepWork(NamedTuple):
     g1: np.ndarray  # … at the step end
     dg1: np.ndarray
     g_tmp: np.ndarray
-    ctrl: np.ndarray  # [proposed h, previous error norm]
+    dg_tmp: np.ndarray
+    ctrl: np.ndarray  # [proposed h, previous error norm, t, mode (2), count of g1]
     counts: np.ndarray  # [accepted steps, rejected steps, field evaluations]
 
 
-@njit(cache=True)
+@compiled
 def make_work(n, max_events, h0):
     """Buffers for an n-dimensional state with up to max_events event functions."""
     counts = np.zeros(3, dtype=np.int64)
-    ctrl = np.array([h0, 1e-4])
+    ctrl = np.array([h0, 1e-4, np.nan, -1.0, -1.0, 0.0])
     return StepWork(
         np.zeros((N_STAGES, n)),
         np.zeros(n),
         np.zeros(n),
+        np.zeros(max_events),
         np.zeros(max_events),
         np.zeros(max_events),
         np.zeros(max_events),
@@ -118,7 +122,7 @@ def make_work(n, max_events, h0):
     )
 
 
-@njit(cache=True)
+@hot
 def dp54_step(rhs, t, y, f, h, p, mode, w):
     """One Dormand–Prince step of size h from (t, y) with f = rhs(t, y).
 
@@ -140,7 +144,7 @@ def dp54_step(rhs, t, y, f, h, p, mode, w):
     w.counts[2] += N_STAGES - 1
 
 
-@njit(cache=True)
+@hot
 def rk4_step(rhs, t, y, f, h, p, mode, w):
     """One classical RK4 step; K[0..3] hold the stages, K[6] = rhs at the new point."""
     n = y.shape[0]
@@ -161,7 +165,7 @@ def rk4_step(rhs, t, y, f, h, p, mode, w):
     w.counts[2] += 4
 
 
-@njit(cache=True)
+@hot
 def error_norm(K, h, y, y_new, rtol, atol, n_err):
     """RMS of the DP54 error estimate scaled by atol + rtol·max(|y|, |y_new|)."""
     acc = 0.0
@@ -175,10 +179,9 @@ def error_norm(K, h, y, y_new, rtol, atol, n_err):
     return np.sqrt(acc / n_err)
 
 
-@njit(cache=True)
-def dense_eval(method, K, y, y_new, h, theta, out):
-    """State at t + θh (0 ≤ θ ≤ 1) from the last step's dense output into ``out``."""
-    n = y.shape[0]
+@hot
+def dense_eval(method, K, y, y_new, h, theta, n, out):
+    """First n components of the state at t + θh (0 ≤ θ ≤ 1) from the last step."""
     if method == DP54:
         for i in range(n):
             q1 = 0.0
@@ -204,16 +207,16 @@ def dense_eval(method, K, y, y_new, h, theta, out):
             out[i] = h00 * y[i] + h10 * h * K[0, i] + h01 * y_new[i] + h11 * h * K[6, i]
 
 
-@njit(cache=True)
-def event_value(events, method, t, y, h, theta, p, mode, w, which):
+@hot
+def event_value(events, method, t, y, h, theta, p, mode, w, which, n_err):
     """Event function ``which`` on the dense output of the last trial step."""
-    dense_eval(method, w.K, y, w.y_new, h, theta, w.y_stage)
-    events(t + theta * h, w.y_stage, p, mode, w.g_tmp)
+    dense_eval(method, w.K, y, w.y_new, h, theta, n_err, w.y_stage)
+    events(t + theta * h, w.y_stage, w.K[0], p, mode, w.g_tmp, w.dg_tmp)
     return w.g_tmp[which]
 
 
-@njit(cache=True)
-def locate_event(events, method, t, y, h, p, mode, w, which, a, fa, b, fb, theta_tol):
+@hot
+def locate_event(events, method, t, y, h, p, mode, w, which, a, fa, b, fb, theta_tol, n_err):
     """Root of event ``which`` in [a, b] (fractions of the step) with fa > 0 ≥ fb.
 
     Illinois variant of regula falsi on the dense output. Returns the final
@@ -227,7 +230,7 @@ def locate_event(events, method, t, y, h, p, mode, w, which, a, fa, b, fb, theta
         m = (a * fb - b * fa) / (fb - fa)
         if not (a < m < b):
             m = 0.5 * (a + b)
-        fm = event_value(events, method, t, y, h, m, p, mode, w, which)
+        fm = event_value(events, method, t, y, h, m, p, mode, w, which, n_err)
         if fm > 0.0:
             a, fa = m, fm
             if side == -1:
@@ -241,8 +244,8 @@ def locate_event(events, method, t, y, h, p, mode, w, which, a, fa, b, fb, theta
     return a, b
 
 
-@njit(cache=True)
-def first_crossing(events, method, t, y, h, p, mode, w, m, theta_tol):
+@hot
+def first_crossing(events, method, t, y, h, p, mode, w, m, theta_tol, n_err):
     """Earliest event root in the trial step, from g and g' at both step ends.
 
     Returns (event index or -1, θ of the root). A g that is ≤ 0 at the start by
@@ -267,21 +270,24 @@ def first_crossing(events, method, t, y, h, p, mode, w, m, theta_tol):
                 # the mode holds only inside the step, if at all: bracket from its peak
                 th, _ = hermite_extremum(g0, d0, g1, d1, False)
                 if th > 0.0:
-                    gm = event_value(events, method, t, y, h, th, p, mode, w, i)
+                    gm = event_value(events, method, t, y, h, th, p, mode, w, i, n_err)
                     if gm > 0.0:
                         a = th
                         fa = gm
                 if fa <= 0.0:  # never inside: the event is at the step start
-                    if 0.0 < first_theta:
+                    if first_theta > 0.0:
                         first = i
                         first_theta = 0.0
                     continue
         else:
-            # both ends positive: look for a dip below zero in between
-            th, val = hermite_extremum(g0, d0, g1, d1, True)
-            if th <= 0.0 or val > 0.1 * max(abs(g0), abs(g1)):
+            # both ends positive: a dip below zero needs min(g0, g1) < 4/27 (|d0| + |d1|),
+            # the largest excursion of a cubic Hermite basis beyond its end values
+            if min(g0, g1) > HERMITE_BOUND * (abs(d0) + abs(d1)):
                 continue
-            gm = event_value(events, method, t, y, h, th, p, mode, w, i)
+            th, val = hermite_extremum(g0, d0, g1, d1, True)
+            if th <= 0.0 or val > 0.0:
+                continue
+            gm = event_value(events, method, t, y, h, th, p, mode, w, i, n_err)
             if gm > 0.0:
                 continue
             b = th
@@ -290,14 +296,16 @@ def first_crossing(events, method, t, y, h, p, mode, w, m, theta_tol):
                 continue
         if a >= first_theta:
             continue
-        lo, hi = locate_event(events, method, t, y, h, p, mode, w, i, a, fa, b, fb, theta_tol)
+        lo, hi = locate_event(
+            events, method, t, y, h, p, mode, w, i, a, fa, b, fb, theta_tol, n_err
+        )
         if hi < first_theta:
             first = i
             first_theta = hi
     return first, first_theta
 
 
-@njit(cache=True)
+@hot
 def take_step(rhs, method, t, y, f, h, p, mode, w):
     if method == DP54:
         dp54_step(rhs, t, y, f, h, p, mode, w)
@@ -305,7 +313,7 @@ def take_step(rhs, method, t, y, f, h, p, mode, w):
         rk4_step(rhs, t, y, f, h, p, mode, w)
 
 
-@njit(cache=True)
+@hot
 def all_finite(x):
     for i in range(x.shape[0]):
         if not np.isfinite(x[i]):
@@ -313,17 +321,27 @@ def all_finite(x):
     return True
 
 
-@njit(cache=True)
-def advance(rhs, events, event_rates, t, t_end, y, f, p, mode, opt, w):
+@hot
+def advance(rhs, events, t, t_end, y, f, p, mode, opt, w):
     """One accepted step from t toward the breakpoint t_end, ending at the first event.
 
     y and f (= rhs(t, y)) are updated in place. Returns (status, t_new, event):
     event is the index of the event function whose root ends the step, or -1.
     An event at the very start returns t_new = t with y unchanged.
+
+    The event values at the start are reused from the previous step's end when
+    that step ended at this t in this mode without an event: the caller must
+    not change y or f between two such calls.
     """
     n = y.shape[0]
-    m = events(t, y, p, mode, w.g0)
-    event_rates(t, y, f, p, mode, w.dg0)
+    if t == w.ctrl[2] and mode[0] == w.ctrl[3] and mode[1] == w.ctrl[4]:
+        m = int(w.ctrl[5])
+        for i in range(m):
+            w.g0[i] = w.g1[i]
+            w.dg0[i] = w.dg1[i]
+    else:
+        m = events(t, y, f, p, mode, w.g0, w.dg0)
+    w.ctrl[2] = np.nan
     rejects = 0
     adaptive = opt.method == DP54
     while True:
@@ -350,10 +368,10 @@ def advance(rhs, events, event_rates, t, t_end, y, f, p, mode, opt, w):
         elif not all_finite(w.y_new):
             return NONFINITE, t, -1
         t_new = t_end if h == remaining else t + h
-        events(t_new, w.y_new, p, mode, w.g1)
-        event_rates(t_new, w.y_new, w.K[6], p, mode, w.dg1)
-        theta_tol = opt.event_tol / h
-        which, theta = first_crossing(events, opt.method, t, y, h, p, mode, w, m, theta_tol)
+        events(t_new, w.y_new, w.K[6], p, mode, w.g1, w.dg1)
+        which, theta = first_crossing(
+            events, opt.method, t, y, h, p, mode, w, m, opt.event_tol / h, opt.n_err
+        )
         if which >= 0 and theta < 1.0:
             if theta * h <= opt.event_tol:
                 return OK, t, which
@@ -368,13 +386,19 @@ def advance(rhs, events, event_rates, t, t_end, y, f, p, mode, opt, w):
                     w.ctrl[0] = h_event * 0.5
                     continue
             t_new = t + h_event
-        elif adaptive:
-            # PI control of the next step from this accepted step's error
-            err = max(err, 1e-10)
-            fac = err**ERROR_EXPONENT / w.ctrl[1] ** PI_BETA / SAFETY
-            fac = max(1.0 / MAX_FACTOR, min(1.0 / MIN_FACTOR, fac))
-            w.ctrl[0] = h / fac
-            w.ctrl[1] = max(err, 1e-4)
+        else:
+            if adaptive:
+                # PI control of the next step from this accepted step's error
+                err = max(err, 1e-10)
+                fac = err**ERROR_EXPONENT / w.ctrl[1] ** PI_BETA / SAFETY
+                fac = max(1.0 / MAX_FACTOR, min(1.0 / MIN_FACTOR, fac))
+                w.ctrl[0] = h / fac
+                w.ctrl[1] = max(err, 1e-4)
+            if which < 0:  # g1 holds the event values at t_new: reusable next step
+                w.ctrl[2] = t_new
+                w.ctrl[3] = mode[0]
+                w.ctrl[4] = mode[1]
+                w.ctrl[5] = m
         for i in range(n):
             y[i] = w.y_new[i]
             f[i] = w.K[6, i]
@@ -382,7 +406,7 @@ def advance(rhs, events, event_rates, t, t_end, y, f, p, mode, opt, w):
         return OK, t_new, which
 
 
-@njit(cache=True)
+@hot
 def initial_step(rhs, t, y, f, p, mode, rtol, atol, n_err, h_max):
     """Starting step size (Hairer, Nørsett & Wanner, II.4), capped at h_max."""
     d0 = 0.0
@@ -393,8 +417,5 @@ def initial_step(rhs, t, y, f, p, mode, rtol, atol, n_err, h_max):
         d1 += (f[i] / scale) ** 2
     d0 = np.sqrt(d0 / n_err)
     d1 = np.sqrt(d1 / n_err)
-    if d0 < 1e-5 or d1 < 1e-5:
-        h0 = 1e-6
-    else:
-        h0 = 0.01 * d0 / d1
+    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     return min(h0, h_max)

@@ -183,9 +183,7 @@ class Job(Settings):
     def known_fixed(cls, fixed: dict[str, float]) -> dict[str, float]:
         for name, value in fixed.items():
             if name not in PAPER_VALUES:
-                raise ValueError(
-                    f"unknown parameter {name!r}; allowed: {', '.join(PAPER_VALUES)}"
-                )
+                raise ValueError(f"unknown parameter {name!r}; allowed: {', '.join(PAPER_VALUES)}")
             try:
                 check_parameter(name, value)
             except ValueError as exc:
@@ -271,7 +269,11 @@ def format_validation_error(exc: ValidationError, source: str) -> str:
         elif err["type"] == "missing":
             message = "required key is missing"
         got = err.get("input")
-        detail = "" if err["type"] in ("extra_forbidden", "missing") or isinstance(got, dict) else f", got {got!r}"
+        detail = (
+            ""
+            if err["type"] in ("extra_forbidden", "missing") or isinstance(got, dict)
+            else f", got {got!r}"
+        )
         lines.append(f"{source}: {where}: {message}{detail}")
     return "\n".join(lines)
 

@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from . import model
 from .analysis import (
     N_REV_STATS,
     REV_DETACH,
@@ -34,8 +35,8 @@ from .analysis import (
     stretch_tangent,
     window_stats,
 )
-from . import model
 from .integrator import SolverOptions, StepWork, advance, initial_step, make_work
+from .jit import compiled, hot
 from .model import (
     FREE,
     MAX_EVENTS,
@@ -132,7 +133,7 @@ class ChainWork(NamedTuple):
     u: np.ndarray  # tangent vector for the Lyapunov exponent
 
 
-@njit(cache=True)
+@compiled
 def make_chain_work(cs):
     rows = cs.max_revolutions + cs.window + 2
     return ChainWork(
@@ -150,7 +151,7 @@ def make_chain_work(cs):
     )
 
 
-@njit(cache=True)
+@hot
 def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit):
     """Integrate one cam revolution from θ = 0 to 2π, in place on x.
 
@@ -168,20 +169,22 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit):
     eps, deps = gap(0.0, x, p, RISE)
     mode[1] = contact_mode(eps, deps, p)
     t = 0.0
+    e0 = de0 = pn0 = dpn0 = 0.0
     for phase in range(N_PHASES):
         mode[0] = phase
         t_end = PHASE_BOUNDS[phase + 1] / p.omega
         model.rhs(t, x, p, mode, f)
         w.counts[2] += 1
         stuck = 0
+        fresh = False  # e0 … dpn0 hold the kinematics at t in this mode
         while t < t_end:
             if w.counts[0] + w.counts[1] > step_limit:
                 return STEP_LIMIT
             t_prev = t
             contact = mode[1]
-            if want_stats:
+            if want_stats and not fresh:
                 e0, de0, pn0, dpn0 = contact_kinematics(t, x, f, p, mode)
-            status, t, which = advance(model.rhs, model.events, model.event_rates, t, t_end, x, f, p, mode, opt, w)
+            status, t, which = advance(model.rhs, model.events, t, t_end, x, f, p, mode, opt, w)
             if status != OK:
                 return status
             if t > t_prev:
@@ -191,6 +194,8 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit):
                     add_step_stats(
                         row, t - t_prev, contact == FREE, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1
                     )
+                    e0, de0, pn0, dpn0 = e1, de1, pn1, dpn1
+                    fresh = True
             elif which >= 0:
                 stuck += 1
                 if stuck > MAX_STUCK_EVENTS:
@@ -201,10 +206,11 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit):
                 mode[1] = mode_after_event(contact, which)
                 model.rhs(t, x, p, mode, f)
                 w.counts[2] += 1
+                fresh = False
     return OK
 
 
-@njit(cache=True)
+@hot
 def solver_options(base, p, cs):
     """Per-cell integrator options: RK4's step and the floors scale with the period."""
     period = TWO_PI / p.omega
@@ -219,7 +225,7 @@ def solver_options(base, p, cs):
     )
 
 
-@njit(cache=True)
+@hot
 def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
     """Revolution k+1 from xs[k]: fills xs[k+1], jac[k] (if variational), revs[k]."""
     if variational:
@@ -243,18 +249,18 @@ def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
     return OK
 
 
-@njit(cache=True)
+@hot
 def spend(cw):
     return cw.w2.counts[0] + cw.w2.counts[1] + cw.w6.counts[0] + cw.w6.counts[1]
 
 
-@njit(cache=True)
+@hot
 def share_step_size(src, dst):
     dst.ctrl[0] = src.ctrl[0]
     dst.ctrl[1] = src.ctrl[1]
 
 
-@njit(cache=True)
+@hot
 def transient_converged(cw, p, opt, cs, want_stats, step_budget):
     """Revolutions until assess_revolution accepts a cycle or the budget ends.
 
@@ -281,7 +287,7 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
     return OK, k, 0, base, jumps
 
 
-@njit(cache=True)
+@hot
 def transient_fixed(cw, p, opt, cs, want_stats, step_budget):
     """cs.max_revolutions plain revolutions, then a window with variational equations.
 
@@ -301,7 +307,7 @@ def transient_fixed(cw, p, opt, cs, want_stats, step_budget):
     return OK, k, period
 
 
-@njit(cache=True)
+@hot
 def fail_cell(out, i, status, k, steps):
     out.n[i] = 0
     out.p[i] = 0
@@ -324,7 +330,7 @@ def fail_cell(out, i, status, k, steps):
         out.sections[i, :, :] = np.nan
 
 
-@njit(cache=True)
+@hot
 def record_window(out, i, cw, first, count, period):
     """Statistics of revolutions first … first+count−1 into the outputs of cell i."""
     t_free, detach, eps_min, eps_max, pn_max, stretch = window_stats(cw.revs, first, count)
@@ -336,7 +342,7 @@ def record_window(out, i, cw, first, count, period):
     return stretch
 
 
-@njit(cache=True)
+@hot
 def record_sections(out, i, cw, last, count):
     s = out.sections.shape[1]
     out.sections[i, :, :] = np.nan
@@ -345,7 +351,7 @@ def record_sections(out, i, cw, last, count):
         out.sections[i, j, 1] = cw.xs[last - count + 1 + j, 1]
 
 
-@njit(cache=True)
+@hot
 def run_cell(x_start, p, opt, cs, cw, out, i):
     """Compute cell i from x_start; returns (status, index of the final state in xs)."""
     period_time = TWO_PI / p.omega
@@ -451,8 +457,10 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
             x_start[:] = x_init
             if i > 0:
                 flags |= FLAG_RESTARTED
-        elif have2 and cs.extrapolate and (
-            abs(prev1[0] - prev2[0]) + abs(prev1[1] - prev2[1]) < EXTRAPOLATE_MAX
+        elif (
+            have2
+            and cs.extrapolate
+            and (abs(prev1[0] - prev2[0]) + abs(prev1[1] - prev2[1]) < EXTRAPOLATE_MAX)
         ):
             x_start[0] = 2.0 * prev1[0] - prev2[0]
             x_start[1] = 2.0 * prev1[1] - prev2[1]
@@ -466,7 +474,9 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
             eps, deps = gap(0.0, cw.x2, p, RISE)
             cw.mode[1] = contact_mode(eps, deps, p)
             model.rhs(0.0, cw.x2, p, cw.mode, cw.f2)
-            h0 = initial_step(model.rhs, 0.0, cw.x2, cw.f2, p, cw.mode, solver.rtol, solver.atol, 2, 0.1)
+            h0 = initial_step(
+                model.rhs, 0.0, cw.x2, cw.f2, p, cw.mode, solver.rtol, solver.atol, 2, 0.1
+            )
             cw.w2.ctrl[0] = h0
             cw.w6.ctrl[0] = h0
             h_started = True

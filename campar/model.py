@@ -21,7 +21,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+
+from .jit import hot
 
 # Cam phases of the cosine-acceleration law with stroke 1.
 RISE = 0
@@ -56,7 +57,7 @@ class ModelParams(NamedTuple):
     clamp: bool  # True: no tensile force, Pn = max(0, …)
 
 
-@njit(cache=True)
+@hot
 def make_params(omega, zeta, f0, mu_kn, mu_cn, clamp):
     """Pack the physical parameters (μkn, μcn ∈ (0, 1)) into ModelParams."""
     k = mu_kn / (1.0 - mu_kn)
@@ -64,7 +65,7 @@ def make_params(omega, zeta, f0, mu_kn, mu_cn, clamp):
     return ModelParams(omega, zeta, f0, k, c, clamp)
 
 
-@njit(cache=True)
+@hot
 def phase_of(theta):
     """Cam phase containing angle θ ∈ [0, 2π) (a boundary belongs to the next phase)."""
     if theta < PHASE_BOUNDS[1]:
@@ -76,7 +77,7 @@ def phase_of(theta):
     return NEAR_DWELL
 
 
-@njit(cache=True)
+@hot
 def cam(theta, phase):
     """Cam lift yc(θ) and its first two θ-derivatives with the formula of ``phase``.
 
@@ -97,14 +98,14 @@ def cam(theta, phase):
     return 0.0, 0.0, 0.0
 
 
-@njit(cache=True)
+@hot
 def cam_at(theta):
     """yc, dyc/dθ, d²yc/dθ² at any angle θ (taken modulo 2π)."""
     th = theta % TWO_PI
     return cam(th, phase_of(th))
 
 
-@njit(cache=True)
+@hot
 def contact_force(eps, deps, p):
     """Hunt–Crossley force Pn for penetration ε and its rate ε' (MODEL.md eq. 12)."""
     if eps <= 0.0:
@@ -115,14 +116,14 @@ def contact_force(eps, deps, p):
     return force
 
 
-@njit(cache=True)
+@hot
 def gap(t, y, p, phase):
     """Penetration ε = yc − y and its rate ε' = ẏc − y' at time t."""
     yc, dyc, _ = cam(p.omega * t, phase)
     return yc - y[0], p.omega * dyc - y[1]
 
 
-@njit(cache=True)
+@hot
 def contact_mode(eps, deps, p):
     """The contact mode a state is in (used where no event history exists)."""
     if eps <= 0.0:
@@ -132,7 +133,7 @@ def contact_mode(eps, deps, p):
     return PUSH
 
 
-@njit(cache=True)
+@hot
 def rhs(t, y, p, mode, dy):
     """Vector field of the current mode into ``dy``; variational part if len(y) == 6."""
     yc, dyc, _ = cam(p.omega * t, mode[0])
@@ -161,7 +162,7 @@ def rhs(t, y, p, mode, dy):
         dy[5] = a10 * y[3] + a11 * y[5]
 
 
-@njit(cache=True)
+@hot
 def divergence(t, y, p, mode):
     """div f = tr A of the (y, y') field in the current mode (Liouville's formula)."""
     if mode[1] != PUSH:
@@ -171,43 +172,34 @@ def divergence(t, y, p, mode):
     return -2.0 * p.zeta - p.k * eps * math.sqrt(eps) * p.c
 
 
-@njit(cache=True)
-def events(t, y, p, mode, g):
-    """Event functions of the current contact mode into ``g``; returns how many.
+@hot
+def events(t, y, f, p, mode, g, dg):
+    """Event functions of the current contact mode into g, their rates into dg.
 
     Each g_i is positive while the mode holds; the mode ends where one reaches 0.
     FREE: g0 = −ε (impact). PUSH: g0 = ε (detachment), g1 = 1 + c ε' (force
     reaches zero, clamp only). SLACK: g0 = ε (detachment), g1 = −(1 + c ε').
+    Rates use f = rhs(t, y). Returns the number of event functions.
     """
-    eps, deps = gap(t, y, p, mode[0])
-    if mode[1] == FREE:
-        g[0] = -eps
-        return 1
-    g[0] = eps
-    if not p.clamp:
-        return 1
-    if mode[1] == PUSH:
-        g[1] = 1.0 + p.c * deps
-    else:
-        g[1] = -(1.0 + p.c * deps)
-    return 2
-
-
-@njit(cache=True)
-def event_rates(t, y, f, p, mode, dg):
-    """Time derivatives of the event functions, given the field value ``f``."""
-    _, dyc, d2yc = cam(p.omega * t, mode[0])
+    yc, dyc, d2yc = cam(p.omega * t, mode[0])
+    eps = yc - y[0]
     deps = p.omega * dyc - y[1]
     d2eps = p.omega * p.omega * d2yc - f[1]
     if mode[1] == FREE:
+        g[0] = -eps
         dg[0] = -deps
-        return
+        return 1
+    g[0] = eps
     dg[0] = deps
-    if p.clamp:
-        dg[1] = p.c * d2eps if mode[1] == PUSH else -p.c * d2eps
+    if not p.clamp:
+        return 1
+    sign = 1.0 if mode[1] == PUSH else -1.0
+    g[1] = sign * (1.0 + p.c * deps)
+    dg[1] = sign * p.c * d2eps
+    return 2
 
 
-@njit(cache=True)
+@hot
 def mode_after_event(contact, which):
     """Contact mode after event ``which`` of mode ``contact`` fired."""
     if contact == FREE:
@@ -217,13 +209,13 @@ def mode_after_event(contact, which):
     return SLACK if contact == PUSH else PUSH
 
 
-@njit(cache=True)
+@hot
 def is_detachment(contact, which):
     """True when event ``which`` of mode ``contact`` is a contact → separation."""
     return contact != FREE and which == 0
 
 
-@njit(cache=True)
+@hot
 def contact_kinematics(t, y, f, p, mode):
     """ε, ε', Pn and dPn/dt at a state with field value f, in the current mode.
 

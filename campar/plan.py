@@ -35,8 +35,7 @@ def plan_tiles(job: Job) -> list[Tile]:
     n_rows, _ = job.shape
     size = job.tiles.rows
     return [
-        Tile(i, start, min(start + size, n_rows))
-        for i, start in enumerate(range(0, n_rows, size))
+        Tile(i, start, min(start + size, n_rows)) for i, start in enumerate(range(0, n_rows, size))
     ]
 
 

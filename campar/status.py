@@ -5,7 +5,6 @@ A leaf module: njit code returns these integers, Python code translates them.
 
 import enum
 
-
 # Plain ints for njit code (numba folds module-level ints into constants).
 OK = 0
 STEP_UNDERFLOW = 1

@@ -1,0 +1,92 @@
+"""Look of every campar figure: fonts, line widths, the field's notation, saving.
+
+Figures are made with ``matplotlib.figure.Figure`` and the Agg canvas, never
+through pyplot: drawing is headless everywhere (clusters, CI) and leaves the
+caller's backend and pyplot's figure registry alone.
+"""
+
+import contextlib
+from pathlib import Path
+
+import matplotlib
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+# Sizes for a journal page: 9 pt text survives reduction to one column.
+STYLE = {
+    "font.size": 9,
+    "axes.labelsize": 9,
+    "axes.titlesize": 9,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "legend.fontsize": 8,
+    "legend.title_fontsize": 8,
+    "legend.frameon": False,
+    "legend.handlelength": 1.0,
+    "legend.handleheight": 1.0,
+    "legend.handletextpad": 0.5,
+    "legend.labelspacing": 0.3,
+    "legend.columnspacing": 1.0,
+    "legend.borderaxespad": 0.0,
+    "axes.linewidth": 0.6,
+    "xtick.major.width": 0.6,
+    "ytick.major.width": 0.6,
+    "xtick.minor.width": 0.4,
+    "ytick.minor.width": 0.4,
+    "xtick.direction": "out",
+    "ytick.direction": "out",
+    "hatch.linewidth": 0.6,
+    "mathtext.fontset": "dejavusans",
+    "savefig.bbox": "tight",
+    "savefig.pad_inches": 0.03,
+}
+DPI = 300  # PNG resolution; vector formats keep maps as embedded images (rasterized)
+
+# The field's notation for the model parameters (MODEL.md), and what each one is.
+SYMBOLS = {
+    "omega": r"$\omega$",
+    "f0": r"$f_0$",
+    "mu_kn": r"$\mu_{\mathrm{kn}}$",
+    "mu_cn": r"$\mu_{\mathrm{cn}}$",
+    "zeta": r"$\zeta$",
+}
+MEANINGS = {
+    "omega": "cam speed",
+    "f0": "preload",
+    "mu_kn": "contact stiffness",
+    "mu_cn": "contact damping",
+    "zeta": "damping ratio",
+}
+
+
+def axis_label(name: str) -> str:
+    """Axis title of a model parameter: "cam speed ω", "contact damping μcn", …"""
+    return f"{MEANINGS[name]} {SYMBOLS[name]}"
+
+
+def parameter_text(values: dict[str, float]) -> str:
+    """"μkn = 0.8, f0 = 0.5, ζ = 0.2" in the field's notation, for a caption line."""
+    return ",  ".join(f"{SYMBOLS[name]} = {value:g}" for name, value in values.items())
+
+
+@contextlib.contextmanager
+def figure_style():
+    """Apply campar's rc settings while artists are created."""
+    with matplotlib.rc_context(STYLE):
+        yield
+
+
+def new_figure(width: float, height: float) -> Figure:
+    """A headless figure (Agg canvas, constrained layout), size in inches."""
+    figure = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(figure)
+    return figure
+
+
+def save_figure(figure: Figure, path: str | Path, dpi: int = DPI) -> Path:
+    """Write a figure; the format follows the suffix (.png, .pdf, .svg, …)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with figure_style():
+        figure.savefig(path, dpi=dpi)
+    return path
