@@ -27,7 +27,9 @@ compiled = njit(cache=True)
 hot = njit(cache=True, _nrt=False)
 
 PACKAGE = Path(__file__).resolve().parent
-COMPILED_MODULES = ("jit", "status", "hermite", "model", "integrator", "analysis", "kernel")
+COMPILED_MODULES = (
+    "jit", "status", "hermite", "model", "integrator", "analysis", "revolution", "kernel"
+)  # fmt: skip
 STAMP = "campar-core.digest"
 
 

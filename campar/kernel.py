@@ -1,4 +1,4 @@
-"""The compiled kernel: one revolution, one cell, one continuation chain of cells.
+"""The compiled kernel: one cell, one continuation chain of cells, one traced orbit.
 
 ``run_chain`` is the entry the runners call: it computes a chain of cells in
 order (ω decreasing along the chain in a map), each warm-started from the
@@ -20,9 +20,7 @@ from numba import njit
 from . import model
 from .analysis import (
     N_REV_STATS,
-    REV_DETACH,
     REV_LOG_STRETCH,
-    add_step_stats,
     assess_revolution,
     cycle_jacobian,
     distinct_period,
@@ -30,30 +28,24 @@ from .analysis import (
     near_unit_circle,
     nonperiodic_kind,
     repeat_period,
-    reset_revolution_stats,
     spectral_radius,
     stretch_tangent,
     window_stats,
 )
-from .integrator import SolverOptions, StepWork, advance, initial_step, make_work
+from .integrator import StepWork, initial_step, make_work
 from .jit import compiled, hot
 from .model import (
-    FREE,
     MAX_EVENTS,
-    N_PHASES,
     N_STATE,
     N_STATE_VARIATIONAL,
-    PHASE_BOUNDS,
     RISE,
     TWO_PI,
-    contact_kinematics,
     contact_mode,
     gap,
-    is_detachment,
     make_params,
-    mode_after_event,
 )
-from .status import EVENT_LOOP, FAILED, NONFINITE, OK, PERIODIC, STEP_LIMIT
+from .revolution import Trace, make_trace, run_revolution, solver_options
+from .status import FAILED, NONFINITE, OK, PERIODIC
 
 # Transient policies.
 CONVERGED = 0  # stop once the section has converged to a cycle (Newton-accelerated)
@@ -71,7 +63,6 @@ FLAG_SLOW = 2
 FLAG_WARM_EXTRAPOLATED = 8
 FLAG_RESTARTED = 16
 
-MAX_STUCK_EVENTS = 8  # zero-length events in a row before a cell is declared stuck
 SLOW_MARGIN = 0.02  # a multiplier this close to the unit circle marks a slow cell
 EXTRAPOLATE_MAX = 0.05  # extrapolate the warm start only between close fixed points
 
@@ -131,6 +122,7 @@ class ChainWork(NamedTuple):
     jac: np.ndarray  # (R, 4) one-revolution Jacobians
     revs: np.ndarray  # (R, N_REV_STATS)
     u: np.ndarray  # tangent vector for the Lyapunov exponent
+    no_trace: Trace
 
 
 @compiled
@@ -148,80 +140,7 @@ def make_chain_work(cs):
         np.zeros((rows, 4)),
         np.zeros((rows, N_REV_STATS)),
         np.array([1.0, 0.0]),
-    )
-
-
-@hot
-def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit):
-    """Integrate one cam revolution from θ = 0 to 2π, in place on x.
-
-    Steps end on every cam phase boundary and every contact event; with the
-    variational part, Φ starts at I, so x[2:6] ends as the Jacobian of the
-    one-revolution map. Fills the revolution's statistics in ``row``; fails with
-    STEP_LIMIT once the workspace has counted more than step_limit steps.
-    """
-    if x.shape[0] == N_STATE_VARIATIONAL:
-        x[2] = 1.0
-        x[3] = 0.0
-        x[4] = 0.0
-        x[5] = 1.0
-    reset_revolution_stats(row)
-    eps, deps = gap(0.0, x, p, RISE)
-    mode[1] = contact_mode(eps, deps, p)
-    t = 0.0
-    e0 = de0 = pn0 = dpn0 = 0.0
-    for phase in range(N_PHASES):
-        mode[0] = phase
-        t_end = PHASE_BOUNDS[phase + 1] / p.omega
-        model.rhs(t, x, p, mode, f)
-        w.counts[2] += 1
-        stuck = 0
-        fresh = False  # e0 … dpn0 hold the kinematics at t in this mode
-        while t < t_end:
-            if w.counts[0] + w.counts[1] > step_limit:
-                return STEP_LIMIT
-            t_prev = t
-            contact = mode[1]
-            if want_stats and not fresh:
-                e0, de0, pn0, dpn0 = contact_kinematics(t, x, f, p, mode)
-            status, t, which = advance(model.rhs, model.events, t, t_end, x, f, p, mode, opt, w)
-            if status != OK:
-                return status
-            if t > t_prev:
-                stuck = 0
-                if want_stats:
-                    e1, de1, pn1, dpn1 = contact_kinematics(t, x, f, p, mode)
-                    add_step_stats(
-                        row, t - t_prev, contact == FREE, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1
-                    )
-                    e0, de0, pn0, dpn0 = e1, de1, pn1, dpn1
-                    fresh = True
-            elif which >= 0:
-                stuck += 1
-                if stuck > MAX_STUCK_EVENTS:
-                    return EVENT_LOOP
-            if which >= 0:
-                if is_detachment(contact, which):
-                    row[REV_DETACH] += 1.0
-                mode[1] = mode_after_event(contact, which)
-                model.rhs(t, x, p, mode, f)
-                w.counts[2] += 1
-                fresh = False
-    return OK
-
-
-@hot
-def solver_options(base, p, cs):
-    """Per-cell integrator options: RK4's step and the floors scale with the period."""
-    period = TWO_PI / p.omega
-    return SolverOptions(
-        base.method,
-        base.rtol,
-        base.atol,
-        period / cs.rk4_steps,
-        1e-12 * max(1.0, period),
-        base.event_tol * max(1.0, period),
-        N_STATE,
+        make_trace(0, 0, 1),
     )
 
 
@@ -235,7 +154,7 @@ def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
     x[0] = cw.xs[k, 0]
     x[1] = cw.xs[k, 1]
     limit = w.counts[0] + w.counts[1] + (step_budget - spend(cw))
-    status = run_revolution(x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit)
+    status = run_revolution(x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit, cw.no_trace)
     if status != OK:
         return status
     if not (math.isfinite(x[0]) and math.isfinite(x[1])):
@@ -494,3 +413,28 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
         have1 = True
         prev_periodic = periodic
         prev_n = out.n[i]
+
+
+@njit(cache=True)
+def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, clamp, x0, solver, cs, revolutions, rec):
+    """Integrate ``revolutions`` revolutions from x0 (at θ = 0), recording into rec.
+
+    Returns (status, final y, final y'). For figures of a steady orbit: start
+    from a cell's final state and trace its period.
+    """
+    p = make_params(omega, zeta, f0, mu_kn, mu_cn, clamp)
+    opt = solver_options(solver, p, cs)
+    w = make_work(N_STATE, MAX_EVENTS, 0.0)
+    x = x0.copy()
+    f = np.zeros(N_STATE)
+    mode = np.zeros(2, dtype=np.int64)
+    eps, deps = gap(0.0, x, p, RISE)
+    mode[1] = contact_mode(eps, deps, p)
+    model.rhs(0.0, x, p, mode, f)
+    w.ctrl[0] = initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol, 2, 0.1)
+    row = np.zeros(N_REV_STATS)
+    for _ in range(revolutions):
+        status = run_revolution(x, f, p, opt, w, mode, row, False, cs.max_steps, rec)
+        if status != OK:
+            return status, x[0], x[1]
+    return OK, x[0], x[1]

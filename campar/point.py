@@ -1,0 +1,218 @@
+"""One cell from Python: ``simulate_point`` and its result, with an optional orbit trace.
+
+This is the API behind ``campar point``; the CLI only parses and prints.
+"""
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import JobError
+from .job import Job, check_parameter
+from .kernel import trace_orbit
+from .plan import Tile
+from .revolution import make_trace
+from .status import KIND_NAMES, Flag, Kind, cell_label, status_message
+from .tile import cell_settings, run_tile, solver_options
+
+# Event codes of a trace: 2·(contact mode before) + (event index), see kernel.Trace.
+EVENT_NAMES = {0: "impact", 2: "detachment", 3: "force zero", 4: "detachment", 5: "force resumes"}
+SAMPLES_PER_STEP = 4
+MAX_TRACE_REVOLUTIONS = 64
+
+
+@dataclass(frozen=True)
+class OrbitTrace:
+    """The steady orbit sampled densely; times count from the start of the trace."""
+
+    t: np.ndarray
+    y: np.ndarray
+    v: np.ndarray
+    yc: np.ndarray
+    eps: np.ndarray
+    pn: np.ndarray
+    contact: np.ndarray  # contact mode (0 separated, 1 pushing, 2 in contact without force)
+    events: np.ndarray  # (M, 4): t, y, y', code
+    period: float  # one cam revolution, 2π/ω
+
+    def events_named(self, name: str) -> np.ndarray:
+        """Rows (t, y, y') of the events called ``name`` ("impact", "detachment", …)."""
+        codes = [code for code, label in EVENT_NAMES.items() if label == name]
+        return self.events[np.isin(self.events[:, 3], codes), :3]
+
+
+@dataclass(frozen=True)
+class PointResult:
+    parameters: dict
+    label: str
+    n: int
+    p: int
+    kind: str
+    status: str
+    flags: tuple[str, ...]
+    dc: float
+    eps_min: float
+    eps_max: float
+    pn_max: float
+    revolutions: int
+    steps: int
+    state: tuple[float, float]
+    sections: np.ndarray  # (m, 2): σn points (y, y')
+    multipliers: tuple[complex, ...] | None = None
+    lyapunov: float | None = None
+    trace: OrbitTrace | None = field(default=None, repr=False)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (multipliers as [re, im] pairs; NaN as None)."""
+
+        def num(x):
+            return None if x is None or not math.isfinite(x) else float(x)
+
+        data = {
+            "label": self.label,
+            "n": self.n,
+            "p": self.p,
+            "kind": self.kind,
+            "status": self.status,
+            "flags": list(self.flags),
+            "dc": num(self.dc),
+            "eps_min": num(self.eps_min),
+            "eps_max": num(self.eps_max),
+            "pn_max": num(self.pn_max),
+            "revolutions": self.revolutions,
+            "steps": self.steps,
+            "state": [num(self.state[0]), num(self.state[1])],
+            "sections": [[num(a), num(b)] for a, b in self.sections],
+            "parameters": self.parameters,
+        }
+        if self.multipliers is not None:
+            data["multipliers"] = [[num(m.real), num(m.imag)] for m in self.multipliers]
+        if self.lyapunov is not None:
+            data["lyapunov"] = num(self.lyapunov)
+        return data
+
+
+def point_job(
+    omega, f0, mu_kn, mu_cn, zeta, tensile, y0, v0, transient, revolutions, rtol, atol, method,
+    outputs,
+) -> Job:  # fmt: skip
+    """A one-cell job (validated like any job) for the given parameters."""
+    for name, value in (("omega", omega), ("f0", f0), ("mu_kn", mu_kn), ("mu_cn", mu_cn),
+                        ("zeta", zeta)):  # fmt: skip
+        try:
+            check_parameter(name, float(value))
+        except ValueError as exc:
+            raise JobError(str(exc)) from None
+    integrator = {"method": method, "rtol": rtol}
+    if atol is not None:
+        integrator["atol"] = atol
+    data = {
+        "name": "point",
+        "sweep": {
+            "omega": {"from": omega, "to": omega, "points": 1},
+            "f0": {"from": f0, "to": f0, "points": 1},
+        },
+        "fixed": {"mu_kn": mu_kn, "mu_cn": mu_cn, "zeta": zeta},
+        "model": {"tensile": tensile},
+        "initial": {"y": y0, "v": v0},
+        "integrator": integrator,
+        "transient": {"mode": transient, "max_revolutions": revolutions},
+        "outputs": outputs,
+        "tiles": {"rows": 1},
+    }
+    return Job.from_dict(data, source="point")
+
+
+def simulate_point(
+    omega: float,
+    *,
+    f0: float = 0.5,
+    mu_kn: float = 0.8,
+    mu_cn: float = 0.8,
+    zeta: float = 0.2,
+    tensile: str = "clamp",
+    y0: float = 0.0,
+    v0: float = 0.0,
+    transient: str = "converged",
+    revolutions: int = 500,
+    rtol: float = 1e-8,
+    atol: float | None = None,
+    method: str = "dp54",
+    multipliers: bool = False,
+    lyapunov: bool = False,
+    trace: bool = False,
+) -> PointResult:
+    """Simulate one cell from (y0, v0) at θ = 0 and classify its steady motion.
+
+    ``revolutions`` is the transient budget (converged) or length (fixed). With
+    ``trace``, the steady orbit (its period, or up to 64 revolutions when not
+    periodic) is integrated once more from the final state and recorded.
+    Raises JobError for parameters out of range.
+    """
+    outputs = ["label", "dc", "eps", "pn", "sections"]
+    if multipliers:
+        outputs.append("multipliers")
+    if lyapunov:
+        outputs.append("lyapunov")
+    job = point_job(
+        omega, f0, mu_kn, mu_cn, zeta, tensile, y0, v0, transient, revolutions, rtol, atol,
+        method, outputs,
+    )  # fmt: skip
+    cell = {name: arr[0, 0] for name, arr in run_tile(job, Tile(0, 0, 1)).items()}
+    kind = Kind(int(cell["kind"]))
+    n = int(cell["n"])
+    sections = cell["sections"][: n if n else job.n_sections]
+    sections = sections[~np.isnan(sections[:, 0])]
+    result = PointResult(
+        parameters={"omega": omega, "f0": f0, "mu_kn": mu_kn, "mu_cn": mu_cn, "zeta": zeta,
+                    "tensile": tensile},  # fmt: skip
+        label=cell_label(kind, n, int(cell["p"]), job.classify.chatter_p),
+        n=n,
+        p=int(cell["p"]),
+        kind=KIND_NAMES[kind],
+        status=status_message(int(cell["status"])),
+        flags=tuple(f.name.lower() for f in Flag if f and int(cell["flags"]) & f),
+        dc=float(cell["dc"]),
+        eps_min=float(cell["eps_min"]),
+        eps_max=float(cell["eps_max"]),
+        pn_max=float(cell["pn_max"]),
+        revolutions=int(cell["revolutions"]),
+        steps=int(cell["steps"]),
+        state=(float(cell["state"][0]), float(cell["state"][1])),
+        sections=sections,
+        multipliers=(
+            tuple(complex(re, im) for re, im in cell["multipliers"]) if multipliers else None
+        ),
+        lyapunov=float(cell["lyapunov"]) if lyapunov else None,
+    )
+    if trace and kind != Kind.FAILED:
+        n_revs = n if n else min(job.classify.window_revolutions, MAX_TRACE_REVOLUTIONS)
+        result = _with_trace(result, job, n_revs)
+    return result
+
+
+def _with_trace(result: PointResult, job: Job, n_revs: int) -> PointResult:
+    par = result.parameters
+    max_samples = SAMPLES_PER_STEP * max(result.steps, 1000) * 4 + 16
+    rec = make_trace(max_samples, 64 * n_revs + 64, SAMPLES_PER_STEP)
+    status, _, _ = trace_orbit(
+        par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
+        par["tensile"] == "clamp", np.array(result.state), solver_options(job),
+        cell_settings(job), n_revs, rec,
+    )  # fmt: skip
+    samples = rec.samples[: rec.count[0]]
+    orbit = OrbitTrace(
+        t=samples[:, 0],
+        y=samples[:, 1],
+        v=samples[:, 2],
+        yc=samples[:, 3],
+        eps=samples[:, 4],
+        pn=samples[:, 5],
+        contact=samples[:, 6].astype(np.int8),
+        events=rec.events[: rec.count[1]].copy(),
+        period=2 * math.pi / par["omega"],
+    )
+    if status != 0:
+        return result
+    return PointResult(**{**result.__dict__, "trace": orbit})

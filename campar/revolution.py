@@ -1,0 +1,190 @@
+"""One cam revolution of the hybrid system, and the recorder that traces it.
+
+``run_revolution`` is where the model meets the integrator: it steps across
+the four cam phases (every step ends on a phase boundary), switches the
+contact mode at every event the integrator locates, counts detachments and
+folds every step into the revolution's statistics.
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+
+from . import model
+from .analysis import REV_DETACH, add_step_stats, reset_revolution_stats
+from .integrator import SolverOptions, advance, dense_eval
+from .jit import compiled, hot
+from .model import (
+    FREE,
+    N_PHASES,
+    N_STATE,
+    N_STATE_VARIATIONAL,
+    PHASE_BOUNDS,
+    RISE,
+    TWO_PI,
+    cam,
+    contact_force,
+    contact_kinematics,
+    contact_mode,
+    gap,
+    is_detachment,
+    mode_after_event,
+)
+from .status import EVENT_LOOP, OK, STEP_LIMIT
+
+MAX_STUCK_EVENTS = 8  # zero-length events in a row before a cell is declared stuck
+
+
+class Trace(NamedTuple):
+    """Recorder of an orbit for figures; length-0 arrays record nothing.
+
+    samples rows: t, y, y', yc, ε, Pn (the law's force, clamp applied), contact
+    mode; events rows: t, y, y', code = 2·(mode before) + (event index).
+    """
+
+    samples: np.ndarray  # (N, 7)
+    events: np.ndarray  # (M, 4)
+    count: np.ndarray  # int64 [samples written, events written]
+    t0: np.ndarray  # [time at θ = 0 of the current revolution]
+    prev: np.ndarray  # (2,) state at the start of the current step
+    per_step: int  # dense samples per step (≥ 1: the step end itself)
+
+
+@compiled
+def make_trace(n_samples, n_events, per_step):
+    return Trace(
+        np.zeros((n_samples, 7)),
+        np.zeros((n_events, 4)),
+        np.zeros(2, dtype=np.int64),
+        np.zeros(1),
+        np.zeros(2),
+        per_step,
+    )
+
+
+@hot
+def record_sample(rec, t, y0, y1, p, mode):
+    i = rec.count[0]
+    if i >= rec.samples.shape[0]:
+        return
+    yc, dyc, _ = cam(p.omega * t, mode[0])
+    eps = yc - y0
+    row = rec.samples[i]
+    row[0] = rec.t0[0] + t
+    row[1] = y0
+    row[2] = y1
+    row[3] = yc
+    row[4] = eps
+    row[5] = contact_force(eps, p.omega * dyc - y1, p)
+    row[6] = mode[1]
+    rec.count[0] = i + 1
+
+
+@hot
+def record_step(rec, method, w, t_prev, t, x, p, mode):
+    """Dense samples inside the step just taken, then its end point."""
+    h = t - t_prev
+    for j in range(1, rec.per_step):
+        theta = j / rec.per_step
+        dense_eval(method, w.K, rec.prev, x, h, theta, N_STATE, w.y_stage)
+        record_sample(rec, t_prev + theta * h, w.y_stage[0], w.y_stage[1], p, mode)
+    record_sample(rec, t, x[0], x[1], p, mode)
+
+
+@hot
+def record_event(rec, t, x, contact, which):
+    i = rec.count[1]
+    if i >= rec.events.shape[0]:
+        return
+    rec.events[i, 0] = rec.t0[0] + t
+    rec.events[i, 1] = x[0]
+    rec.events[i, 2] = x[1]
+    rec.events[i, 3] = 2 * contact + which
+    rec.count[1] = i + 1
+
+
+@hot
+def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
+    """Integrate one cam revolution from θ = 0 to 2π, in place on x.
+
+    Steps end on every cam phase boundary and every contact event; with the
+    variational part, Φ starts at I, so x[2:6] ends as the Jacobian of the
+    one-revolution map. Fills the revolution's statistics in ``row``; fails with
+    STEP_LIMIT once the workspace has counted more than step_limit steps.
+    Records the orbit into ``rec`` unless its arrays are empty.
+    """
+    recording = rec.samples.shape[0] > 0
+    if x.shape[0] == N_STATE_VARIATIONAL:
+        x[2] = 1.0
+        x[3] = 0.0
+        x[4] = 0.0
+        x[5] = 1.0
+    reset_revolution_stats(row)
+    eps, deps = gap(0.0, x, p, RISE)
+    mode[1] = contact_mode(eps, deps, p)
+    t = 0.0
+    e0 = de0 = pn0 = dpn0 = 0.0
+    if recording:
+        record_sample(rec, t, x[0], x[1], p, mode)
+    for phase in range(N_PHASES):
+        mode[0] = phase
+        t_end = PHASE_BOUNDS[phase + 1] / p.omega
+        model.rhs(t, x, p, mode, f)
+        w.counts[2] += 1
+        stuck = 0
+        fresh = False  # e0 … dpn0 hold the kinematics at t in this mode
+        while t < t_end:
+            if w.counts[0] + w.counts[1] > step_limit:
+                return STEP_LIMIT
+            t_prev = t
+            contact = mode[1]
+            if want_stats and not fresh:
+                e0, de0, pn0, dpn0 = contact_kinematics(t, x, f, p, mode)
+            if recording:
+                rec.prev[0] = x[0]
+                rec.prev[1] = x[1]
+            status, t, which = advance(model.rhs, model.events, t, t_end, x, f, p, mode, opt, w)
+            if status != OK:
+                return status
+            if t > t_prev:
+                stuck = 0
+                if recording:
+                    record_step(rec, opt.method, w, t_prev, t, x, p, mode)
+                if want_stats:
+                    e1, de1, pn1, dpn1 = contact_kinematics(t, x, f, p, mode)
+                    add_step_stats(
+                        row, t - t_prev, contact == FREE, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1
+                    )
+                    e0, de0, pn0, dpn0 = e1, de1, pn1, dpn1
+                    fresh = True
+            elif which >= 0:
+                stuck += 1
+                if stuck > MAX_STUCK_EVENTS:
+                    return EVENT_LOOP
+            if which >= 0:
+                if is_detachment(contact, which):
+                    row[REV_DETACH] += 1.0
+                if recording:
+                    record_event(rec, t, x, contact, which)
+                mode[1] = mode_after_event(contact, which)
+                model.rhs(t, x, p, mode, f)
+                w.counts[2] += 1
+                fresh = False
+    if recording:
+        rec.t0[0] += t
+    return OK
+
+
+@hot
+def solver_options(base, p, cs):
+    """Per-cell integrator options: RK4's step and the floors scale with the period."""
+    period = TWO_PI / p.omega
+    return SolverOptions(
+        base.method,
+        base.rtol,
+        base.atol,
+        period / cs.rk4_steps,
+        1e-12 * max(1.0, period),
+        base.event_tol * max(1.0, period),
+        N_STATE,
+    )

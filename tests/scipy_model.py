@@ -1,0 +1,148 @@
+"""An independent implementation of the model with SciPy, for tests only.
+
+Written from MODEL.md without campar's code: solve_ivp (DOP853) integrates
+piecewise between cam phase boundaries and exact contact events (terminal
+events, restarted in the new contact mode), as the reference cells were made.
+"""
+
+import math
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+BOUNDS = (0.0, math.pi / 3, math.pi, 4 * math.pi / 3, 2 * math.pi)
+FREE, PUSH, SLACK = 0, 1, 2
+
+
+def cam(theta):
+    """yc, dyc/dθ, d²yc/dθ² of the cosine-acceleration law (stroke 1)."""
+    th = theta % (2 * math.pi)
+    if th < BOUNDS[1]:
+        return 0.5 * (1 - math.cos(3 * th)), 1.5 * math.sin(3 * th), 4.5 * math.cos(3 * th)
+    if th < BOUNDS[2]:
+        return 1.0, 0.0, 0.0
+    if th < BOUNDS[3]:
+        u = 3 * (th - math.pi)
+        return 0.5 * (1 + math.cos(u)), -1.5 * math.sin(u), -4.5 * math.cos(u)
+    return 0.0, 0.0, 0.0
+
+
+class Model:
+    def __init__(self, omega, f0=0.5, mu_kn=0.8, mu_cn=0.8, zeta=0.2, clamp=True):
+        self.omega, self.f0, self.zeta, self.clamp = omega, f0, zeta, clamp
+        self.k = mu_kn / (1 - mu_kn)
+        self.c = 2 * zeta * mu_cn / (1 - mu_cn)
+
+    def gap(self, t, y, theta_mid):
+        # evaluate the cam with the formula of the phase containing theta_mid
+        yc, dyc, _ = cam_in_phase(self.omega * t, theta_mid)
+        return yc - y[0], self.omega * dyc - y[1]
+
+    def force(self, eps, deps):
+        if eps <= 0:
+            return 0.0
+        f = self.k * eps**1.5 * (1 + self.c * deps)
+        return max(f, 0.0) if self.clamp else f
+
+    def field(self, mode, theta_mid, with_divergence=False):
+        def f(t, x):
+            y, v = x[0], x[1]
+            acc = -2 * self.zeta * v - y - self.f0
+            div = -2 * self.zeta
+            if mode == PUSH:
+                eps, deps = self.gap(t, x, theta_mid)
+                e = max(eps, 0.0)
+                acc += self.k * e**1.5 * (1 + self.c * deps)
+                div -= self.k * e**1.5 * self.c
+            if with_divergence:
+                return [v, acc, div]
+            return [v, acc]
+
+        return f
+
+    def mode_of(self, t, x, theta_mid):
+        eps, deps = self.gap(t, x, theta_mid)
+        if eps <= 0:
+            return FREE
+        if self.clamp and 1 + self.c * deps <= 0:
+            return SLACK
+        return PUSH
+
+    def events_of(self, mode, theta_mid):
+        def eps_event(t, x):
+            return self.gap(t, x, theta_mid)[0]
+
+        eps_event.terminal = True
+        eps_event.direction = 1 if mode == FREE else -1
+        evs = [eps_event]
+        if self.clamp and mode != FREE:
+
+            def bracket(t, x):
+                return 1 + self.c * self.gap(t, x, theta_mid)[1]
+
+            bracket.terminal = True
+            bracket.direction = -1 if mode == PUSH else 1
+            evs.append(bracket)
+        return evs
+
+
+def cam_in_phase(theta, theta_mid):
+    """Cam law with the formula of the phase that contains theta_mid."""
+    base = theta_mid - (theta_mid % (2 * math.pi))
+    th = theta - base
+    mid = theta_mid - base
+    if mid < BOUNDS[1]:
+        return 0.5 * (1 - math.cos(3 * th)), 1.5 * math.sin(3 * th), 4.5 * math.cos(3 * th)
+    if mid < BOUNDS[2]:
+        return 1.0, 0.0, 0.0
+    if mid < BOUNDS[3]:
+        u = 3 * (th - math.pi)
+        return 0.5 * (1 + math.cos(u)), -1.5 * math.sin(u), -4.5 * math.cos(u)
+    return 0.0, 0.0, 0.0
+
+
+def integrate(model, x0, revolutions, rtol=1e-12, atol=1e-14, with_divergence=False):
+    """Integrate from (y, y') at θ = 0 over whole revolutions.
+
+    Returns (final state, list of (t, kind) events with kind in {"impact",
+    "detachment", "force zero", "force resumes"}, ∫ div f dt if asked).
+    """
+    w = model.omega
+    x = np.array([x0[0], x0[1], 0.0] if with_divergence else list(x0[:2]), dtype=float)
+    events = []
+    t = 0.0
+    mode = None
+    for rev in range(revolutions):
+        for i in range(4):
+            t_end = (2 * math.pi * rev + BOUNDS[i + 1]) / w
+            theta_mid = 2 * math.pi * rev + 0.5 * (BOUNDS[i] + BOUNDS[i + 1])
+            if mode is None:
+                mode = model.mode_of(t, x, theta_mid)
+            while t < t_end - 1e-14 * max(1.0, t_end):
+                sol = solve_ivp(
+                    model.field(mode, theta_mid, with_divergence), (t, t_end), x,
+                    method="DOP853", rtol=rtol, atol=atol,
+                    events=model.events_of(mode, theta_mid),
+                )  # fmt: skip
+                if sol.status == 1:
+                    which = next(j for j, te in enumerate(sol.t_events) if len(te))
+                    t = float(sol.t_events[which][0])
+                    x = sol.y_events[which][0].copy()
+                    if mode == FREE:
+                        events.append((t, "impact"))
+                        mode = PUSH
+                    elif which == 0:
+                        events.append((t, "detachment"))
+                        mode = FREE
+                    elif mode == PUSH:
+                        events.append((t, "force zero"))
+                        mode = SLACK
+                    else:
+                        events.append((t, "force resumes"))
+                        mode = PUSH
+                else:
+                    t = t_end
+                    x = sol.y[:, -1].copy()
+        mode = None  # campar decides the mode from the state at each θ = 0 as well
+    divergence = x[2] if with_divergence else None
+    return x[:2], events, divergence

@@ -1,0 +1,106 @@
+"""Section analysis on synthetic sequences with known answers."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from campar import analysis as A
+from campar.status import CHAOTIC, QUASIPERIODIC, UNCONVERGED
+
+
+def linear_history(z, L, x0, revolutions):
+    """Section points and Jacobians of the affine map x ↦ z + L (x − z)."""
+    xs = np.zeros((revolutions + 1, 2))
+    jac = np.tile(L.ravel(), (revolutions, 1))
+    xs[0] = x0
+    for k in range(revolutions):
+        xs[k + 1] = z + L @ (xs[k] - z)
+    return xs, jac
+
+
+def assess(xs, jac, k, base=0, conv_tol=1e-9):
+    return A.assess_revolution(xs, jac, k, base, 32, conv_tol, 1e-6, 0.05, 0.02)
+
+
+def test_slow_one_cycle_is_not_taken_for_a_two_cycle():
+    # multiplier −0.99: x_k − x_{k−2} shrinks 50× faster than the distance to the cycle,
+    # so a plain repeat test at 1e-6 would call this a 2-cycle long before it converges
+    z = np.array([0.3, -0.2])
+    L = np.diag([-0.99, 0.5])
+    xs, jac = linear_history(z, L, z + [1e-4, 0.0], 10)
+    assert np.max(np.abs(xs[10] - xs[8])) < 1e-5  # the naive 2-cycle test would pass
+    period, jump, z0, z1 = assess(xs, jac, 10)
+    assert period == 0
+    assert jump == 1  # …and a Newton jump lands on the 1-cycle exactly (the map is affine)
+    np.testing.assert_allclose([z0, z1], z, atol=1e-15)
+
+
+def test_converged_one_cycle_is_accepted():
+    z = np.array([0.3, -0.2])
+    xs, jac = linear_history(z, np.diag([-0.99, 0.5]), z + [1e-11, 0.0], 3)
+    assert assess(xs, jac, 3)[0] == 1
+
+
+def test_two_cycle_is_found_and_not_mistaken_for_one():
+    a, b = np.array([0.1, 0.2]), np.array([0.1 + 1e-3, 0.2])
+    xs = np.array([a, b, a, b, a])
+    # Jacobian of one revolution: swap-like, with a stable 2-cycle (DP² = 0.25 I)
+    jac = np.tile(np.array([[0.0, 0.5], [0.5, 0.0]]).ravel(), (4, 1))
+    period, *_ = assess(xs, jac, 4)
+    assert period == 2
+
+
+def test_unstable_cycle_is_never_accepted():
+    z = np.array([0.0, 0.0])
+    xs, jac = linear_history(z, np.diag([1.5, 0.5]), z + [1e-12, 0.0], 3)
+    period, jump, *_ = assess(xs, jac, 3)
+    assert period == 0 and jump == 0
+
+
+def test_distinct_period_merges_points_within_tolerance():
+    xs = np.array([[0, 0], [1, 0], [0, 0], [1 + 1e-8, 0], [0, 1e-9]], float)
+    assert A.distinct_period(xs, 4, 4, 1e-6) == 2
+    assert A.distinct_period(xs, 4, 4, 1e-10) == 4
+
+
+def test_repeat_period_needs_two_full_periods():
+    cycle = np.array([[0, 0], [1, 0], [2, 0]], float)
+    xs = np.vstack([cycle] * 3)
+    assert A.repeat_period(xs, 0, 8, 32, 1e-9) == 3
+    assert A.repeat_period(xs, 0, 4, 32, 1e-9) == 0  # fewer than 2 periods seen
+
+
+@given(st.lists(st.floats(-10, 10), min_size=4, max_size=4))
+@settings(max_examples=200, deadline=None)
+def test_eig2_matches_numpy(entries):
+    m = np.array(entries).reshape(2, 2)
+    re0, im0, re1, im1 = A.eig2(tuple(entries))
+    ours = sorted([complex(re0, im0), complex(re1, im1)], key=lambda c: (c.real, c.imag))
+    ref = sorted(np.linalg.eigvals(m), key=lambda c: (c.real, c.imag))
+    np.testing.assert_allclose(ours, ref, atol=1e-9 * (1 + np.abs(m).max()))
+    assert abs(complex(re0, im0)) >= abs(complex(re1, im1)) - 1e-12
+
+
+def test_cubic_extremes_bracket_a_sampled_cubic():
+    g0, d0, g1, d1 = 0.1, -1.0, 0.3, 0.5
+    th = np.linspace(0, 1, 10001)
+    h00, h10 = 2 * th**3 - 3 * th**2 + 1, th**3 - 2 * th**2 + th
+    h01, h11 = -2 * th**3 + 3 * th**2, th**3 - th**2
+    g = h00 * g0 + h10 * d0 + h01 * g1 + h11 * d1
+    lo, hi = A.cubic_extremes(g0, d0, g1, d1)
+    assert lo == pytest.approx(g.min(), abs=1e-7)
+    assert hi == pytest.approx(g.max(), abs=1e-7)
+
+
+def test_nonperiodic_kind_thresholds():
+    assert A.nonperiodic_kind(0.2, 0.01) == CHAOTIC
+    assert A.nonperiodic_kind(0.004, 0.01) == QUASIPERIODIC
+    assert A.nonperiodic_kind(-0.3, 0.01) == UNCONVERGED
+
+
+def test_lyapunov_of_a_constant_map_is_log_of_its_spectral_radius():
+    jac = np.array([2.0, 1.0, 0.0, 0.5])
+    u = np.array([1.0, 1.0]) / np.sqrt(2)
+    logs = [A.stretch_tangent(jac, u) for _ in range(200)]
+    assert np.mean(logs[50:]) == pytest.approx(np.log(2.0), abs=1e-9)

@@ -1,0 +1,86 @@
+"""The model: cam law, contact force, vector field and its Jacobian, event functions."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from campar import model as M
+
+BOUNDARIES = M.PHASE_BOUNDS[1:]
+
+
+@pytest.mark.parametrize("i", range(4))
+def test_cam_is_c1_across_phase_boundaries(i):
+    theta = BOUNDARIES[i]
+    before = M.cam(theta, i)
+    after = M.cam(theta if i < 3 else 0.0, (i + 1) % 4)
+    assert before[0] == pytest.approx(after[0], abs=1e-15)  # lift continuous
+    assert before[1] == pytest.approx(after[1], abs=1e-14)  # velocity continuous
+    assert abs(before[2] - after[2]) == pytest.approx(4.5)  # acceleration jumps by 4.5
+
+
+def test_cam_law_values():
+    assert M.cam_at(math.pi / 6)[0] == pytest.approx(0.5)  # half the rise
+    assert M.cam_at(2.0)[0] == 1.0 and M.cam_at(5.0)[0] == 0.0
+    assert M.cam_at(math.pi + math.pi / 6)[0] == pytest.approx(0.5)
+
+
+params = st.builds(
+    lambda kn, cn, zeta, clamp: M.make_params(1.0, zeta, 0.5, kn, cn, clamp),
+    st.floats(0.01, 0.999),
+    st.floats(0.01, 0.999),
+    st.floats(0.0, 2.0),
+    st.booleans(),
+)
+
+
+@given(params, st.floats(-2, 2), st.floats(-50, 50))
+@settings(max_examples=300, deadline=None)
+def test_contact_force_laws(p, eps, deps):
+    force = M.contact_force(eps, deps, p)
+    if eps <= 0:
+        assert force == 0.0  # no force while separated
+    elif p.clamp:
+        assert force >= 0.0  # contact cannot pull
+        assert force == pytest.approx(max(0.0, p.k * eps**1.5 * (1 + p.c * deps)))
+    else:
+        assert force == pytest.approx(p.k * eps**1.5 * (1 + p.c * deps))
+
+
+@pytest.mark.parametrize("contact", [M.FREE, M.PUSH])
+@pytest.mark.parametrize("phase", range(4))
+def test_variational_part_is_the_jacobian_of_the_field(contact, phase):
+    p = M.make_params(2.0, 0.2, 0.5, 0.9, 0.8, True)
+    mode = np.array([phase, contact])
+    t = 0.5 * (M.PHASE_BOUNDS[phase] + M.PHASE_BOUNDS[phase + 1]) / p.omega
+    yc = M.cam(p.omega * t, phase)[0]
+    x = np.array([yc - 0.05, 0.1, 1.0, 0.0, 0.0, 1.0])  # ε = 0.05 > 0
+    dx = np.zeros(6)
+    M.rhs(t, x, p, mode, dx)
+    jac = np.zeros((2, 2))
+    for j in range(2):
+        for sign in (1, -1):
+            xp = x[:2].copy()
+            xp[j] += sign * 1e-7
+            out = np.zeros(2)
+            M.rhs(t, xp, p, mode, out)
+            jac[:, j] += sign * out / 2e-7
+    # Φ = I, so dΦ/dt = A: rows (dΦ00, dΦ01), (dΦ10, dΦ11)
+    np.testing.assert_allclose(dx[2:].reshape(2, 2), jac, rtol=1e-6, atol=1e-7)
+    assert M.divergence(t, x, p, mode) == pytest.approx(np.trace(jac), rel=1e-6)
+
+
+def test_event_functions_are_positive_inside_their_mode():
+    p = M.make_params(1.0, 0.2, 0.5, 0.8, 0.8, True)
+    g, dg, f = np.zeros(2), np.zeros(2), np.zeros(2)
+    mode = np.array([M.FAR_DWELL, M.FREE])
+    assert M.events(2.0, np.array([1.2, 0.0]), f, p, mode, g, dg) == 1 and g[0] > 0
+    mode[1] = M.PUSH
+    assert M.events(2.0, np.array([0.9, 0.0]), f, p, mode, g, dg) == 2
+    assert g[0] > 0 and g[1] > 0
+    assert M.contact_mode(0.1, -10.0, p) == M.SLACK  # 1 + c ε' < 0
+    assert M.mode_after_event(M.PUSH, 0) == M.FREE and M.is_detachment(M.SLACK, 0)
+    assert not M.is_detachment(M.FREE, 0) and M.mode_after_event(M.FREE, 0) == M.PUSH
