@@ -6,7 +6,7 @@ compiled with numba; ``simulate_point`` runs one cell from Python.
 
 __version__ = "0.1.0"
 
-from .jit import ensure_fresh_cache
+from .jitcache import ensure_fresh_cache
 
 ensure_fresh_cache()
 

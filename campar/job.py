@@ -104,6 +104,10 @@ class TransientSettings(Settings):
     """… and the distance of the read window's first point from it."""
     extrapolate: bool = True
     """Start a cell from the linear extrapolation of the two previous fixed points."""
+    chaos_after: Annotated[int, Field(ge=0)] = 0
+    """From this revolution on, a clearly chaotic motion ends the transient (0: never)."""
+    chaos_lyapunov: Annotated[float, Field(gt=0.0)] = 0.05
+    """Lyapunov exponent per revolution (last read window) that counts as clearly chaotic."""
 
 
 class ClassifySettings(Settings):

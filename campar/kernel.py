@@ -85,6 +85,8 @@ class CellSettings(NamedTuple):
     max_steps: int
     extrapolate: bool
     rk4_steps: int  # RK4 steps per revolution
+    chaos_after: int  # earliest revolution of a chaotic verdict (0: only at the budget)
+    chaos_lyapunov: float  # … for a Lyapunov exponent per revolution above this
     outputs: int
 
 
@@ -183,7 +185,11 @@ def share_step_size(src, dst):
 def transient_converged(cw, p, opt, cs, want_stats, step_budget):
     """Revolutions until assess_revolution accepts a cycle or the budget ends.
 
-    Returns (status, k, period, base, jumps).
+    From revolution cs.chaos_after on (0: never), a motion whose largest
+    Lyapunov exponent over the last window exceeds cs.chaos_lyapunov per
+    revolution is declared chaotic at once: a clearly positive exponent does not
+    turn into a cycle within the rest of the budget. Returns (status, k,
+    period, base, jumps).
     """
     k = 0
     base = 0
@@ -198,6 +204,9 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
         )
         if period > 0:
             return OK, k, period, base, jumps
+        if 0 < cs.chaos_after <= k and k - base >= cs.window:
+            if window_stats(cw.revs, k - cs.window, cs.window)[5] > cs.chaos_lyapunov:
+                return OK, k, 0, base, jumps
         if jump_n > 0 and cs.newton and jumps < cs.max_jumps:
             cw.xs[k, 0] = z0
             cw.xs[k, 1] = z1

@@ -103,6 +103,8 @@ def cell_settings(job: Job) -> CellSettings:
         job.integrator.max_steps,
         tr.extrapolate,
         job.integrator.rk4_steps,
+        tr.chaos_after,
+        tr.chaos_lyapunov,
         output_bits(job),
     )
 
