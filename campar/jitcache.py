@@ -12,7 +12,6 @@ import hashlib
 import os
 from pathlib import Path
 
-
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_MODULES = (
     "jit", "status", "hermite", "model", "integrator", "analysis", "revolution", "kernel"

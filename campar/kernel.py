@@ -204,9 +204,13 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
         )
         if period > 0:
             return OK, k, period, base, jumps
-        if 0 < cs.chaos_after <= k and k - base >= cs.window:
-            if window_stats(cw.revs, k - cs.window, cs.window)[5] > cs.chaos_lyapunov:
-                return OK, k, 0, base, jumps
+        clearly_chaotic = (
+            0 < cs.chaos_after <= k
+            and k - base >= cs.window
+            and window_stats(cw.revs, k - cs.window, cs.window)[5] > cs.chaos_lyapunov
+        )
+        if clearly_chaotic:
+            return OK, k, 0, base, jumps
         if jump_n > 0 and cs.newton and jumps < cs.max_jumps:
             cw.xs[k, 0] = z0
             cw.xs[k, 1] = z1
