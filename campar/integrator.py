@@ -72,6 +72,11 @@ MAX_REJECTS = 60  # consecutive rejections before the step is declared underflow
 STRETCH = 0.01
 LOCATE_MAX_ITER = 80
 HERMITE_BOUND = 4.0 / 27.0
+# The cubic model's interior minimum must stay above this fraction of the end
+# values, or the dense output is searched for a dip below zero.
+DIP_MARGIN = 0.5
+GOLDEN = 0.6180339887498949
+DIP_ITER = 24
 
 
 class SolverOptions(NamedTuple):
@@ -245,6 +250,35 @@ def locate_event(events, method, t, y, h, p, mode, w, which, a, fa, b, fb, theta
 
 
 @hot
+def dense_minimum(events, method, t, y, h, p, mode, w, which, n_err, guess):
+    """Minimum of event ``which`` over the step on the dense output (golden section).
+
+    Searches the half of the step around the cubic model's minimum ``guess``;
+    returns (θ, value).
+    """
+    a = max(0.0, guess - 0.25)
+    b = min(1.0, guess + 0.25)
+    c = b - GOLDEN * (b - a)
+    d = a + GOLDEN * (b - a)
+    fc = event_value(events, method, t, y, h, c, p, mode, w, which, n_err)
+    fd = event_value(events, method, t, y, h, d, p, mode, w, which, n_err)
+    for _ in range(DIP_ITER):
+        if fc <= 0.0 or fd <= 0.0:
+            break
+        if fc < fd:
+            b, d, fd = d, c, fc
+            c = b - GOLDEN * (b - a)
+            fc = event_value(events, method, t, y, h, c, p, mode, w, which, n_err)
+        else:
+            a, c, fc = c, d, fd
+            d = a + GOLDEN * (b - a)
+            fd = event_value(events, method, t, y, h, d, p, mode, w, which, n_err)
+    if fc <= fd:
+        return c, fc
+    return d, fd
+
+
+@hot
 def first_crossing(events, method, t, y, h, p, mode, w, m, theta_tol, n_err):
     """Earliest event root in the trial step, from g and g' at both step ends.
 
@@ -285,9 +319,11 @@ def first_crossing(events, method, t, y, h, p, mode, w, m, theta_tol, n_err):
             if min(g0, g1) > HERMITE_BOUND * (abs(d0) + abs(d1)):
                 continue
             th, val = hermite_extremum(g0, d0, g1, d1, True)
-            if th <= 0.0 or val > 0.0:
+            if th <= 0.0 or val > DIP_MARGIN * min(g0, g1):
                 continue
-            gm = event_value(events, method, t, y, h, th, p, mode, w, i, n_err)
+            # a shallow dip (a grazing contact or detachment) can reach zero between
+            # the cubic's values: find the minimum on the dense output itself
+            th, gm = dense_minimum(events, method, t, y, h, p, mode, w, i, n_err, th)
             if gm > 0.0:
                 continue
             b = th

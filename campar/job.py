@@ -95,7 +95,7 @@ class TransientSettings(Settings):
     newton: bool = True
     """Shorten the transient with capped Newton jumps to the estimated cycle (converged only)."""
     jump_cap: Annotated[float, Field(gt=0.0)] = 0.02
-    jump_residual: Annotated[float, Field(gt=0.0)] = 0.05
+    jump_residual: Annotated[float, Field(gt=0.0)] = 1e-3
     """Newton jumps are tried only where |x_k − x_{k−n}| is below this."""
     max_jumps: Annotated[int, Field(ge=0)] = 20
     conv_tol: Annotated[float, Field(gt=0.0, lt=1e-2)] = 1e-8
@@ -175,11 +175,11 @@ class Job(Settings):
                 f"parameter, got {keys}"
             )
         for name, axis in sweep.items():
-            for end in (axis.start, axis.stop):
+            for end, value in (("from", axis.start), ("to", axis.stop)):
                 try:
-                    check_parameter(name, end)
+                    check_parameter(name, value)
                 except ValueError as exc:
-                    raise ValueError(f"{name}: {exc}") from None
+                    raise ValueError(f"{name}.{end}: {str(exc).removeprefix(name + ' ')}") from None
         return sweep
 
     @field_validator("fixed")
@@ -256,7 +256,8 @@ class Job(Settings):
     @classmethod
     def from_dict(cls, data: dict, source: str = "job") -> "Job":
         if not isinstance(data, dict):
-            raise JobError(f"{source}: a job is a mapping of keys, got {type(data).__name__}")
+            got = "an empty file" if data is None else f"a {type(data).__name__}"
+            raise JobError(f"{source}: a job is a mapping of keys (key: value lines), got {got}")
         try:
             return cls.model_validate(data)
         except ValidationError as exc:
@@ -272,6 +273,8 @@ def format_validation_error(exc: ValidationError, source: str) -> str:
             message = "unknown key (check the spelling; see jobs/README or campar.job)"
         elif err["type"] == "missing":
             message = "required key is missing"
+        elif err["type"] in ("model_type", "dict_type"):
+            message = "must be a mapping of keys (key: value, or {key: value})"
         got = err.get("input")
         detail = (
             ""

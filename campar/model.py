@@ -136,12 +136,12 @@ def contact_mode(eps, deps, p):
 @hot
 def rhs(t, y, p, mode, dy):
     """Vector field of the current mode into ``dy``; variational part if len(y) == 6."""
-    yc, dyc, _ = cam(p.omega * t, mode[0])
     v = y[1]
     acc = -2.0 * p.zeta * v - y[0] - p.f0
     dfdy = 0.0
     dfdv = 0.0
-    if mode[1] == PUSH:
+    if mode[1] == PUSH:  # only a pushing contact needs the cam
+        yc, dyc, _ = cam(p.omega * t, mode[0])
         eps = yc - y[0]
         deps = p.omega * dyc - v
         if eps < 0.0:  # a stage point just past an event: extend by zero force

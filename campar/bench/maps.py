@@ -1,0 +1,150 @@
+"""`campar bench map`: how well a map agrees with a reference map, against run time.
+
+For each of the paper's three planes a sub-plane (default 100 × 100, the same
+ranges as the full plane, continuation along ω as always) is computed by
+every candidate setting (transient policy × rtol) and compared cell by cell
+with a reference: the paper's recipe at high accuracy (a fixed transient of
+500 revolutions, then a 64-revolution read window, rtol 1e-11), computed once
+with `campar run` and kept in a store.
+
+A 500-revolution reference is itself wrong where a cell converges slowly (a
+multiplier near −1 passes a 2n-repeat test before it has converged, and one
+near the unit circle looks quasi-periodic). So every disagreeing cell is
+adjudicated: the reference's own recipe is run again from the reference's
+warm start (its state at the previous cell) with a long transient, and the
+verdict of that long run is recorded beside the raw agreement. Both numbers
+are reported; nothing is dropped.
+"""
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..job import Job, load_job
+from ..plan import plan_tiles
+from ..point import point_job
+from ..status import Flag, Kind, cell_label
+from ..tile import run_tile
+
+PLANES = ("mu_cn", "mu_kn", "omega_f0")
+REFERENCE = {
+    "integrator": {"method": "dp54", "rtol": 1e-11, "atol": 1e-13, "max_steps": 50_000_000},
+    "transient": {"mode": "fixed", "max_revolutions": 500},
+    "classify": {"window_revolutions": 64},
+}
+ADJUDICATION_REVOLUTIONS = 4000
+COMPARED_OUTPUTS = ["label", "dc"]
+
+
+def plane_job(plane: str, jobs_dir: Path = Path("jobs")) -> Job:
+    return load_job(jobs_dir / f"{plane}.yaml")
+
+
+def subplane_job(job: Job, size: int, name: str, overrides: dict, outputs=None) -> Job:
+    """The plane of ``job`` at size × size points with settings overridden."""
+    data = job.to_dict()
+    data["name"] = name
+    for axis in data["sweep"].values():
+        axis["points"] = size
+    for section, values in overrides.items():
+        if isinstance(values, dict):
+            data[section] = {**data.get(section, {}), **values}
+        else:
+            data[section] = values
+    data["outputs"] = outputs or COMPARED_OUTPUTS
+    data["tiles"] = {"rows": 1}
+    data["store"] = None
+    return Job.from_dict(data, source=name)
+
+
+def reference_job(job: Job, size: int) -> Job:
+    return subplane_job(
+        job, size, f"{job.name}_{size}_reference", REFERENCE,
+        outputs=["label", "dc", "eps", "pn", "lyapunov"],
+    )  # fmt: skip
+
+
+def compute(job: Job) -> tuple[dict[str, np.ndarray], float]:
+    """Every tile of a job in this process; (arrays over (second, omega), seconds)."""
+    start = time.perf_counter()
+    parts = [run_tile(job, tile) for tile in plan_tiles(job)]
+    seconds = time.perf_counter() - start
+    return {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}, seconds
+
+
+def label_codes(arrays: dict[str, np.ndarray]) -> np.ndarray:
+    """One integer per cell that is equal exactly when the n-p labels (or kinds) are."""
+    periodic = arrays["kind"] == Kind.PERIODIC
+    return np.where(periodic, arrays["n"] * 100_000 + arrays["p"], -1 - arrays["kind"])
+
+
+def label_of(arrays, i, j) -> str:
+    return cell_label(int(arrays["kind"][i, j]), int(arrays["n"][i, j]), int(arrays["p"][i, j]), 99)
+
+
+@dataclass
+class Comparison:
+    cells: int
+    agree: float  # fraction of cells with the reference's label
+    adjudicated: float  # … with the reference's label or the long run's verdict
+    dc_error_mean: float  # |ΔDC| over periodic cells that agree
+    dc_error_max: float
+    disagreements: list = field(default_factory=list)  # (i, j, ref, cand, verdict, flags)
+
+    @property
+    def flagged(self) -> int:
+        """Disagreeing cells the candidate flagged slow (a multiplier near the unit circle)."""
+        return sum(1 for d in self.disagreements if d[5] & Flag.SLOW)
+
+
+def compare(cand, ref, verdicts: dict | None = None) -> Comparison:
+    ours, theirs = label_codes(cand), label_codes(ref)
+    agree = ours == theirs
+    verdicts = verdicts or {}
+    rescued = 0
+    rows = []
+    for i, j in np.argwhere(~agree):
+        verdict = verdicts.get(f"{i},{j}")
+        mine = label_of(cand, i, j)
+        if verdict == mine:
+            rescued += 1
+        rows.append((int(i), int(j), label_of(ref, i, j), mine, verdict, int(cand["flags"][i, j])))
+    both = agree & (ref["kind"] == Kind.PERIODIC)
+    dc_err = np.abs(cand["dc"] - ref["dc"])[both]
+    return Comparison(
+        cells=agree.size,
+        agree=float(agree.mean()),
+        adjudicated=float((agree.sum() + rescued) / agree.size),
+        dc_error_mean=float(dc_err.mean()) if dc_err.size else float("nan"),
+        dc_error_max=float(dc_err.max()) if dc_err.size else float("nan"),
+        disagreements=rows,
+    )
+
+
+def adjudicate(job: Job, ref: dict, cells, cache: Path) -> dict[str, str]:
+    """Long-run verdicts of cells, from the reference's warm start; cached in ``cache``."""
+    verdicts = json.loads(cache.read_text()) if cache.exists() else {}
+    second = job.second_values
+    omega = job.omega
+    for i, j in cells:
+        key = f"{i},{j}"
+        if key in verdicts:
+            continue
+        if j == 0:
+            start = (job.initial.y, job.initial.v)
+        else:
+            start = tuple(float(x) for x in ref["state"][i, j - 1])
+        params = {name: job.fixed.get(name) for name in ("f0", "mu_kn", "mu_cn", "zeta")}
+        params[job.second] = float(second[i])
+        one = point_job(
+            float(omega[j]), params["f0"], params["mu_kn"], params["mu_cn"], params["zeta"],
+            job.model.tensile, start[0], start[1], "fixed", ADJUDICATION_REVOLUTIONS,
+            job.integrator.rtol, job.integrator.atol, "dp54", ["label"],
+        )  # fmt: skip
+        cell, _ = compute(one)
+        verdicts[key] = label_of(cell, 0, 0)
+        cache.write_text(json.dumps(verdicts, indent=0, sort_keys=True))
+    return verdicts
