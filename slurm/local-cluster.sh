@@ -229,7 +229,7 @@ start() {
             log "node $(hostname -s) is $state"
             return 0
             ;;
-        down* | drain* | drained* | fail*)
+        down* | drain* | fail*)
             # e.g. state restored from before a crash; bring it back once.
             if ((!resumed)); then
                 log "node is $state: resuming it"
@@ -254,7 +254,7 @@ stop() {
         local jobs i
         jobs=$(squeue -h -o %A 2>/dev/null || true)
         if [[ -n $jobs ]]; then
-            log "cancelling jobs: $(echo $jobs)"
+            log "cancelling jobs: ${jobs//$'\n'/ }"
             # shellcheck disable=SC2086
             scancel $jobs 2>/dev/null || true
             for ((i = 0; i < 45; i++)); do
@@ -274,9 +274,16 @@ stop() {
 
 status() {
     local ok=0
-    pid_alive "$MUNGE_PID" munged && echo "munged: running" || { echo "munged: stopped"; ok=1; }
-    pid_alive "$CTLD_PID" slurmctld && echo "slurmctld: running" || { echo "slurmctld: stopped"; ok=1; }
-    pid_alive "$SLURMD_PID" slurmd && echo "slurmd: running" || { echo "slurmd: stopped"; ok=1; }
+    local pidfile name
+    for pidfile in "$MUNGE_PID:munged" "$CTLD_PID:slurmctld" "$SLURMD_PID:slurmd"; do
+        name=${pidfile##*:}
+        if pid_alive "${pidfile%:*}" "$name"; then
+            echo "$name: running"
+        else
+            echo "$name: stopped"
+            ok=1
+        fi
+    done
     if ((ok == 0)); then
         sinfo
         squeue
