@@ -34,7 +34,8 @@ REV_EPS_MIN = 2
 REV_EPS_MAX = 3
 REV_PN_MAX = 4
 REV_LOG_STRETCH = 5  # growth of the tangent vector (Lyapunov exponent)
-N_REV_STATS = 6
+REV_GRAZE = 6  # smallest |ε| at a local minimum of ε: a shallow flight or a near miss
+N_REV_STATS = 7
 
 
 @hot
@@ -195,6 +196,7 @@ def reset_revolution_stats(row):
     row[REV_EPS_MAX] = -math.inf
     row[REV_PN_MAX] = 0.0
     row[REV_LOG_STRETCH] = 0.0
+    row[REV_GRAZE] = math.inf
 
 
 @hot
@@ -222,6 +224,10 @@ def add_step_stats(row, h, free, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
     lo, hi = cubic_extremes(e0, de0 * h, e1, de1 * h)
     row[REV_EPS_MIN] = min(row[REV_EPS_MIN], lo)
     row[REV_EPS_MAX] = max(row[REV_EPS_MAX], hi)
+    # a local minimum of ε near 0 is where a detachment can appear or vanish
+    th, dip = hermite_extremum(e0, de0 * h, e1, de1 * h, True)
+    if th > 0.0:
+        row[REV_GRAZE] = min(row[REV_GRAZE], abs(dip))
     if not free:
         _, pn_hi = cubic_extremes(pn0, dpn0 * h, pn1, dpn1 * h)
         row[REV_PN_MAX] = max(row[REV_PN_MAX], pn_hi)
@@ -230,13 +236,14 @@ def add_step_stats(row, h, free, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
 @hot
 def window_stats(revs, first, count):
     """Combine revolutions first … first+count−1: (time separated, detachments,
-    ε min, ε max, Pn max, mean log-stretch per revolution)."""
+    ε min, ε max, Pn max, mean log-stretch per revolution, smallest |ε| at a dip)."""
     t_free = 0.0
     detach = 0.0
     eps_min = math.inf
     eps_max = -math.inf
     pn_max = 0.0
     stretch = 0.0
+    graze = math.inf
     for j in range(first, first + count):
         t_free += revs[j, REV_T_FREE]
         detach += revs[j, REV_DETACH]
@@ -244,7 +251,8 @@ def window_stats(revs, first, count):
         eps_max = max(eps_max, revs[j, REV_EPS_MAX])
         pn_max = max(pn_max, revs[j, REV_PN_MAX])
         stretch += revs[j, REV_LOG_STRETCH]
-    return t_free, detach, eps_min, eps_max, pn_max, stretch / max(count, 1)
+        graze = min(graze, revs[j, REV_GRAZE])
+    return t_free, detach, eps_min, eps_max, pn_max, stretch / max(count, 1), graze
 
 
 @hot

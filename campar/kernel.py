@@ -60,10 +60,12 @@ OUT_LYAPUNOV = 8  # largest Lyapunov exponent
 # Flags (campar.status.Flag).
 FLAG_NEWTON = 1
 FLAG_SLOW = 2
+FLAG_GRAZING = 4
 FLAG_WARM_EXTRAPOLATED = 8
 FLAG_RESTARTED = 16
 
 SLOW_MARGIN = 0.02  # a multiplier this close to the unit circle marks a slow cell
+GRAZE_TOL = 1e-5  # a dip of ε this close to 0 marks a cell whose p is sensitive
 EXTRAPOLATE_MAX = 0.05  # extrapolate the warm start only between close fixed points
 
 
@@ -265,13 +267,13 @@ def fail_cell(out, i, status, k, steps):
 @hot
 def record_window(out, i, cw, first, count, period):
     """Statistics of revolutions first … first+count−1 into the outputs of cell i."""
-    t_free, detach, eps_min, eps_max, pn_max, stretch = window_stats(cw.revs, first, count)
+    t_free, detach, eps_min, eps_max, pn_max, stretch, graze = window_stats(cw.revs, first, count)
     out.p[i] = int(detach + 0.5)
     out.dc[i] = t_free / (count * period)
     out.eps_min[i] = eps_min
     out.eps_max[i] = eps_max
     out.pn_max[i] = pn_max
-    return stretch
+    return stretch, graze
 
 
 @hot
@@ -316,7 +318,9 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     final = k
     if n > 0:
         m = distinct_period(cw.xs, k, n, cs.period_tol)
-        record_window(out, i, cw, k - m, m, period_time)
+        _, graze = record_window(out, i, cw, k - m, m, period_time)
+        if graze < GRAZE_TOL:
+            flags |= FLAG_GRAZING
         out.n[i] = m
         out.kind[i] = PERIODIC
         have_jacobian = k - m >= variational_from
@@ -342,7 +346,7 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     else:
         count = min(cs.window, k - max(base, variational_from))
         count = max(count, 1)
-        stretch = record_window(out, i, cw, k - count, count, period_time)
+        stretch, _ = record_window(out, i, cw, k - count, count, period_time)
         out.n[i] = 0
         out.kind[i] = nonperiodic_kind(stretch, cs.lyap_tol)
         if out.lyapunov.shape[0] > 0:

@@ -25,7 +25,6 @@ import numpy as np
 
 from ..job import Job, load_job
 from ..plan import plan_tiles
-from ..point import point_job
 from ..status import Flag, Kind, cell_label
 from ..tile import run_tile
 
@@ -124,27 +123,116 @@ def compare(cand, ref, verdicts: dict | None = None) -> Comparison:
     )
 
 
-def adjudicate(job: Job, ref: dict, cells, cache: Path) -> dict[str, str]:
-    """Long-run verdicts of cells, from the reference's warm start; cached in ``cache``."""
+def adjudicate(ref_job: Job, ref: dict, cells, cache: Path) -> dict[str, str]:
+    """Long-run verdicts of cells, from the reference's warm start; cached in ``cache``.
+
+    Each cell is run with the reference's own settings but a transient of
+    ADJUDICATION_REVOLUTIONS, from the reference's final state at the previous
+    cell of its chain (the state the reference itself started from).
+    """
     verdicts = json.loads(cache.read_text()) if cache.exists() else {}
-    second = job.second_values
-    omega = job.omega
+    omega = ref_job.omega
+    second = ref_job.second_values
     for i, j in cells:
         key = f"{i},{j}"
         if key in verdicts:
             continue
-        if j == 0:
-            start = (job.initial.y, job.initial.v)
-        else:
-            start = tuple(float(x) for x in ref["state"][i, j - 1])
-        params = {name: job.fixed.get(name) for name in ("f0", "mu_kn", "mu_cn", "zeta")}
-        params[job.second] = float(second[i])
-        one = point_job(
-            float(omega[j]), params["f0"], params["mu_kn"], params["mu_cn"], params["zeta"],
-            job.model.tensile, start[0], start[1], "fixed", ADJUDICATION_REVOLUTIONS,
-            job.integrator.rtol, job.integrator.atol, "dp54", ["label"],
-        )  # fmt: skip
-        cell, _ = compute(one)
+        data = ref_job.to_dict()
+        data["name"] = f"{ref_job.name}_adjudication"
+        data["sweep"]["omega"] = {"from": float(omega[j]), "to": float(omega[j]), "points": 1}
+        value = float(second[i])
+        data["sweep"][ref_job.second] = {"from": value, "to": value, "points": 1}
+        if j > 0 and np.all(np.isfinite(ref["state"][i, j - 1])):
+            y, v = (float(x) for x in ref["state"][i, j - 1])
+            data["initial"] = {"y": y, "v": v}  # else the chain restarted there too
+        data["transient"]["max_revolutions"] = ADJUDICATION_REVOLUTIONS
+        data["outputs"] = ["label"]
+        cell, _ = compute(Job.from_dict(data))
         verdicts[key] = label_of(cell, 0, 0)
         cache.write_text(json.dumps(verdicts, indent=0, sort_keys=True))
     return verdicts
+
+
+# -- the benchmark ---------------------------------------------------------------------------
+
+CANDIDATES = {
+    # name: job overrides; "default" is the job file's own settings
+    "default": {},
+    "rtol 1e-6": {"integrator": {"rtol": 1e-6}},
+    "rtol 1e-7": {"integrator": {"rtol": 1e-7}},
+    "rtol 1e-9": {"integrator": {"rtol": 1e-9}},
+    "rtol 1e-10": {"integrator": {"rtol": 1e-10}},
+    "no Newton": {"transient": {"newton": False}},
+    "no early chaos": {"transient": {"chaos_after": 0}},
+    "paper recipe 500": {"transient": {"mode": "fixed", "max_revolutions": 500}},
+}
+
+
+def reference_arrays(job: Job, size: int, directory: Path, ranks: int) -> dict[str, np.ndarray]:
+    """The reference map of a plane: read its store, computing it first if needed."""
+    from ..store import read_store
+
+    ref = reference_job(job, size)
+    path = directory / f"{ref.name}.zarr"
+    if not _complete(path):
+        run_reference(ref, path, ranks)
+    with read_store(path) as store:
+        return {name: store.read(name) for name in store.names}
+
+
+def _complete(path: Path) -> bool:
+    from ..store import read_store
+
+    if not path.exists():
+        return False
+    with read_store(path) as store:
+        return bool(store.done.all())
+
+
+def run_reference(job: Job, path: Path, ranks: int) -> None:
+    """Compute a reference store with `campar run`, under mpirun when ranks > 1."""
+    import subprocess
+    import sys
+
+    import yaml
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    job_file = path.with_suffix(".yaml")
+    job_file.write_text(yaml.safe_dump(job.to_dict(), sort_keys=False))
+    command = [sys.executable, "-m", "campar.cli", "run", str(job_file), "--store", str(path)]
+    if ranks > 1:
+        mpirun = Path(sys.executable).parent / "mpirun"
+        command = [str(mpirun), "-n", str(ranks), *command]
+    subprocess.run(command, check=True)
+
+
+def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: bool, out):
+    """Run every candidate on every plane; print one table row per (plane, candidate)."""
+    results = {}
+    header = (
+        f"{'plane':9} {'candidate':18} {'time s':>7} {'rev/cell':>8} {'agree %':>8} "
+        f"{'adjud. %':>8} {'disagree':>8} {'slow':>5} {'|ΔDC| mean':>10} {'|ΔDC| max':>9}"
+    )
+    print(header, file=out)
+    for plane in planes:
+        base = plane_job(plane)
+        ref = reference_arrays(base, size, directory, ranks)
+        for name in candidates:
+            job = subplane_job(base, size, f"{plane}_{size}_candidate", CANDIDATES[name])
+            cand, seconds = compute(job)
+            verdicts = {}
+            if long_runs:
+                first = compare(cand, ref)
+                cells = [(i, j) for i, j, *_ in first.disagreements]
+                cache = directory / f"{base.name}_{size}_verdicts.json"
+                verdicts = adjudicate(reference_job(base, size), ref, cells, cache)
+            c = compare(cand, ref, verdicts)
+            results[(plane, name)] = (c, seconds, float(cand["revolutions"].mean()))
+            print(
+                f"{plane:9} {name:18} {seconds:7.1f} {cand['revolutions'].mean():8.2f} "
+                f"{100 * c.agree:8.2f} {100 * c.adjudicated:8.2f} {len(c.disagreements):8d} "
+                f"{c.flagged:5d} {c.dc_error_mean:10.1e} {c.dc_error_max:9.1e}",
+                file=out,
+                flush=True,
+            )
+    return results
