@@ -7,12 +7,14 @@ map holds, so one motion has one colour in every figure of a paper:
   any two of them and the greys below differ by CIE76 ΔE ≥ 15;
 - chattering-impact motions (p ≥ chatter_p, written n-p̃) are grouped per n, as in
   the paper: every n-p̃ with the same n is one category "n-p~" with one dark colour;
-- any other label gets a colour computed from (n, p) by a fixed rule;
+- any other label gets a colour computed from (n, p) by a fixed rule that keeps it
+  ΔE ≥ 15 from every designed colour (two rare labels may still look alike);
 - the non-periodic kinds are greys: quasi-periodic mid grey, chaos near-black,
-  unconverged light grey; failed cells are white with a cross-hatch and cells not
-  computed yet are plain white.
+  unconverged light grey; cells without a result are gaps, hatched on white
+  (failed: dark red cross-hatch; not computed yet: light grey hatch).
 """
 
+import functools
 import re
 from dataclasses import dataclass
 
@@ -42,9 +44,12 @@ KIND_CATEGORY = {
     Kind.FAILED: FAILED,
 }
 
-# Failed cells are drawn as this hatch on white, so they read as "no result".
-FAILED_HATCH = "xxxx"
-FAILED_HATCH_COLOUR = "#b2182b"
+# Cells without a result are hatched on white, so they read as gaps, not as motions:
+# failed cells cross-hatched in dark red, cells not computed yet in light grey.
+GAP_STYLE = {
+    "failed": {"facecolor": "white", "edgecolor": "#b2182b", "hatch": "xxxxx", "linewidth": 0.0},
+    "not computed": {"facecolor": "white", "edgecolor": "0.7", "hatch": "////", "linewidth": 0.0},
+}
 
 # fmt: off
 DESIGNED = {
@@ -53,7 +58,7 @@ DESIGNED = {
     "1-4": "#e15759", "1-5": "#b07aa1", "1-6": "#9c755f",
     # 2-2p is the period doubling of 1-p: a light version of its hue.
     "2-0": "#b9e0c9", "2-1": "#499894", "2-2": "#a0cbe8", "2-3": "#86bcb6",
-    "2-4": "#ffbe7d", "2-5": "#8cd17d", "2-6": "#f1ce63",
+    "2-4": "#ffbe7d", "2-5": "#f1ce63", "2-6": "#8cd17d",
     "3-0": "#f7d6e6", "3-1": "#d37295", "3-2": "#b6992d", "3-3": "#d4a6c8",
     "3-4": "#ff9d9a",
     "4-0": "#e0c27a", "4-1": "#35c2a0", "4-2": "#c45a3b", "4-3": "#3f8f5f",
@@ -61,11 +66,13 @@ DESIGNED = {
     # chattering n-p̃, grouped per n: dark, but far from the black of chaos.
     "1-p~": "#6b2d5c", "2-p~": "#1f5f5b", "3-p~": "#7a4a12", "4-p~": "#2c3e78",
     QUASIPERIODIC: "#8f8f8f", CHAOS: "#1b1b1b", UNCONVERGED: "#cdcdcd",
-    FAILED: "#ffffff", NOT_COMPUTED: "#ffffff", PERIODIC: "#a0cbe8",
+    FAILED: "#ffffff", NOT_COMPUTED: "#ffffff", PERIODIC: "#a9b98a",
 }
 # fmt: on
 
 GOLDEN = 0.6180339887498949  # hue step of the fallback rule: successive n land far apart
+MIN_DELTA_E = 15.0  # CIE76 distance a fallback colour keeps from every designed one
+NEIGHBOUR_LIMIT = 64  # n, p up to which fallbacks also avoid their neighbours' (bounds recursion)
 
 LABEL_PATTERN = re.compile(r"^(\d+)-(\d+|p)(~?)$")
 
@@ -88,7 +95,7 @@ def category_of(label: str) -> str:
     """The map category of a cell label: chattering "n-p~" labels grouped per n."""
     parsed = parse_label(label)
     if parsed is not None and parsed[1] is None:
-        return f"{parsed[0]}-{CHATTER}"
+        return label_name(parsed[0], None)
     return label
 
 
@@ -107,18 +114,70 @@ def label_colour(label: str) -> RGBA:
     return fallback_colour(*parsed)
 
 
+@functools.lru_cache(maxsize=4096)
 def fallback_colour(n: int, p: int | None) -> RGBA:
     """Deterministic colour of a rare label from (n, p); p = None for chattering n-p̃.
 
-    Hue walks the colour circle in golden-ratio steps in n and p; saturation stays
-    ≥ 0.45 so no label looks like one of the greys of the non-periodic kinds.
+    Candidates walk the colour circle in golden-ratio steps of n, p and the attempt;
+    the first one at least MIN_DELTA_E from every designed colour and from the
+    fallback colours of the labels likely to border this one in a map (n−1 and
+    n−2 with the same p, n with p−1) is taken. Saturation stays ≥ 0.45, so no
+    label looks like a grey of the non-periodic kinds.
     """
     q = 0 if p is None else p
-    hue = (0.07 + GOLDEN * n + 0.29 * q) % 1.0
-    saturation = 0.45 + 0.25 * ((0.37 * n + GOLDEN * q) % 1.0)
-    value = 0.42 if p is None else 0.68 + 0.22 * ((GOLDEN * (n + 2 * q)) % 1.0)
-    r, g, b = hsv_to_rgb((hue, saturation, value))
-    return float(r), float(g), float(b), 1.0
+    neighbours = [(n - 1, p), (n - 2, p)] + ([] if p is None or p == 0 else [(n, p - 1)])
+    avoid = [_designed_lab()] + [
+        cielab(fallback_colour(*label))[None]
+        for label in neighbours
+        if 1 <= label[0] <= NEIGHBOUR_LIMIT
+        and q <= NEIGHBOUR_LIMIT
+        and label_name(*label) not in DESIGNED
+    ]
+    avoid = np.concatenate(avoid)
+    for attempt in range(64):
+        hue = (0.07 + GOLDEN * n + 0.29 * q + 0.5 * GOLDEN * attempt) % 1.0
+        saturation = 0.45 + 0.3 * ((0.37 * n + GOLDEN * (q + attempt)) % 1.0)
+        if p is None:  # chattering: dark like the designed n-p̃
+            value = 0.35 + 0.15 * ((GOLDEN * attempt) % 1.0)
+        else:
+            value = 0.62 + 0.3 * ((GOLDEN * (n + 2 * q + attempt)) % 1.0)
+        rgb = hsv_to_rgb((hue, saturation, value))
+        if np.min(np.linalg.norm(avoid - cielab(rgb), axis=1)) >= MIN_DELTA_E:
+            break
+    return float(rgb[0]), float(rgb[1]), float(rgb[2]), 1.0
+
+
+def label_name(n: int, p: int | None) -> str:
+    """The category name of (n, p); p = None for chattering: (2, 3) → "2-3", (1, None) → "1-p~"."""
+    return f"{n}-{CHATTER if p is None else p}"
+
+
+def cielab(rgb) -> np.ndarray:
+    """CIE L*a*b* (D65) of sRGB colours in [0, 1], shape (..., 3) → (..., 3)."""
+    rgb = np.asarray(rgb, float)[..., :3]
+    linear = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    xyz = linear @ _SRGB_TO_XYZ.T / _D65_WHITE
+    f = np.where(xyz > 0.008856, np.cbrt(xyz), 7.787 * xyz + 16 / 116)
+    return np.stack(
+        [116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]), 200 * (f[..., 1] - f[..., 2])],
+        axis=-1,
+    )
+
+
+def delta_e(colour_a, colour_b) -> float:
+    """CIE76 colour difference ΔE*ab of two colours (≈ 2.3: just noticeable)."""
+    return float(np.linalg.norm(cielab(to_rgba(colour_a)) - cielab(to_rgba(colour_b))))
+
+
+_SRGB_TO_XYZ = np.array(
+    [[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]]
+)
+_D65_WHITE = np.array([0.95047, 1.0, 1.08883])
+
+
+@functools.cache
+def _designed_lab() -> np.ndarray:
+    return cielab(np.array([to_rgba(c) for c in DESIGNED.values()]))
 
 
 def legend_text(category: str) -> str:
@@ -168,14 +227,12 @@ class CategoryMap:
     @property
     def labels(self) -> np.ndarray:
         """The category of every cell as a string array, shaped like ``codes``."""
-        names = np.array([entry.label for entry in self.entries] or [""])
+        names = np.array(self.labels_present or [""])
         return names[self.codes]
 
-    def index(self, label: str) -> int | None:
-        for i, entry in enumerate(self.entries):
-            if entry.label == label:
-                return i
-        return None
+    @property
+    def labels_present(self) -> list[str]:
+        return [entry.label for entry in self.entries]
 
 
 # Keys of the non-n-p categories in the integer encoding of map_labels (all < 0).
@@ -196,7 +253,8 @@ def map_labels(arrays, chatter_p: int = 7) -> CategoryMap:
     ``arrays`` maps "kind", "n", "p" (and optionally "computed", a boolean mask
     of cells already computed) to arrays shaped (second, omega). Labels follow
     ``campar.status.cell_label``; chattering ones are grouped per n ("1-p~").
-    A periodic cell with n < 1 cannot come from the kernel and counts as not computed.
+    Cells holding a store's fill (kind −1) or zeros (a periodic cell with n < 1,
+    which the kernel never writes) count as not computed.
     """
     kind = np.asarray(arrays["kind"])
     n = np.asarray(arrays["n"]).astype(np.int64)
@@ -209,13 +267,14 @@ def map_labels(arrays, chatter_p: int = 7) -> CategoryMap:
             key = np.where(kind == value, _NON_PERIODIC_KEYS[name], key)
     unknown = ~np.isin(kind, list(KIND_CATEGORY))
     key = np.where(unknown, _NON_PERIODIC_KEYS[FAILED], key)
-    key = np.where(~computed | (periodic & (n < 1)), _NON_PERIODIC_KEYS[NOT_COMPUTED], key)
+    pending = ~computed | (kind < 0) | (periodic & (n < 1))
+    key = np.where(pending, _NON_PERIODIC_KEYS[NOT_COMPUTED], key)
 
     def category(k: int) -> str:
         if k < 0:
             return NON_PERIODIC[-1 - k]
         cell_n, cell_p = divmod(k, 2 * _P_CHATTER)
-        return f"{cell_n}-{CHATTER if cell_p == _P_CHATTER else cell_p}"
+        return label_name(cell_n, None if cell_p == _P_CHATTER else cell_p)
 
     return categorise(key, category)
 
@@ -225,7 +284,7 @@ def map_kinds(arrays) -> CategoryMap:
     kind = np.asarray(arrays["kind"]).astype(np.int64)
     computed = computed_cells(arrays, kind.shape)
     key = np.where(np.isin(kind, list(KIND_CATEGORY)), kind, int(Kind.FAILED))
-    key = np.where(computed, key, -1)
+    key = np.where(computed & (kind >= 0), key, -1)  # kind −1: a store's fill
     names = {int(k): v for k, v in KIND_CATEGORY.items()} | {-1: NOT_COMPUTED}
     return categorise(key, names.__getitem__)
 
@@ -237,7 +296,5 @@ def categorise(key: np.ndarray, category) -> CategoryMap:
     order = sorted(range(len(names)), key=lambda i: order_key(names[i]))
     rank = np.empty(len(order), np.intp)
     rank[order] = np.arange(len(order))
-    entries = tuple(
-        LegendEntry(names[i], int(counts[i]), label_colour(names[i])) for i in order
-    )
+    entries = tuple(LegendEntry(names[i], int(counts[i]), label_colour(names[i])) for i in order)
     return CategoryMap(rank[inverse.reshape(key.shape)], entries)

@@ -65,7 +65,7 @@ def axis_label(name: str) -> str:
 
 
 def parameter_text(values: dict[str, float]) -> str:
-    """"μkn = 0.8, f0 = 0.5, ζ = 0.2" in the field's notation, for a caption line."""
+    """A caption line in the field's notation: "μkn = 0.8,  f0 = 0.5,  ζ = 0.2"."""
     return ",  ".join(f"{SYMBOLS[name]} = {value:g}" for name, value in values.items())
 
 

@@ -1,0 +1,197 @@
+"""Single-parameter bifurcation lines: σn points and detachments along ω by continuation.
+
+A line is one continuation chain of the kernel: ω decreasing from its largest
+value, each cell warm-started from the previous cell's final state, exactly
+as one row of a two-parameter map (the paper's Fig. 5 is such a row, drawn as
+σn points y against ω with the detachment count p beneath). It is computed
+as a one-row job with the ``sections`` output through ``run_tile``, so a line
+and the map row with the same parameters give the same cells.
+
+``continued_state`` uses a line to reach one ω the way the paper's maps reach
+it (continuation from ω = 6.0), which is what the paper's point claims and
+phase portraits refer to; ``simulate_point`` started from that state then
+traces the same attractor.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import JobError
+from .job import Job
+from .plan import Tile
+from .status import KIND_NAMES, Kind, cell_label
+from .tile import run_tile
+
+# Second parameter of the one-row job (any swept parameter would do; its one value
+# is the line's μkn).
+ROW_PARAMETER = "mu_kn"
+PAPER_START = 6.0  # ω where the paper's continuations start (MODEL.md, planes)
+CONTINUATION_STEP = 0.005  # ω step of ``continued_state``: a third of the paper's map step
+DEFAULT_SECTIONS = 64  # σn points kept per non-periodic cell (periodic ones keep n)
+
+
+@dataclass(frozen=True)
+class BifurcationLine:
+    """Cells of one continuation chain, in the order computed (ω decreasing).
+
+    Shapes: N = number of ω values, S = σn points stored per cell.
+    """
+
+    omega: np.ndarray  # (N,) cam speed, decreasing
+    sections: np.ndarray  # (N, S, 2) σn points (y, y'), NaN-padded
+    n: np.ndarray  # (N,) period in revolutions; 0 if not periodic
+    p: np.ndarray  # (N,) detachments in n revolutions (non-periodic: in the read window)
+    kind: np.ndarray  # (N,) campar.status.Kind codes
+    dc: np.ndarray  # (N,) duty cycle
+    state: np.ndarray  # (N, 2) final (y, y') at θ = 0 of each cell
+    parameters: dict  # f0, mu_kn, mu_cn, zeta (floats) and tensile
+    chatter_p: int = 7
+    window: int = 64  # revolutions of the read window (p of non-periodic cells)
+
+    @property
+    def labels(self) -> list[str]:
+        """n-p label of every cell ("2-2", "1-9~", "QP", "chaos", …)."""
+        return [
+            cell_label(Kind(int(k)), int(n), int(p), self.chatter_p)
+            for k, n, p in zip(self.kind, self.n, self.p, strict=True)
+        ]
+
+    def runs(self) -> list[tuple[str, float, float]]:
+        """Consecutive cells with one label: (label, first ω, last ω), in ω order computed."""
+        out = []
+        for label, w in zip(self.labels, self.omega, strict=True):
+            if out and out[-1][0] == label:
+                out[-1] = (label, out[-1][1], float(w))
+            else:
+                out.append((label, float(w), float(w)))
+        return out
+
+    def kind_names(self) -> list[str]:
+        return [KIND_NAMES[Kind(int(k))] for k in self.kind]
+
+    def to_npz(self, path) -> None:
+        """Save every array (and the parameters as 0-d entries) in one .npz file."""
+        np.savez_compressed(
+            path, omega=self.omega, sections=self.sections, n=self.n, p=self.p,
+            kind=self.kind, dc=self.dc, state=self.state,
+            **{k: np.array(v) for k, v in self.parameters.items()},
+        )  # fmt: skip
+
+
+def line_job(
+    omega: tuple[float, float],
+    points: int,
+    *,
+    f0: float = 0.5,
+    mu_kn: float = 0.8,
+    mu_cn: float = 0.8,
+    zeta: float = 0.2,
+    tensile: str = "clamp",
+    sections: int = DEFAULT_SECTIONS,
+    transient: str = "converged",
+    revolutions: int = 500,
+    initial: tuple[float, float] = (0.0, 0.0),
+    rtol: float = 1e-8,
+    name: str = "line",
+) -> Job:
+    """The one-row job of a line: ``points`` ω values from max(omega) down to min(omega).
+
+    ``sections`` σn points are stored per non-periodic cell (chaos, quasi-periodic
+    clouds); ``transient`` and ``revolutions`` as in a job's ``transient``.
+    Raises JobError for parameters out of range.
+    """
+    hi, lo = max(omega), min(omega)
+    data = {
+        "name": name,
+        "sweep": {
+            "omega": {"from": hi, "to": lo, "points": points},
+            ROW_PARAMETER: {"from": mu_kn, "to": mu_kn, "points": 1},
+        },
+        "fixed": {"f0": f0, "mu_cn": mu_cn, "zeta": zeta},
+        "model": {"tensile": tensile},
+        "initial": {"y": initial[0], "v": initial[1]},
+        "integrator": {"rtol": rtol},
+        "transient": {"mode": transient, "max_revolutions": revolutions},
+        "classify": {"sections": sections},
+        "outputs": ["label", "dc", "sections"],
+        "tiles": {"rows": 1},
+    }
+    return Job.from_dict(data, source=f"line {name}")
+
+
+def compute_line(job: Job) -> BifurcationLine:
+    """Run the chain of a one-row job (``line_job``) and collect its cells."""
+    if job.shape[0] != 1 or not job.wants("sections"):
+        raise ValueError("compute_line needs a one-row job with the 'sections' output")
+    cells = {name: values[0] for name, values in run_tile(job, Tile(0, 0, 1)).items()}
+    parameters = {name: float(job.parameter(name)) for name in ("f0", "mu_cn", "zeta")}
+    parameters[ROW_PARAMETER] = float(job.second_values[0])
+    parameters["tensile"] = job.model.tensile
+    return BifurcationLine(
+        omega=job.omega,
+        sections=cells["sections"],
+        n=cells["n"],
+        p=cells["p"],
+        kind=cells["kind"],
+        dc=cells["dc"],
+        state=cells["state"],
+        parameters=parameters,
+        chatter_p=job.classify.chatter_p,
+        window=job.classify.window_revolutions,
+    )
+
+
+def bifurcation_line(omega: tuple[float, float], points: int, **options) -> BifurcationLine:
+    """``compute_line(line_job(omega, points, **options))``."""
+    return compute_line(line_job(omega, points, **options))
+
+
+def continuation_points(omega: float, start: float = PAPER_START,
+                        step: float = CONTINUATION_STEP) -> int:  # fmt: skip
+    """Cells of a chain from ``start`` down to ``omega`` with spacing at most ``step``."""
+    return max(2, math.ceil(abs(start - omega) / step) + 1)
+
+
+def continued_state(
+    omega: float, *, start: float = PAPER_START, step: float = CONTINUATION_STEP, **options
+) -> tuple[BifurcationLine, tuple[float, float]]:
+    """Reach ``omega`` by continuation from ``start`` (ω decreasing, from (0, 0) at θ = 0).
+
+    Returns the line and the last cell's final state: the attractor the paper's
+    procedure lands on at this ω. ``options`` as for ``line_job`` (sections 1).
+    """
+    options.setdefault("sections", 1)
+    line = bifurcation_line((start, omega), continuation_points(omega, start, step), **options)
+    return line, (float(line.state[-1, 0]), float(line.state[-1, 1]))
+
+
+def compute_lines(jobs: list[Job], threads: int = 2) -> list[BifurcationLine]:
+    """Several lines at once: the kernel releases the GIL, so threads use the cores."""
+    if len(jobs) == 1 or threads <= 1:
+        return [compute_line(job) for job in jobs]
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(min(threads, len(jobs))) as pool:
+        return list(pool.map(compute_line, jobs))
+
+
+def varied_parameters(values: dict[str, list[float]]) -> list[dict[str, float]]:
+    """Parameter sets of the lines to draw: at most one parameter may list several values."""
+    several = [name for name, vals in values.items() if len(vals) > 1]
+    if len(several) > 1:
+        raise JobError(f"only one parameter may take several values, got {', '.join(several)}")
+    base = {name: vals[0] for name, vals in values.items()}
+    if not several:
+        return [base]
+    return [{**base, several[0]: value} for value in values[several[0]]]
+
+
+def describe_line(line: BifurcationLine) -> str:
+    """One text line per run of equal labels, in the order computed (ω decreasing)."""
+    par = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                    for k, v in line.parameters.items())  # fmt: skip
+    rows = [f"line at {par}: {len(line.omega)} cells, ω {line.omega[0]:g} → {line.omega[-1]:g}"]
+    rows += [f"  {label:>11}  ω {a:.5g} … {b:.5g}" for label, a, b in line.runs()]
+    return "\n".join(rows)

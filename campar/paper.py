@@ -1,0 +1,186 @@
+"""The paper's set-ups as data, and the small computations behind its figures and claims.
+
+The paper (seed/000: a cam with a flat-bottomed follower, Hunt–Crossley
+contact) shows three two-parameter planes (its Figs. 2, 4, 7), bifurcation
+lines at four μkn (Fig. 5), phase portraits along one of them (Fig. 6), the
+penetration ε(t) (Figs. 3, 8) and the contact force with the cam input
+(Fig. 9). This module fixes the parameter values of each, where the paper
+leaves them open says what was chosen, and computes them:
+
+- planes: the job files ``jobs/{omega_f0,mu_kn,mu_cn}.yaml``, at their own
+  400 × 400 (size "full") or on a coarser grid (size "small"), through the
+  sweep runner into a store (which resumes, so a second command reuses it);
+- lines: one continuation chain each (``campar.line``), ω from 6.0 down;
+- orbits of Fig. 6 and of the point claims: reached as the paper reaches them,
+  by continuation from ω = 6.0 (``continued_state``), then traced with
+  ``simulate_point`` from that state;
+- ε(t) and Pn(t) (Figs. 3, 8, 9): ``simulate_point`` from rest, (y, y') = (0, 0)
+  at θ = 0 (the paper's initial state; it does not say more).
+
+Every function takes ``tensile`` ("clamp": no tensile force, the product's
+definition; "allow": the paper's literal force law).
+"""
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import JobError
+from .job import Job, load_job
+from .line import (
+    BifurcationLine,
+    bifurcation_line,
+    compute_line,
+    compute_lines,
+    continued_state,
+    line_job,
+)
+
+PLANES = ("omega_f0", "mu_kn", "mu_cn")
+TENSILE = ("clamp", "allow")
+
+
+@dataclass(frozen=True)
+class Size:
+    """Resolution of a figure set: plane grid (None: the job file's own) and line cells."""
+
+    plane: int | None
+    line: int
+
+
+SIZES = {"small": Size(plane=48, line=1000), "full": Size(plane=None, line=4000)}
+
+# Fig. 5: bifurcation lines at four contact stiffness ratios (f0 = 0.5, μcn = 0.8).
+FIG5_MU_KN = (0.94, 0.90, 0.91, 0.922)
+LINE_OMEGA = (6.0, 0.02)  # the planes' ω range; the paper's Fig. 5 does not state its own
+
+# Fig. 6: the paper's labels along μkn = 0.91 (f0 = 0.5, μcn = 0.8, ζ = 0.2).
+FIG6_MU_KN = 0.91
+FIG6_CLAIMS = (
+    (2.71, "3-2"),
+    (2.709, "chaos"),
+    (2.83, "4-4"),
+    (3.0, "2-2"),
+    (3.15, "1-1"),
+    (3.208583, "QP"),
+)
+CLOUD_REVOLUTIONS = 1500  # σn points of a non-periodic orbit's Poincaré section
+
+# Figs. 3, 8, 9: time series at three cam speeds. The paper names neither the three
+# preloads of Fig. 3 nor the stiffness and damping ratios of Fig. 8; these are chosen
+# so that both ratios take the same three values (a like-for-like comparison).
+SPEEDS = (1.0, 3.0, 5.0)
+FIG3_F0 = (0.5, 1.5, 2.5)
+FIG8_F0 = 2.5
+FIG8_RATIOS = (0.7, 0.8, 0.9)
+FIG9_F0 = 0.5
+
+# The paper's base values (MODEL.md): μkn = μcn = 0.8, ζ = 0.2, f0 = 0.5.
+BASE = {"f0": 0.5, "mu_kn": 0.8, "mu_cn": 0.8, "zeta": 0.2}
+
+# Floquet multipliers the paper quotes (its Fig. 5b1, μkn = 0.90) and what it concludes.
+QUOTED_MULTIPLIERS = (
+    (1.1620, (complex(-0.354351, 0.263715), complex(-0.354351, -0.263715)), "period doubling"),
+    (1.4301, (complex(0.263516, 0.0), complex(0.374650, 0.0)), "onset of chaos"),
+)
+QUOTED_MU_KN = 0.90
+
+
+def jobs_dir() -> Path:
+    """The repository's ``jobs/`` directory (next to the package in a source checkout)."""
+    return Path(__file__).resolve().parents[1] / "jobs"
+
+
+def plane_job(name: str, size: str = "full", tensile: str = "clamp",
+              jobs: Path | None = None) -> Job:  # fmt: skip
+    """The job of a plane at a size: ``jobs/<name>.yaml``, its grid coarsened for "small",
+    its force law set to ``tensile``; named "<name>" or "<name>-allow", store unset."""
+    if name not in PLANES:
+        raise JobError(f"unknown plane {name!r}; the paper's planes are {', '.join(PLANES)}")
+    path = (jobs or jobs_dir()) / f"{name}.yaml"
+    data = load_job(path).to_dict()
+    points = SIZES[size].plane
+    if points is not None:
+        for axis in data["sweep"].values():
+            axis["points"] = points
+    data["model"]["tensile"] = tensile
+    data["name"] = name if tensile == "clamp" else f"{name}-{tensile}"
+    data["store"] = None
+    return Job.from_dict(data, source=f"{path} at size {size}")
+
+
+def run_plane(job: Job, stores: Path) -> Path:
+    """Compute a plane into ``stores/<job name>.zarr`` with the sweep runner (serial, or
+    MPI under mpirun) and return the store's path. A finished store of the same job is
+    reused as is; one of another version of the job (older settings or campar) is
+    replaced: ``stores`` belongs to the gallery and the report, a cache of their planes."""
+    from .errors import StoreMismatch
+    from .runner import run_job
+
+    path = Path(stores) / f"{job.name}.zarr"
+    try:
+        run_job(job, path)
+    except StoreMismatch:
+        run_job(job, path, overwrite=True)
+    return path
+
+
+def paper_lines(size: str = "full", tensile: str = "clamp") -> list[BifurcationLine]:
+    """The Fig. 5 lines, one per μkn of FIG5_MU_KN, computed side by side."""
+    return compute_lines([paper_line_job(mu, size, tensile) for mu in FIG5_MU_KN])
+
+
+FINE_LINE = (6.0, 2.0, 4001)  # ω from, to, points: steps of 0.001 through Fig. 6's range
+
+
+def fine_line(mu_kn: float, tensile: str = "clamp") -> BifurcationLine:
+    """The line at μkn through the paper's Fig. 6 range in steps of 0.001 (any size)."""
+    hi, lo, points = FINE_LINE
+    return bifurcation_line((hi, lo), points, tensile=tensile, **{**BASE, "mu_kn": mu_kn})
+
+
+def paper_line_job(mu_kn: float, size: str = "full", tensile: str = "clamp") -> Job:
+    """A Fig. 5 line: ω from 6.0 down to 0.02 at μkn, the other parameters at base values."""
+    params = {**BASE, "mu_kn": mu_kn}
+    return line_job(LINE_OMEGA, SIZES[size].line, tensile=tensile, name=f"line_mu_kn_{mu_kn:g}",
+                    **params)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class ContinuedPoint:
+    """A point reached by continuation from ω = 6.0, its orbit, and (if not periodic)
+    the cloud of its σn points over CLOUD_REVOLUTIONS revolutions."""
+
+    result: object  # PointResult with trace, multipliers and Lyapunov exponent
+    line: BifurcationLine  # the continuation chain that reached it
+    cloud: object  # (m, 2) σn points: the orbit's n points, or a long run's cloud
+
+
+def continued_point(omega: float, tensile: str = "clamp", **params) -> ContinuedPoint:
+    """Reach ``omega`` by continuation from 6.0 and trace the attractor found there."""
+    from .point import simulate_point
+
+    params = {**BASE, **params}
+    line, state = continued_state(omega, tensile=tensile, **params)
+    result = simulate_point(omega, y0=state[0], v0=state[1], tensile=tensile, multipliers=True,
+                            lyapunov=True, trace=True, **params)  # fmt: skip
+    cloud = np.asarray(result.sections)
+    if result.kind != "periodic":
+        cloud = section_cloud(omega, state, tensile=tensile, **params)
+    return ContinuedPoint(result, line, cloud)
+
+
+def section_cloud(omega: float, state, revolutions: int = CLOUD_REVOLUTIONS, **options):
+    """σn points (m, 2) of ``revolutions`` revolutions from ``state`` (a Poincaré section)."""
+    job = line_job((omega, omega), 1, initial=state, sections=revolutions, transient="fixed",
+                   revolutions=revolutions, name="cloud", **options)  # fmt: skip
+    points = compute_line(job).sections[0]
+    return points[np.isfinite(points[:, 0])]
+
+
+def steady_point(omega: float, tensile: str = "clamp", **params):
+    """``simulate_point`` from rest at θ = 0 with trace (Figs. 3, 8, 9)."""
+    from .point import simulate_point
+
+    return simulate_point(omega, tensile=tensile, trace=True, **{**BASE, **params})

@@ -1,0 +1,79 @@
+"""Figures of computed results: maps, bifurcation diagrams, phase portraits, time series.
+
+Every view draws plain arrays that were computed before (a store, ``run_tile``,
+a point simulation) and never recomputes them; nothing here imports the kernel.
+Figures are headless (Agg) and returned, so a caller can adjust or save them.
+
+- ``labels``: n-p categories and their fixed colours (``label_colour``, ``map_labels``).
+- ``maps``: two-parameter maps (``MapGrid``, ``plot_map``, ``select_cells``, ``plot_store``).
+- ``style``: fonts, the field's notation, ``save_figure``.
+- ``orbit``: one steady orbit (``plot_orbit``; ``plot_phase``, ``plot_gap``, ``plot_force``).
+- ``bifurcation``: σn points and detachments along ω (``plot_line``, ``plot_lines``).
+- ``figures``: the paper's composite figures (phase-portrait grid, ε(t) families, Pn rows).
+
+For developers: a new view (bifurcation diagram, phase portrait, time series) is
+one module of pure ``plot_*(data, …, ax=None) -> Figure`` functions that create
+artists inside ``style.figure_style()``, use ``style.new_figure`` when no axes is
+given, and take their colours for n-p labels from ``labels.label_colour``.
+
+Importing this package is cheap (matplotlib loads on first use of a view), so
+the CLI can name the views without paying for matplotlib.
+"""
+
+import argparse
+import importlib
+
+from ..errors import CamparError
+
+
+class PlotError(CamparError):
+    """A figure cannot be drawn as asked (unknown view, empty zoom, array missing)."""
+
+
+# What ``plot_map`` / ``campar plot --what`` can draw.
+MAP_VIEWS = ("labels", "kind", "dc", "eps_max", "eps_min", "pn_max", "revolutions", "lyapunov")
+
+_EXPORTS = {
+    "label_colour": "labels",
+    "map_labels": "labels",
+    "map_kinds": "labels",
+    "CategoryMap": "labels",
+    "LegendEntry": "labels",
+    "MapGrid": "maps",
+    "QUANTITIES": "maps",
+    "computed_mask": "maps",
+    "plot_map": "maps",
+    "plot_store": "maps",
+    "select_cells": "maps",
+    "save_figure": "style",
+    "plot_orbit": "orbit",
+    "plot_phase": "orbit",
+    "plot_gap": "orbit",
+    "plot_force": "orbit",
+    "plot_line": "bifurcation",
+    "plot_lines": "bifurcation",
+}
+
+__all__ = ["MAP_VIEWS", "PlotError", "parse_range", *_EXPORTS]
+
+
+def parse_range(text: str) -> tuple[float, float]:
+    """A zoom range of ``campar plot --omega/--second``: "2.5:3" → (2.5, 3.0)."""
+    parts = text.split(":")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return float(parts[0]), float(parts[1])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected A:B with two numbers, got {text!r}") from None
+
+
+def __getattr__(name):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f".{module}", __name__), name)
+
+
+def __dir__():
+    return sorted(__all__)
