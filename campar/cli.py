@@ -143,5 +143,186 @@ def run_plot(args) -> int:
     return 0
 
 
+@subcommand
+def add_run(sub):
+    p = sub.add_parser("run", help="compute a job's map into its store (resumes; MPI under mpirun)")
+    p.add_argument("job", help="job file (YAML)")
+    p.add_argument("--store", metavar="PATH", help="result store (default: the job's store:)")
+    p.add_argument("--overwrite", action="store_true", help="replace a store of another job")
+    p.add_argument("--grace", type=float, default=30.0, metavar="SECONDS",
+                   help="after a signal, wait so long for tiles in flight (30)")  # fmt: skip
+    p.set_defaults(handler=run_run)
+
+
+def run_run(args) -> int:
+    from .job import load_job
+
+    job = load_job(args.job)  # before anything touches the disk
+    from .runner import run_job, setup_logging
+
+    setup_logging()
+    try:
+        run_job(job, args.store, overwrite=args.overwrite, grace=args.grace)
+    except CamparError as exc:
+        if getattr(exc, "rank", 0):
+            return exc.exit_code  # a worker rank: the master prints the message
+        raise
+    return 0
+
+
+@subcommand
+def add_status(sub):
+    p = sub.add_parser("status", help="how far a store has got: tiles, cells, failures, runs")
+    p.add_argument("store", help="result store (Zarr directory or HDF5 file)")
+    p.set_defaults(handler=run_status)
+
+
+def run_status(args) -> int:
+    from .progress import describe
+    from .store import read_store
+
+    with read_store(args.store) as reader:
+        print(describe(reader))
+    return 0
+
+
+@subcommand
+def add_bench(sub):
+    from .bench import add_parser  # cheap: each benchmark imports its numerics when it runs
+
+    add_parser(sub)  # `campar bench NAME …`: the registry in campar/bench/__init__.py
+
+
+@subcommand
+def add_line(sub):
+    from .plot import parse_range  # cheap: matplotlib loads only to draw
+
+    p = sub.add_parser("line", help="bifurcation diagram: σn points y and detachments p "
+                       "against ω (continuation, ω decreasing)")  # fmt: skip
+    p.add_argument(
+        "--omega",
+        metavar="A:B",
+        type=parse_range,
+        required=True,
+        help="ω range; computed from the larger value down (the paper's direction)",
+    )
+    p.add_argument("--points", type=int, default=2000, help="ω values (2000)")
+    p.add_argument("--f0", type=float, nargs="+", default=[0.5], help="preload (0.5)")
+    p.add_argument(
+        "--mu-kn",
+        type=float,
+        nargs="+",
+        default=[0.8],
+        help="contact stiffness ratio (0.8); several values draw several lines",
+    )
+    p.add_argument("--mu-cn", type=float, nargs="+", default=[0.8], help="contact damping (0.8)")
+    p.add_argument("--zeta", type=float, nargs="+", default=[0.2], help="damping ratio (0.2)")
+    p.add_argument("--tensile", choices=("clamp", "allow"), default="clamp")
+    p.add_argument(
+        "--sections", type=int, default=64, help="σn points kept per non-periodic cell (64)"
+    )
+    p.add_argument("--transient", choices=("converged", "fixed"), default="converged")
+    p.add_argument("--revolutions", type=int, default=500, help="transient budget / length")
+    p.add_argument(
+        "-o",
+        "--output",
+        metavar="FILE",
+        default="line.png",
+        help="figure; format from the suffix (default line.png)",
+    )
+    p.add_argument("--npz", metavar="FILE", help="also save the arrays (FILE, or FILE-1.npz, …)")
+    p.set_defaults(handler=run_line)  # fmt: skip
+
+
+def run_line(args) -> int:
+    import time
+    from pathlib import Path
+
+    from .line import compute_lines, describe_line, line_job, varied_parameters
+
+    if args.points < 2:
+        raise JobError(f"--points must be ≥ 2, got {args.points}")
+    sets = varied_parameters({"f0": args.f0, "mu_kn": args.mu_kn, "mu_cn": args.mu_cn,
+                              "zeta": args.zeta})  # fmt: skip
+    jobs = [line_job(args.omega, args.points, tensile=args.tensile, sections=args.sections,
+                     transient=args.transient, revolutions=args.revolutions, **params)
+            for params in sets]  # fmt: skip
+    start = time.perf_counter()
+    lines = compute_lines(jobs)
+    seconds = time.perf_counter() - start
+    for line in lines:
+        print(describe_line(line))
+    print(f"{sum(len(line.omega) for line in lines)} cells in {seconds:.2f} s")
+    if args.npz:
+        for i, line in enumerate(lines):
+            path = Path(args.npz)
+            line.to_npz(path if len(lines) == 1 else path.with_stem(f"{path.stem}-{i + 1}"))
+    from .plot import save_figure
+    from .plot.bifurcation import plot_line, plot_lines
+
+    figure = plot_line(lines[0]) if len(lines) == 1 else plot_lines(lines)
+    print(f"wrote {save_figure(figure, args.output)}")
+    return 0
+
+
+@subcommand
+def add_gallery(sub):
+    p = sub.add_parser("gallery", help="compute and draw the paper's whole figure set")
+    p.add_argument("outdir", help="directory for the PNGs, their job files and index.md")
+    p.add_argument(
+        "--size",
+        choices=("small", "full"),
+        default="small",
+        help="small: 48×48 planes, under a minute (CI); full: the jobs' 400×400",
+    )
+    p.add_argument("--tensile", choices=("clamp", "allow"), default="clamp")
+    p.add_argument(
+        "--stores",
+        metavar="DIR",
+        help="plane stores, reused between runs (default results/paper-SIZE)",
+    )
+    p.set_defaults(handler=run_gallery)  # fmt: skip
+
+
+def run_gallery(args) -> int:
+    from .gallery import make_gallery
+    from .runner import setup_logging
+
+    setup_logging()  # the planes' progress lines
+    make_gallery(args.outdir, args.size, args.tensile, args.stores)
+    return 0
+
+
+@subcommand
+def add_report(sub):
+    p = sub.add_parser(
+        "report",
+        help="write the reproduction report: the paper's claims "
+        "against campar under both force laws, and the Liouville check",
+    )
+    p.add_argument("path", help="Markdown file to write (the committed one is docs/paper.md)")
+    p.add_argument(
+        "--size",
+        choices=("small", "full"),
+        default="small",
+        help="map resolution: small 48×48 (fast, CI) or full 400×400",
+    )
+    p.add_argument(
+        "--stores",
+        metavar="DIR",
+        help="plane stores, reused between runs (default results/paper-SIZE)",
+    )
+    p.set_defaults(handler=run_report)  # fmt: skip
+
+
+def run_report(args) -> int:
+    from .report import write_report
+    from .runner import setup_logging
+
+    setup_logging()  # the planes' progress lines
+    write_report(args.path, args.size, args.stores)
+    return 0
+
+
 if __name__ == "__main__":
     sys.exit(main())

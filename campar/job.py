@@ -11,6 +11,7 @@ Errors name the offending key and what is allowed, e.g.
 import hashlib
 import json
 import math
+import typing
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -44,7 +45,9 @@ def check_parameter(name: str, value: float) -> float:
 
 
 class Settings(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+    model_config = ConfigDict(
+        extra="forbid", frozen=True, populate_by_name=True, use_attribute_docstrings=True
+    )
 
 
 class Axis(Settings):
@@ -104,7 +107,7 @@ class TransientSettings(Settings):
     """… and the distance of the read window's first point from it."""
     extrapolate: bool = True
     """Start a cell from the linear extrapolation of the two previous fixed points."""
-    chaos_after: Annotated[int, Field(ge=0)] = 0
+    chaos_after: Annotated[int, Field(ge=0)] = 150
     """From this revolution on, a clearly chaotic motion ends the transient (0: never)."""
     chaos_lyapunov: Annotated[float, Field(gt=0.0)] = 0.05
     """Lyapunov exponent per revolution (last read window) that counts as clearly chaotic."""
@@ -270,7 +273,7 @@ def format_validation_error(exc: ValidationError, source: str) -> str:
         where = ".".join(str(part) for part in err["loc"]) or "(top level)"
         message = err["msg"].removeprefix("Value error, ")
         if err["type"] == "extra_forbidden":
-            message = "unknown key (check the spelling; see jobs/README or campar.job)"
+            message = f"unknown key; allowed here: {', '.join(allowed_keys(err['loc'][:-1]))}"
         elif err["type"] == "missing":
             message = "required key is missing"
         elif err["type"] in ("model_type", "dict_type"):
@@ -283,6 +286,19 @@ def format_validation_error(exc: ValidationError, source: str) -> str:
         )
         lines.append(f"{source}: {where}: {message}{detail}")
     return "\n".join(lines)
+
+
+def allowed_keys(loc: tuple) -> list[str]:
+    """The keys a job may have at ``loc`` (the location of the mapping holding a bad key)."""
+    node = Job
+    parts = iter(loc)
+    for part in parts:
+        annotation = node.model_fields[part].annotation
+        if typing.get_origin(annotation) is dict:  # sweep: {parameter: Axis}
+            next(parts, None)
+            annotation = typing.get_args(annotation)[1]
+        node = annotation
+    return [field.alias or name for name, field in node.model_fields.items()]
 
 
 def load_job(path: str | Path) -> Job:

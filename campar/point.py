@@ -165,8 +165,14 @@ def simulate_point(
     sections = cell["sections"][: n if n else job.n_sections]
     sections = sections[~np.isnan(sections[:, 0])]
     result = PointResult(
-        parameters={"omega": omega, "f0": f0, "mu_kn": mu_kn, "mu_cn": mu_cn, "zeta": zeta,
-                    "tensile": tensile},  # fmt: skip
+        parameters={
+            "omega": omega,
+            "f0": f0,
+            "mu_kn": mu_kn,
+            "mu_cn": mu_cn,
+            "zeta": zeta,
+            "tensile": tensile,
+        },  # fmt: skip
         label=cell_label(kind, n, int(cell["p"]), job.classify.chatter_p),
         n=n,
         p=int(cell["p"]),

@@ -4,9 +4,9 @@ import math
 
 import numpy as np
 import pytest
-from scipy_model import Model, integrate
 
 from campar import simulate_point
+from campar.bench.scipy_model import Model, integrate
 
 CELLS = [
     dict(omega=3.15, mu_kn=0.91),  # 2-2 with the clamp active

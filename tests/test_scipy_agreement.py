@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
-from scipy_model import Model, integrate
 
+from campar.bench.scipy_model import Model, integrate
 from campar.kernel import trace_orbit
 from campar.point import EVENT_NAMES, point_job
 from campar.revolution import make_trace

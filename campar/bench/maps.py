@@ -236,3 +236,35 @@ def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: 
                 flush=True,
             )
     return results
+
+
+QUICK = {"planes": ["mu_cn"], "size": 6, "candidates": ["default", "rtol 1e-6"], "ranks": 1}
+
+
+def run(args) -> int:
+    import sys
+    import tempfile
+
+    from .common import machine_line
+
+    if args.quick:
+        for key, value in QUICK.items():
+            setattr(args, key, value)
+    candidates = args.candidates or list(CANDIDATES)
+    unknown = [c for c in candidates if c not in CANDIDATES]
+    if unknown:
+        print(f"unknown candidate {unknown[0]!r}; known: {', '.join(CANDIDATES)}", file=sys.stderr)
+        return 2
+    print(machine_line())
+    with tempfile.TemporaryDirectory(prefix="campar-bench-map-") as tmp:
+        directory = Path(tmp) if args.quick else Path(args.references)
+        results = bench_map(
+            args.planes, args.size, candidates, directory, args.ranks,
+            not args.no_adjudication, sys.stdout,
+        )  # fmt: skip
+    if args.list:
+        for (plane, name), (c, _, _) in results.items():
+            for i, j, ref, mine, verdict, flags in c.disagreements:
+                print(f"{plane} {name}: cell ({i}, {j}) reference {ref}, campar {mine}, "
+                      f"long run {verdict}, flags {flags}")  # fmt: skip
+    return 0

@@ -1,8 +1,10 @@
-"""An independent implementation of the model with SciPy, for tests only.
+"""An independent implementation of the model with SciPy: the peer of tests and benchmarks.
 
-Written from MODEL.md without campar's code: solve_ivp (DOP853) integrates
-piecewise between cam phase boundaries and exact contact events (terminal
-events, restarted in the new contact mode), as the reference cells were made.
+Written from MODEL.md without campar's code, and it must stay so (never import
+campar's model, integrator or kernel, or it stops being a check): solve_ivp
+(DOP853) integrates piecewise between cam phase boundaries and exact contact
+events (terminal events, restarted in the new contact mode), as the reference
+cells were made.
 """
 
 import math
@@ -16,15 +18,7 @@ FREE, PUSH, SLACK = 0, 1, 2
 
 def cam(theta):
     """yc, dyc/dθ, d²yc/dθ² of the cosine-acceleration law (stroke 1)."""
-    th = theta % (2 * math.pi)
-    if th < BOUNDS[1]:
-        return 0.5 * (1 - math.cos(3 * th)), 1.5 * math.sin(3 * th), 4.5 * math.cos(3 * th)
-    if th < BOUNDS[2]:
-        return 1.0, 0.0, 0.0
-    if th < BOUNDS[3]:
-        u = 3 * (th - math.pi)
-        return 0.5 * (1 + math.cos(u)), -1.5 * math.sin(u), -4.5 * math.cos(u)
-    return 0.0, 0.0, 0.0
+    return cam_in_phase(theta, theta)
 
 
 class Model:
@@ -101,8 +95,13 @@ def cam_in_phase(theta, theta_mid):
     return 0.0, 0.0, 0.0
 
 
-def integrate(model, x0, revolutions, rtol=1e-12, atol=1e-14, with_divergence=False):
+def integrate(model, x0, revolutions, rtol=1e-12, atol=1e-14, with_divergence=False,
+              max_step=np.inf):  # fmt: skip
     """Integrate from (y, y') at θ = 0 over whole revolutions.
+
+    solve_ivp looks for events only as sign changes between step ends, so a
+    contact shorter than one step (ε > 0 briefly, inside a step) is missed;
+    ``max_step`` bounds the step to catch such contacts.
 
     Returns (final state, list of (t, kind) events with kind in {"impact",
     "detachment", "force zero", "force resumes"}, ∫ div f dt if asked).
@@ -121,7 +120,7 @@ def integrate(model, x0, revolutions, rtol=1e-12, atol=1e-14, with_divergence=Fa
             while t < t_end - 1e-14 * max(1.0, t_end):
                 sol = solve_ivp(
                     model.field(mode, theta_mid, with_divergence), (t, t_end), x,
-                    method="DOP853", rtol=rtol, atol=atol,
+                    method="DOP853", rtol=rtol, atol=atol, max_step=max_step,
                     events=model.events_of(mode, theta_mid),
                 )  # fmt: skip
                 if sol.status == 1:

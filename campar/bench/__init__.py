@@ -1,0 +1,154 @@
+"""``campar bench``: benchmarks with numbers, one module per benchmark.
+
+Every benchmark is registered here by name with one line of help, the module
+that runs it and a function that adds its arguments. The module is imported
+only when its benchmark runs, so building the ``campar`` parser stays cheap;
+it defines ``run(args) -> int``, prints a table and states the machine load.
+
+For developers — a new ``campar bench NAME``: write ``campar/bench/NAME.py``
+with ``run(args)`` and register its arguments below::
+
+    @benchmark("NAME", "one line of help")
+    def _name_arguments(p):
+        p.add_argument("--size", type=int, default=20)
+"""
+
+import argparse
+import importlib
+from collections.abc import Callable
+from typing import NamedTuple
+
+
+class Benchmark(NamedTuple):
+    name: str
+    help: str
+    module: str  # campar.bench.<module> defines run(args) -> int
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+
+
+# Registered benchmarks, in the order ``campar bench --help`` lists them.
+BENCHMARKS: dict[str, Benchmark] = {}
+
+
+def benchmark(name: str, help: str, module: str | None = None):
+    """Register ``campar bench NAME``; decorates the function that adds its arguments."""
+
+    def register(add_arguments):
+        BENCHMARKS[name] = Benchmark(name, help, module or name, add_arguments)
+        return add_arguments
+
+    return register
+
+
+def add_parser(sub) -> None:
+    """The ``bench`` parser with one sub-command per registered benchmark."""
+    p = sub.add_parser("bench", help="benchmarks: precision, peers, output cost, stress, …")
+    inner = p.add_subparsers(dest="benchmark", required=True, metavar="BENCHMARK")
+    for bench in BENCHMARKS.values():
+        q = inner.add_parser(bench.name, help=bench.help, description=bench.help)
+        bench.add_arguments(q)
+        q.set_defaults(handler=run_benchmark)
+
+
+def run_benchmark(args) -> int:
+    module = importlib.import_module(f"{__name__}.{BENCHMARKS[args.benchmark].module}")
+    return int(module.run(args) or 0)
+
+
+def floats(text: str) -> list[float]:
+    """Comma-separated numbers: "1e-4,1e-6"."""
+    return [float(x) for x in text.split(",") if x]
+
+
+def ints(text: str) -> list[int]:
+    return [int(x) for x in text.split(",") if x]
+
+
+def names(text: str) -> list[str]:
+    return [x for x in text.split(",") if x]
+
+
+# -- the benchmarks ----------------------------------------------------------
+
+
+@benchmark("precision", "wall time and steps against error: DP5(4) tolerances, RK4 steps")
+def _precision_arguments(p):
+    p.add_argument("--cells", type=names, help="comma-separated cell names (default: all)")
+    p.add_argument("--rtols", type=floats, help="DP5(4) rtols (default 1e-4 … 1e-12)")
+    p.add_argument("--rk4-steps", type=ints, help="RK4 steps per revolution (default 60 … 7680)")
+    p.add_argument("--reference-rtol", type=float, default=1e-13, help="SciPy reference (1e-13)")
+    p.add_argument("--scipy-rtols", type=floats, help="SciPy DOP853 peers on the figure "
+                   "(default 1e-6,1e-8,1e-10; '' for none)")  # fmt: skip
+    p.add_argument("--min-seconds", type=float, default=0.3,
+                   help="repeat each timing this long at least; keep the fastest")  # fmt: skip
+    p.add_argument("--plot", metavar="FILE.png", help="log-log figure (default: none)")
+    p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
+
+
+@benchmark("peers", "campar against SciPy DOP853 and the paper's RK4 recipe at equal agreement")
+def _peers_arguments(p):
+    p.add_argument("--cells", type=names, help="comma-separated cell names (default: all)")
+    p.add_argument("--revolutions", type=int, default=500,
+                   help="transient of the paper's recipe and the SciPy script (500)")  # fmt: skip
+    p.add_argument("--window", type=int, default=64, help="read window, revolutions (64)")
+    p.add_argument("--scipy-cells", type=int, default=-1,
+                   help="run SciPy on the first N cells only (default: all)")  # fmt: skip
+    p.add_argument("--scipy-rtol", type=float, default=1e-8, help="SciPy rtol (1e-8; atol /100)")
+    p.add_argument("--min-seconds", type=float, default=0.3,
+                   help="repeat each campar timing at least this long")  # fmt: skip
+    p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
+
+
+@benchmark("outputs", "cost of a labels-only map against one with every output")
+def _outputs_arguments(p):
+    p.add_argument("--rows", type=int, default=20, help="μcn values (20)")
+    p.add_argument("--omegas", type=int, default=40, help="ω values per chain (40)")
+    p.add_argument("--repeat", type=int, default=4, help="alternating runs of each; fastest (4)")
+    p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
+
+
+@benchmark("stress", "extreme parameters and states: no crash, no hang, valid or failed")
+def _stress_arguments(p):
+    p.add_argument("--budget", type=int, default=1_000_000, help="step budget per cell (1e6)")
+    p.add_argument("--timeout", type=float, default=120.0,
+                   help="seconds before a cell counts as hung (120)")  # fmt: skip
+    p.add_argument("--rtols", type=floats, default=[1e-8, 1e-10],
+                   help="labels compared between these (1e-8,1e-10)")  # fmt: skip
+    p.add_argument("--check", type=int, default=40,
+                   help="label changes checked against SciPy, at most (40)")  # fmt: skip
+    p.add_argument("--quick", action="store_true", help="the fast subset of tests/test_stress.py")
+
+
+@benchmark("scaling", "runner throughput: cells/s with 1, 2, 3 ranks, overhead, memory")
+def _scaling_arguments(p):
+    p.add_argument("--job", default="jobs/mu_cn.yaml", help="plane (jobs/mu_cn.yaml)")
+    p.add_argument("--size", type=int, default=100, help="N of the N × N sub-plane (100)")
+    p.add_argument("--rows", type=int, help="chains per tile (default: the job's)")
+    p.add_argument("--ranks", type=ints, default=[1, 2, 3], help="launches (1,2,3)")
+    p.add_argument("--suffix", default=".zarr", help="store type: .zarr (default) or .h5")
+    p.add_argument("--repeat", type=int, default=1, help="runs per launch, fastest kept (1)")
+    p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
+
+
+@benchmark("map", "map agreement with a 500-revolution rtol 1e-11 reference against run time",
+           module="maps")  # fmt: skip
+def _map_arguments(p):
+    p.add_argument("--planes", type=names, default=["mu_cn", "mu_kn", "omega_f0"],
+                   help="planes, as jobs/NAME.yaml (mu_cn,mu_kn,omega_f0)")  # fmt: skip
+    p.add_argument("--size", type=int, default=100, help="N of the N × N sub-plane (100)")
+    p.add_argument("--candidates", type=names, help="comma-separated (default: all)")
+    p.add_argument("--references", default="results/bench-map",
+                   help="reference stores and verdicts (results/bench-map)")  # fmt: skip
+    p.add_argument("--ranks", type=int, default=2, help="ranks computing a reference (2)")
+    p.add_argument("--no-adjudication", action="store_true",
+                   help="skip the long runs of disagreeing cells")  # fmt: skip
+    p.add_argument("--list", action="store_true", help="print the disagreeing cells")
+    p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
+
+
+@benchmark("cells", "one cell against ω (cold, warm), warm-started rows, compile and start-up")
+def _cells_arguments(p):
+    p.add_argument("--rtol", type=float, default=1e-9, help="integrator rtol (1e-9)")
+    p.add_argument("--min-seconds", type=float, default=0.3,
+                   help="repeat each timing this long at least; keep the fastest")  # fmt: skip
+    p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")

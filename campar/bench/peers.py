@@ -1,0 +1,189 @@
+"""``campar bench peers``: one cell by campar, by a SciPy script and by the paper's recipe.
+
+Every peer computes the same cells cold, from (y, y') = (0, 0) at θ = 0:
+
+(a) campar as a map runs it: converged transient (Newton-accelerated), DP5(4)
+    at rtol 1e-8, atol 1e-10, outputs label, dc, eps, pn (``run_tile``);
+(b) the SciPy script a researcher writes today (``scipy_peer``): solve_ivp
+    DOP853 with terminal events, piecewise between cam phase boundaries, rtol
+    1e-8 / atol 1e-10 like campar, a fixed transient of 500 revolutions like
+    the paper and the same read window as (c);
+(c) the paper's recipe: fixed-step RK4 (600 steps per revolution, campar's
+    default), a fixed 500-revolution transient and a 64-revolution read
+    window — campar's own compiled RK4 path, so (c)/(a) measures the method
+    (adaptive steps, early stop), not the language.
+
+Times are CPU seconds of this process (the machine is shared; wall times of
+SciPy are shown too). Agreement: the same n-p label and duty cycles within 0.002 (non-periodic
+cells: non-periodic in every peer). Speed ratios are quoted only for cells
+where the peers agree. A second SciPy ratio charges SciPy only for the
+revolutions campar needed (its time per revolution × campar's revolutions):
+what SciPy would cost with campar's transient policy, i.e. the compiled
+kernel's share of the speed-up.
+"""
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..plan import Tile
+from ..point import point_job
+from ..status import Kind, cell_label
+from ..tile import run_tile
+from .common import Cell, best_time, format_table, machine_line, timed
+from .scipy_peer import scipy_cell
+
+CELLS = (
+    Cell("1-0 ω0.3", 0.3),
+    Cell("1-1 ω1", 1.0),
+    Cell("1-2 ω1.2 f0.01", 1.2, f0=0.01),
+    Cell("1-3 ω0.62 μcn.5", 0.62, mu_cn=0.5),
+    Cell("2-2 ω3.15 μkn.91", 3.15, mu_kn=0.91),
+    Cell("2-2 ω3.5 μcn.5", 3.5, mu_cn=0.5),
+    Cell("chaos ω4.5 μcn.97", 4.5, mu_cn=0.97),
+)
+QUICK = {"cells": ["1-0 ω0.3", "1-2 ω1.2 f0.01"], "revolutions": 20, "window": 8,
+         "scipy_cells": 1, "min_seconds": 0.02}  # fmt: skip
+DC_AGREEMENT = 0.002
+OUTPUTS = ["label", "dc", "eps", "pn"]
+
+
+class Outcome(NamedTuple):
+    label: str
+    periodic: bool
+    dc: float
+    revolutions: int
+    seconds: float  # CPU seconds (fastest run for campar; one run for SciPy)
+    wall: float
+
+
+def campar_outcome(cell: Cell, method: str, transient: str, revolutions: int, window: int,
+                   min_seconds: float) -> Outcome:  # fmt: skip
+    job = point_job(
+        cell.omega, cell.f0, cell.mu_kn, cell.mu_cn, cell.zeta, cell.tensile, 0.0, 0.0,
+        transient, revolutions, 1e-8, 1e-10, method, OUTPUTS,
+    )  # fmt: skip
+    job = job.model_copy(update={"classify": job.classify.model_copy(
+        update={"window_revolutions": window})})  # fmt: skip
+    tile = Tile(0, 0, 1)
+    cell_out = {name: arr[0, 0] for name, arr in run_tile(job, tile).items()}
+    took = best_time(lambda: run_tile(job, tile), min_seconds)
+    kind = int(cell_out["kind"])
+    label = cell_label(kind, int(cell_out["n"]), int(cell_out["p"]), job.classify.chatter_p)
+    return Outcome(label, kind == Kind.PERIODIC, float(cell_out["dc"]),
+                   int(cell_out["revolutions"]), took.cpu, took.wall)  # fmt: skip
+
+
+def scipy_outcome(cell: Cell, revolutions: int, window: int, rtol: float) -> Outcome:
+    model = cell.scipy_model()
+    took, r = timed(lambda: scipy_cell(model, (0.0, 0.0), revolutions, window, rtol=rtol))
+    return Outcome(r.label, r.n > 0, r.dc, revolutions + window, took.cpu, took.wall)
+
+
+def agree(a: Outcome, b: Outcome) -> bool:
+    if not (a.periodic or b.periodic):
+        return True
+    return a.label == b.label and abs(a.dc - b.dc) <= DC_AGREEMENT
+
+
+class PeerRow(NamedTuple):
+    cell: Cell
+    campar: Outcome
+    paper: Outcome
+    scipy: Outcome | None
+    agree: bool
+
+
+def measure(cells=None, revolutions=500, window=64, scipy_cells=None, scipy_rtol=1e-8,
+            min_seconds=0.3) -> list[PeerRow]:  # fmt: skip
+    """Every peer on every chosen cell; SciPy only on the first scipy_cells (None: all)."""
+    chosen = [c for c in CELLS if cells is None or c.name in cells]
+    rows = []
+    for i, cell in enumerate(chosen):
+        a = campar_outcome(cell, "dp54", "converged", revolutions, window, min_seconds)
+        c = campar_outcome(cell, "rk4", "fixed", revolutions, window, min_seconds)
+        b = None
+        if scipy_cells is None or i < scipy_cells:
+            b = scipy_outcome(cell, revolutions, window, scipy_rtol)
+        ok = agree(a, c) and (b is None or (agree(a, b) and agree(b, c)))
+        rows.append(PeerRow(cell, a, c, b, ok))
+    return rows
+
+
+def geometric_mean(values) -> float:
+    values = [v for v in values if v > 0 and math.isfinite(v)]
+    return math.exp(sum(map(math.log, values)) / len(values)) if values else math.nan
+
+
+def format_rows(rows: list[PeerRow]) -> str:
+    headers = ["cell", "campar", "DC", "revs", "CPU ms", "RK4 500", "DC", "CPU ms", "SciPy 500",
+               "DC", "CPU s", "wall s", "ms/rev", "agree", "RK4/campar", "SciPy/campar",
+               "SciPy@revs/campar"]  # fmt: skip
+    out = []
+    for r in rows:
+        a, c, b = r.campar, r.paper, r.scipy
+        line = [r.cell.name, a.label, a.dc, a.revolutions, a.seconds * 1e3, c.label, c.dc,
+                c.seconds * 1e3]  # fmt: skip
+        if b is None:
+            line += ["not run", math.nan, math.nan, math.nan, math.nan]
+        else:
+            line += [b.label, b.dc, b.seconds, b.wall, b.seconds / b.revolutions * 1e3]
+        line.append("yes" if r.agree else "NO")
+        scale = 1.0 / a.seconds if r.agree else math.nan  # ratios only at equal agreement
+        line.append(c.seconds * scale)
+        line.append(b.seconds * scale if b else math.nan)
+        line.append(b.seconds / b.revolutions * a.revolutions * scale if b else math.nan)
+        out.append(line)
+    return format_table(headers, out)
+
+
+def summary(rows: list[PeerRow]) -> str:
+    ok = [r for r in rows if r.agree]
+    periodic = [r for r in ok if r.campar.periodic]
+    scipy = [r for r in ok if r.scipy is not None]
+    lines = [f"cells where all peers agree: {len(ok)} of {len(rows)}"]
+    for name, sel in (("periodic cells", periodic), ("all agreeing cells", ok)):
+        paper = [r.paper.seconds / r.campar.seconds for r in sel]
+        if paper:
+            lines.append(f"RK4 recipe / campar, {name}: geometric mean "
+                         f"{geometric_mean(paper):.0f}×, min {min(paper):.0f}×, "
+                         f"max {max(paper):.0f}×")  # fmt: skip
+    sel = [r for r in scipy if r.campar.periodic]
+    if sel:
+        per_cell = np.mean([r.scipy.seconds for r in sel])
+        per_rev = np.mean([r.scipy.seconds / r.scipy.revolutions for r in sel])
+        ratio = [r.scipy.seconds / r.campar.seconds for r in sel]
+        at_revs = [r.scipy.seconds / r.scipy.revolutions * r.campar.revolutions / r.campar.seconds
+                   for r in sel]  # fmt: skip
+        campar_cell = np.mean([r.campar.seconds for r in sel])
+        lines += [
+            f"SciPy / campar, periodic cells timed ({len(sel)}): geometric mean "
+            f"{geometric_mean(ratio):.0f}×, min {min(ratio):.0f}×",
+            f"SciPy with campar's revolution count / campar: geometric mean "
+            f"{geometric_mean(at_revs):.0f}× (the compiled kernel's share)",
+            f"per cell: SciPy {per_cell:.2f} s ({per_rev * 1e3:.1f} ms/revolution), campar "
+            f"{campar_cell * 1e3:.2f} ms; a 400 × 400 map: SciPy ≈ "
+            f"{per_cell * 160_000 / 86400:.1f} CPU-days, campar (cold cells) ≈ "
+            f"{campar_cell * 160_000 / 60:.1f} CPU-minutes",
+        ]
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    config = {
+        "cells": args.cells,
+        "revolutions": args.revolutions,
+        "window": args.window,
+        "scipy_cells": args.scipy_cells if args.scipy_cells >= 0 else None,
+        "min_seconds": args.min_seconds,
+    }
+    if args.quick:
+        config.update({k: v for k, v in QUICK.items() if k != "cells" or not args.cells})
+    print(machine_line())
+    rows = measure(scipy_rtol=args.scipy_rtol, **config)
+    print(format_rows(rows))
+    print()
+    print(summary(rows))
+    print(f"load average at the end: {machine_line().rsplit('load average ', 1)[1]}")
+    return 0

@@ -1,0 +1,141 @@
+"""Shared fixtures: small job files, serial reference maps, the campar and mpirun commands."""
+
+import contextlib
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from campar.job import Job
+from campar.plan import plan_tiles
+from campar.tile import run_tile
+
+CAMPAR = [sys.executable, "-m", "campar.cli"]
+MPIRUN = Path(sys.executable).parent / "mpirun"
+
+# 6 × 12 cells, one chain a tile; "slow" fixes a long transient so a tile takes
+# a noticeable fraction of a second (time to signal or kill a run mid-way).
+SMALL_JOB = {
+    "name": "small",
+    "sweep": {
+        "omega": {"from": 6.0, "to": 1.0, "points": 12},
+        "mu_cn": {"from": 0.9, "to": 0.6, "points": 6},
+    },
+    "classify": {"window_revolutions": 16},
+    "tiles": {"rows": 1},
+}
+SLOW = {"transient": {"mode": "fixed", "max_revolutions": 1500}}
+
+
+def merge(base: dict, extra: dict) -> dict:
+    out = dict(base)
+    for key, value in extra.items():
+        out[key] = merge(out[key], value) if isinstance(value, dict) and key in out else value
+    return out
+
+
+@pytest.fixture
+def write_job(tmp_path):
+    """write_job(name="x", store=..., **sections) -> (path of a YAML job file, Job)."""
+
+    def write(name="small", slow=False, **extra):
+        data = merge(SMALL_JOB, SLOW) if slow else dict(SMALL_JOB)
+        data = merge(data, {"name": name, **extra})
+        data.setdefault("store", str(tmp_path / f"{name}.zarr"))
+        path = tmp_path / f"{name}.yaml"
+        path.write_text(yaml.safe_dump(data, sort_keys=False))
+        return path, Job.from_dict(data)
+
+    return write
+
+
+_REFERENCES = {}
+
+
+def reference_arrays(job: Job) -> dict[str, np.ndarray]:
+    """The whole map computed tile by tile in this process, without runner or store."""
+    key = job.digest()
+    if key not in _REFERENCES:
+        tiles = [run_tile(job, tile) for tile in plan_tiles(job)]
+        _REFERENCES[key] = {name: np.concatenate([t[name] for t in tiles]) for name in tiles[0]}
+    return _REFERENCES[key]
+
+
+def assert_same_map(reader, job: Job) -> None:
+    """Every array of a finished store equals the serial reference, bit for bit."""
+    reference = reference_arrays(job)
+    assert reader.done.all()
+    assert sorted(reader.names) == sorted(reference)
+    for name, expected in reference.items():
+        got = reader.read(name)
+        assert got.dtype == expected.dtype, name
+        assert np.array_equal(got, expected, equal_nan=True), name
+
+
+def run_campar(*args, timeout=300, **kwargs) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [*CAMPAR, *map(str, args)], capture_output=True, text=True, timeout=timeout, **kwargs
+    )
+
+
+def subprocess_env() -> dict:
+    # Unbuffered, so a test can read a child's progress while it runs.
+    return {**os.environ, "PYTHONUNBUFFERED": "1"}
+
+
+def start_campar(*args, launcher=(), **kwargs) -> subprocess.Popen:
+    """Start ``campar ARGS`` (under ``launcher``, e.g. mpirun -n 2) in its own session."""
+    return subprocess.Popen(
+        [*map(str, launcher), *CAMPAR, *map(str, args)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=subprocess_env(),
+        start_new_session=True,  # killpg reaches mpirun and every rank
+        **kwargs,
+    )
+
+
+def wait_for_tiles(store, count: int, proc: subprocess.Popen, timeout=300.0) -> int:
+    """Poll a store being written until ``count`` tiles are done; returns how many are."""
+    from campar.errors import StoreError
+    from campar.store import read_store
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            raise AssertionError(f"run ended early ({proc.returncode}): {proc.stderr.read()}")
+        try:
+            with read_store(store) as reader:
+                done = int(reader.done.sum())
+        except (StoreError, OSError):
+            done = 0  # not created yet, or replaced under us
+        if done >= count:
+            return done
+        time.sleep(0.02)
+    raise AssertionError(f"{store}: fewer than {count} tiles done after {timeout} s")
+
+
+def kill_tree(pid: int) -> None:
+    """SIGKILL a process and all its descendants, as a node failure would. (hydra starts
+    each rank in a session of its own, so killing mpirun's process group misses them.)"""
+    children = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rpartition(")")[2].split()
+        except OSError:
+            continue
+        children.setdefault(int(fields[1]), []).append(int(stat.parent.name))
+    doomed, todo = [], [pid]
+    while todo:
+        doomed.append(todo.pop())
+        todo += children.get(doomed[-1], [])
+    for victim in reversed(doomed):  # the ranks first, so none outlives its launcher
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(victim, signal.SIGKILL)

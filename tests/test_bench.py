@@ -1,0 +1,59 @@
+"""`campar bench`: every benchmark runs in a tiny configuration and prints its table."""
+
+import pytest
+
+from campar.bench import BENCHMARKS, precision
+from campar.cli import main
+
+HEADERS = {
+    "precision": ["state err", "event-time err", "Observed slopes", "DP5 state err vs rtol"],
+    "peers": ["RK4 500", "SciPy 500", "agree", "RK4 recipe / campar"],
+    "outputs": ["labels CPU s", "all/labels", "converged", "fixed"],
+    "stress": ["labels (rtols)", "worst time per cell", "label changes"],
+}
+
+
+def test_every_benchmark_is_registered_and_listed(capsys):
+    assert set(HEADERS) <= set(BENCHMARKS)
+    with pytest.raises(SystemExit):
+        main(["bench", "--help"])
+    listing = capsys.readouterr().out
+    for name in HEADERS:
+        assert name in listing
+
+
+@pytest.mark.parametrize("name", list(HEADERS))
+def test_benchmark_runs_tiny_and_prints_its_table(name, capsys, tmp_path):
+    extra = ["--plot", str(tmp_path / "precision.png")] if name == "precision" else []
+    assert main(["bench", name, "--quick", *extra]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("machine: ") and "load average" in out
+    for text in HEADERS[name]:
+        assert text in out, text
+    if name == "precision":
+        assert (tmp_path / "precision.png").stat().st_size > 10_000
+
+
+@pytest.fixture(scope="module")
+def precision_runs():
+    return precision.measure(
+        cells=["1-0 contact", "1-2 impacts"], rtols=[1e-4, 1e-6, 1e-8, 1e-10],
+        rk4_steps=[120, 480], scipy_rtols=[], min_seconds=0.0,
+    )  # fmt: skip
+
+
+def test_dp5_error_falls_with_rtol_in_proportion(precision_runs):
+    runs, refs = precision_runs
+    for cell in refs:
+        err = {r.setting: r.state_error for r in runs if r.cell == cell and r.method == "dp54"}
+        assert err[1e-10] < err[1e-6], (cell, err)
+    slopes = {f.cell: f.slope for f in precision.fits(runs, refs)
+              if f.what == "DP5 state err vs rtol"}  # fmt: skip
+    assert set(slopes) == set(refs)
+    for cell, slope in slopes.items():
+        assert 0.7 <= slope <= 1.3, (cell, slope)
+
+
+def test_event_sequences_match_the_reference(precision_runs):
+    runs, _ = precision_runs
+    assert all(r.events_match for r in runs if r.method == "dp54" and r.setting <= 1e-6)

@@ -1,0 +1,206 @@
+"""The MPI runner under real mpirun (mpich's hydra, beside the venv's python).
+
+Every map is compared with tiles computed directly in the test process, so
+a wrong rank-to-tile bookkeeping, a garbled buffer or a lost tile fails.
+"""
+
+import signal
+import socket
+import subprocess
+import sys
+import textwrap
+
+import pytest
+from conftest import (
+    CAMPAR,
+    MPIRUN,
+    assert_same_map,
+    kill_tree,
+    run_campar,
+    start_campar,
+    subprocess_env,
+    wait_for_tiles,
+)
+
+from campar.store import read_store
+
+pytestmark = [
+    pytest.mark.mpi,
+    pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}"),
+]
+
+
+def mpirun(ranks: int) -> list[str]:
+    return [str(MPIRUN), "-n", str(ranks)]
+
+
+def run_mpi(ranks: int, *args, timeout=300, command=CAMPAR) -> subprocess.CompletedProcess:
+    """``campar ARGS`` (or ``command ARGS``) under mpirun -n RANKS."""
+    return subprocess.run(
+        [*mpirun(ranks), *command, *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=subprocess_env(),
+    )
+
+
+def last_run(store) -> dict:
+    with read_store(store) as reader:
+        return reader.attrs["runs"][-1]
+
+
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_mpi_map_equals_the_serial_one_and_every_rank_computes(write_job, ranks):
+    path, job = write_job(slow=True)
+    result = run_mpi(ranks, "run", path)
+    assert result.returncode == 0, result.stderr
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+    entry = last_run(job.store)
+    assert entry["ranks"] == ranks and entry["outcome"] == "complete"
+    assert entry["hosts"] == [socket.gethostname()]
+    assert sum(entry["tiles_per_rank"]) == 6
+    assert all(n >= 1 for n in entry["tiles_per_rank"]), entry["tiles_per_rank"]
+    assert len(entry["peak_rss_mb"]) == ranks and all(0 < mb < 2000 for mb in entry["peak_rss_mb"])
+
+
+def test_mpi_run_killed_with_sigkill_resumes_to_the_same_map(write_job):
+    path, job = write_job(slow=True)
+    proc = start_campar("run", path, launcher=mpirun(2))
+    wait_for_tiles(job.store, 2, proc)
+    kill_tree(proc.pid)  # mpirun and every rank, as a dead node would
+    proc.communicate(timeout=60)
+    with read_store(job.store) as reader:
+        done = int(reader.done.sum())
+    assert 2 <= done < 6
+    resumed = run_mpi(3, "run", path)
+    assert resumed.returncode == 0, resumed.stderr
+    assert "stale lock" in resumed.stderr
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+    assert last_run(job.store)["tiles"] == 6 - done
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGUSR1])
+def test_a_signal_to_mpirun_exits_75_and_a_serial_run_resumes(write_job, signum):
+    path, job = write_job(slow=True)
+    proc = start_campar("run", path, launcher=mpirun(2))
+    wait_for_tiles(job.store, 1, proc)
+    proc.send_signal(signum)  # hydra forwards it to every rank
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 75, stderr
+    assert stderr.count("run the same command again") == 1  # rank 0 only
+    with read_store(job.store) as reader:
+        assert 1 <= int(reader.done.sum()) < 6
+    resumed = run_campar("run", path)
+    assert resumed.returncode == 0, resumed.stderr
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+        assert [r["outcome"] for r in reader.attrs["runs"]] == ["interrupted", "complete"]
+
+
+def run_with_faults(ranks, job_path, fault) -> subprocess.CompletedProcess:
+    """campar run under mpirun with run_tile replaced by one that raises per ``fault``."""
+    script = textwrap.dedent(f"""
+        import os, sys
+        import campar.runner as runner
+        from campar.cli import main
+        from campar.tile import run_tile
+        rank = int(os.environ["PMI_RANK"])
+        def faulty(job, tile):
+            if {fault}:
+                raise RuntimeError(f"injected fault, tile {{tile.index}}")
+            return run_tile(job, tile)
+        runner.run_tile = faulty
+        sys.exit(main(["run", {str(job_path)!r}]))
+    """)
+    return run_mpi(ranks, "-c", script, command=[sys.executable])
+
+
+def test_a_worker_that_fails_every_tile_does_not_stop_the_run(write_job):
+    path, job = write_job(slow=True)  # rank 0 cannot finish alone before rank 1 asks
+    result = run_with_faults(2, path, "rank == 1")
+    assert result.returncode == 0, result.stderr
+    assert f"rank 1 on {socket.gethostname()}" in result.stderr
+    assert "injected fault" in result.stderr
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+
+
+def test_a_tile_that_fails_on_two_ranks_ends_the_run_with_where(write_job):
+    path, job = write_job()
+    result = run_with_faults(3, path, "tile.index == 4")
+    assert result.returncode == 1, result.stderr
+    assert "tile 4 failed 2×" in result.stderr
+    assert (
+        "injected fault, tile 4" in result.stderr and f"on {socket.gethostname()}" in result.stderr
+    )
+    with read_store(job.store) as reader:
+        assert not reader.done[4] and reader.done.sum() >= 1
+    assert last_run(job.store)["outcome"] == "failed"
+
+
+def test_refusals_under_mpi_end_every_rank(write_job):
+    path, job = write_job()
+    assert run_campar("run", path).returncode == 0
+    changed, _ = write_job(integrator={"rtol": 1e-9}, store=job.store)
+    refused = run_mpi(3, "run", changed, timeout=120)
+    assert refused.returncode == 3
+    assert refused.stderr.count("integrator.rtol: 1e-08 in the store") == 1  # rank 0 says it
+
+
+def test_every_rank_of_an_spmd_caller_sees_the_masters_error(write_job):
+    """Library callers run the same code on every rank: a refusal must reach them all."""
+    path, job = write_job()
+    assert run_campar("run", path).returncode == 0
+    _, changed = write_job(integrator={"rtol": 1e-9}, store=job.store)
+    script = textwrap.dedent(f"""
+        import os
+        from campar.errors import StoreMismatch
+        from campar.job import Job
+        from campar.runner import run_job
+        job = Job.from_dict({changed.to_dict()!r})
+        try:
+            run_job(job)
+        except StoreMismatch as exc:
+            print("rank", os.environ["PMI_RANK"], "refused", getattr(exc, "rank", 0), flush=True)
+            run_job(job, overwrite=True)
+            print("rank", os.environ["PMI_RANK"], "overwrote", flush=True)
+    """)
+    result = run_mpi(2, "-c", script, command=[sys.executable])
+    assert result.returncode == 0, result.stderr
+    assert sorted(result.stdout.splitlines()) == [
+        "rank 0 overwrote", "rank 0 refused 0", "rank 1 overwrote", "rank 1 refused 1",
+    ]  # fmt: skip
+    with read_store(job.store) as reader:
+        assert reader.attrs["job"]["integrator"]["rtol"] == 1e-9
+        assert_same_map(reader, changed)
+
+
+def test_no_rank_spins_while_waiting(write_job):
+    """Tiles that sleep (no CPU) on both ranks: CPU time stays far below wall time on each."""
+    path, job = write_job()
+    script = textwrap.dedent(f"""
+        import sys, time
+        import campar.runner as runner
+        from campar.cli import main
+        from campar.job import load_job
+        from campar.plan import plan_tiles
+        from campar.tile import run_tile
+        first = run_tile(load_job({str(path)!r}), plan_tiles(load_job({str(path)!r}))[0])
+        def sleepy(job, tile):  # every tile is one chain: the same shapes
+            time.sleep(0.5)
+            return {{name: a.copy() for name, a in first.items()}}
+        runner.run_tile = sleepy
+        wall, cpu = time.perf_counter(), time.process_time()
+        code = main(["run", {str(path)!r}])
+        print("usage", time.perf_counter() - wall, time.process_time() - cpu, flush=True)
+        sys.exit(code)
+    """)
+    result = run_mpi(2, "-c", script, command=[sys.executable])
+    assert result.returncode == 0, result.stderr
+    usage = [line.split()[1:] for line in result.stdout.splitlines() if line.startswith("usage")]
+    assert len(usage) == 2
+    for wall, cpu in (map(float, u) for u in usage):
+        assert wall > 1.4 and cpu < 0.3 * wall, (wall, cpu)  # spinning: ≈ 0.65

@@ -1,0 +1,326 @@
+"""The serial runner: results equal run_tile's, signals, kills, resume, refusals, status."""
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import (
+    assert_same_map,
+    kill_tree,
+    reference_arrays,
+    run_campar,
+    start_campar,
+    wait_for_tiles,
+)
+
+import campar.runner as runner
+from campar.errors import CamparError, Interrupted
+from campar.plan import plan_tiles
+from campar.progress import Progress, format_duration
+from campar.store import read_store
+from campar.tile import array_names, run_tile
+
+
+def tiles_done(path) -> list[bool]:
+    with read_store(path) as reader:
+        return reader.done.tolist()
+
+
+def outcomes(path) -> list[str]:
+    with read_store(path) as reader:
+        return [run["outcome"] for run in reader.attrs["runs"]]
+
+
+# -- in-process ---------------------------------------------------------------------
+
+
+def test_pack_and_unpack_round_trip_a_tile(write_job):
+    _, job = write_job(outputs=["label", "dc", "sections"])
+    tile = plan_tiles(job)[3]
+    rng = np.random.default_rng(0)
+    arrays = {}
+    for name, dtype, shape in runner.tile_layout(job, tile):
+        arrays[name] = (rng.normal(size=shape) * 100).astype(dtype)
+    buf = runner.pack([3, 42], [arrays[n] for n in array_names(job)])
+    assert buf.dtype == np.uint8 and buf[:16].view(np.int64).tolist() == [3, 42]
+    back = runner.unpack(job, tile, buf[16:])
+    for name, values in arrays.items():
+        assert back[name].dtype == values.dtype
+        np.testing.assert_array_equal(back[name], values)
+    with pytest.raises(CamparError, match="bytes received"):
+        runner.unpack(job, tile, buf[17:])
+
+
+def test_serial_run_equals_tiles_computed_directly(write_job):
+    _, job = write_job()
+    summary = runner.run_job(job)
+    assert summary.outcome == "complete"
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+        (entry,) = reader.attrs["runs"]
+    assert entry["tiles"] == 6 and entry["cells"] == 72 and entry["ranks"] == 1
+    assert entry["host"] == socket.gethostname() and entry["outcome"] == "complete"
+    assert entry["cells_per_s"] > 0 and 0 < entry["compute_seconds"] <= entry["seconds"] * 1.05
+    # A second run finds nothing to do and logs nothing.
+    assert runner.run_job(job).outcome == "nothing to do"
+    assert outcomes(job.store) == ["complete"]
+
+
+def test_a_job_without_store_is_a_job_error_and_creates_nothing(write_job, tmp_path):
+    _, job = write_job(store=None)
+    before = sorted(tmp_path.iterdir())
+    with pytest.raises(CamparError, match="--store") as err:
+        runner.run_job(job)
+    assert err.value.exit_code == 2
+    assert sorted(tmp_path.iterdir()) == before
+
+
+def signal_during(monkeypatch, index, *, sleep=0.0, again_after=None, signum=signal.SIGTERM):
+    """Make run_tile signal this process while computing tile ``index``."""
+
+    def tile_with_signal(job, tile):
+        if tile.index == index:
+            os.kill(os.getpid(), signum)
+            if again_after is not None:
+                time.sleep(again_after)
+                os.kill(os.getpid(), signum)
+            time.sleep(sleep)
+        return run_tile(job, tile)
+
+    monkeypatch.setattr(runner, "run_tile", tile_with_signal)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT, signal.SIGUSR1])
+def test_a_signal_collects_the_tile_in_flight_then_interrupts(write_job, monkeypatch, signum):
+    _, job = write_job()
+    signal_during(monkeypatch, 1, signum=signum)
+    handler = signal.getsignal(signum)
+    with pytest.raises(Interrupted, match=f"stopped by {signum.name} .* resume") as err:
+        runner.run_job(job)
+    assert err.value.exit_code == 75
+    assert signal.getsignal(signum) is handler  # restored
+    assert tiles_done(job.store) == [True, True, False, False, False, False]
+    assert outcomes(job.store) == ["interrupted"]
+    monkeypatch.setattr(runner, "run_tile", run_tile)
+    assert runner.run_job(job).outcome == "complete"
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+    assert outcomes(job.store) == ["interrupted", "complete"]
+
+
+def test_a_second_signal_abandons_the_tile_in_flight(write_job, monkeypatch):
+    _, job = write_job()
+    signal_during(monkeypatch, 2, again_after=1.3, sleep=30)
+    start = time.monotonic()
+    with pytest.raises(Interrupted):
+        runner.run_job(job, grace=60)
+    assert time.monotonic() - start < 10
+    assert tiles_done(job.store) == [True, True, False, False, False, False]
+
+
+def test_the_grace_period_bounds_the_wait_for_tiles_in_flight(write_job, monkeypatch):
+    _, job = write_job()
+    signal_during(monkeypatch, 0, sleep=30)
+    start = time.monotonic()
+    with pytest.raises(Interrupted):
+        runner.run_job(job, grace=0.5)
+    assert time.monotonic() - start < 10
+    assert not any(tiles_done(job.store))
+
+
+def failing(monkeypatch, index, times):
+    calls = {"n": 0}
+
+    def tile_that_fails(job, tile):
+        if tile.index == index and calls["n"] < times:
+            calls["n"] += 1
+            raise ZeroDivisionError("injected")
+        return run_tile(job, tile)
+
+    monkeypatch.setattr(runner, "run_tile", tile_that_fails)
+
+
+def test_a_tile_that_fails_once_is_retried(write_job, monkeypatch, caplog):
+    _, job = write_job()
+    failing(monkeypatch, 3, times=1)
+    assert runner.run_job(job).outcome == "complete"
+    assert "tile 3 failed" in caplog.text and "ZeroDivisionError" in caplog.text
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+
+
+def test_a_tile_that_keeps_failing_ends_the_run_with_where_and_why(write_job, monkeypatch):
+    _, job = write_job()
+    failing(monkeypatch, 2, times=99)
+    with pytest.raises(CamparError) as err:
+        runner.run_job(job)
+    message = str(err.value)
+    assert "tile 2 failed 2×" in message
+    assert f"rank 0 on {socket.gethostname()}" in message and "ZeroDivisionError" in message
+    assert tiles_done(job.store) == [True, True, False, False, False, False]
+    assert outcomes(job.store) == ["failed"]
+
+
+def test_progress_line_counts_rate_and_eta():
+    class Tty:
+        text = ""
+
+        def isatty(self):
+            return True
+
+        def write(self, s):
+            self.text += s
+
+        def flush(self):
+            pass
+
+    out = Tty()
+    progress = Progress(10, 1000, 2, 200, stream=out)
+    progress.start -= 10.0  # started ten seconds ago, last drawn then too
+    progress.last -= 10.0
+    progress.tile_done(100)
+    assert out.text.startswith("\rtiles 3/10  cells 300/1000  10.0 cells/s  ETA 1m10s")
+    assert progress.rate == pytest.approx(10.0, rel=0.01)
+    progress.tile_done(100)  # within REDRAW_SECONDS: not drawn again
+    assert out.text.count("tiles") == 1
+    assert format_duration(70) == "1m10s" and format_duration(7300) == "2h01m"
+
+
+# -- the command line, in subprocesses --------------------------------------------------
+
+
+def test_run_then_status_reports_tiles_cells_and_runs(write_job):
+    path, job = write_job()
+    done = run_campar("run", path)
+    assert done.returncode == 0, done.stderr
+    status = run_campar("status", job.store)
+    assert status.returncode == 0, status.stderr
+    assert "tiles   6/6 done" in status.stdout
+    assert "cells   72/72 done, 0 failed" in status.stdout
+    assert "runs    1 (complete last)" in status.stdout
+    reference = reference_arrays(job)
+    periodic = int((reference["kind"] == 0).sum())
+    assert f"periodic {periodic}" in status.stdout
+
+
+def test_status_of_a_missing_store_exits_3(tmp_path):
+    result = run_campar("status", tmp_path / "none.zarr")
+    assert result.returncode == 3 and "no store" in result.stderr
+
+
+@pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+def test_sigkill_mid_run_then_resume_gives_the_same_map(write_job, tmp_path, suffix):
+    path, job = write_job(slow=True, store=str(tmp_path / f"slow{suffix}"))
+    proc = start_campar("run", path)
+    wait_for_tiles(job.store, 2, proc)
+    kill_tree(proc.pid)
+    proc.communicate(timeout=60)
+    done = tiles_done(job.store)
+    assert 2 <= sum(done) < 6, done
+    resumed = run_campar("run", path)
+    assert resumed.returncode == 0, resumed.stderr
+    assert "stale lock" in resumed.stderr
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+        assert reader.attrs["runs"][-1]["tiles"] == 6 - sum(done)
+
+
+def test_sigterm_exits_75_and_the_same_command_resumes(write_job):
+    path, job = write_job(slow=True)
+    proc = start_campar("run", path)
+    wait_for_tiles(job.store, 1, proc)
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 75, stderr
+    assert "SIGTERM" in stderr and "run the same command again" in stderr
+    assert 1 <= sum(tiles_done(job.store)) < 6
+    resumed = run_campar("run", path)
+    assert resumed.returncode == 0, resumed.stderr
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+    assert outcomes(job.store) == ["interrupted", "complete"]
+
+
+def test_a_concurrent_run_is_refused_with_host_and_pid(write_job):
+    path, job = write_job(slow=True)
+    first = start_campar("run", path)
+    try:
+        wait_for_tiles(job.store, 1, first)
+        second = run_campar("run", path)
+        assert second.returncode == 3
+        assert f"pid {first.pid} on host {socket.gethostname()}" in second.stderr
+    finally:
+        first.send_signal(signal.SIGTERM)
+        first.communicate(timeout=60)
+
+
+def test_a_store_of_another_job_is_refused_untouched_unless_overwrite(write_job):
+    path, job = write_job()
+    assert run_campar("run", path).returncode == 0
+    with read_store(job.store) as reader:
+        before = reader.read("n").copy()
+    changed, _ = write_job(integrator={"rtol": 1e-9}, store=job.store)
+    refused = run_campar("run", changed)
+    assert refused.returncode == 3
+    assert "integrator.rtol: 1e-08 in the store, 1e-09 in the job" in refused.stderr
+    with read_store(job.store) as reader:
+        np.testing.assert_array_equal(reader.read("n"), before)
+        assert reader.attrs["job"]["integrator"]["rtol"] == 1e-8
+    replaced = run_campar("run", changed, "--overwrite")
+    assert replaced.returncode == 0, replaced.stderr
+    with read_store(job.store) as reader:
+        assert reader.attrs["job"]["integrator"]["rtol"] == 1e-9
+
+
+@pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+def test_repeated_sigkills_at_random_moments_then_resume_give_the_same_map(
+    write_job, tmp_path, suffix
+):
+    """Kill -9 at seeded random moments (HDF5 checkpointing after every tile, so kills
+    also land inside checkpoints) until a run completes; the map is still exact."""
+    path, job = write_job(slow=True, store=str(tmp_path / f"killed{suffix}"))
+    script = (
+        "import sys, campar.store._hdf5 as h5; h5.CHECKPOINT_TILES = 1\n"
+        f"from campar.cli import main; sys.exit(main(['run', {str(path)!r}]))"
+    )
+    rng = np.random.default_rng(3)
+    for _ in range(6):
+        done = sum(tiles_done(job.store)) if Path(job.store).exists() else 0
+        proc = subprocess.Popen([sys.executable, "-c", script], stderr=subprocess.PIPE, text=True)
+        if done + 2 < 6:  # else let it finish
+            wait_for_tiles(job.store, done + 2, proc)
+            time.sleep(rng.uniform(0.0, 0.5))  # somewhere in the next tile or checkpoint
+            proc.kill()
+        _, stderr = proc.communicate(timeout=300)
+        if proc.returncode == 0:
+            break
+        assert proc.returncode == -signal.SIGKILL, stderr
+    else:
+        pytest.fail("six runs did not complete the map")
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+        runs = reader.attrs["runs"]
+    assert runs[-1]["outcome"] == "complete"  # killed runs log nothing
+
+
+def test_an_idle_master_does_not_spin(write_job, monkeypatch):
+    """While its only lane sleeps in a tile, the master polls with a 1 ms backoff."""
+    _, job = write_job()
+    first = run_tile(job, plan_tiles(job)[0])  # kernel loaded before the clock starts
+
+    def sleepy(job, tile):  # every tile is one chain: the same shapes
+        time.sleep(0.4)
+        return {name: a.copy() for name, a in first.items()}
+
+    monkeypatch.setattr(runner, "run_tile", sleepy)
+    wall, cpu = time.perf_counter(), time.process_time()
+    runner.run_job(job)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    assert wall > 2.4
+    assert cpu < 0.25 * wall, (cpu, wall)

@@ -1,0 +1,445 @@
+"""One suite every store backend passes (as zarr's StoreTests), plus backend specifics.
+
+These tests write synthetic tiles (random numbers of the right dtypes), so
+they test the store alone and take no kernel time.
+"""
+
+import json
+import logging
+import os
+import signal
+import socket
+import subprocess
+import sys
+import textwrap
+import time
+
+import h5py
+import numpy as np
+import pytest
+
+from campar.errors import StoreError, StoreLocked, StoreMismatch
+from campar.job import Job
+from campar.plan import plan_tiles
+from campar.store import lock_path, open_store, read_store
+from campar.store._lock import process_state
+from campar.store._schema import cell_arrays
+from campar.tile import array_names, array_spec
+
+JOB = {
+    "name": "store_suite",
+    "sweep": {
+        "omega": {"from": 5.0, "to": 1.0, "points": 7},
+        "zeta": {"from": 0.1, "to": 0.3, "points": 5},
+    },
+    "outputs": ["label", "dc", "sections", "multipliers"],
+    "classify": {"sections": 3},
+    "tiles": {"rows": 2},
+}
+
+
+def make_job(**changes) -> Job:
+    data = json.loads(json.dumps(JOB))
+    for dotted, value in changes.items():
+        *parents, last = dotted.split("__")
+        node = data
+        for key in parents:
+            node = node.setdefault(key, {})
+        node[last] = value
+    return Job.from_dict(data)
+
+
+def fake_tile(job: Job, tile, seed: int) -> dict[str, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    arrays = {}
+    for name in array_names(job):
+        dtype, tail = array_spec(job, name)
+        shape = (tile.n_rows, job.shape[1], *tail)
+        if dtype.kind == "f":
+            arrays[name] = rng.normal(size=shape).astype(dtype)
+        else:
+            arrays[name] = rng.integers(0, 100, size=shape).astype(dtype)
+    return arrays
+
+
+def snapshot(path) -> dict:
+    """Every file under ``path`` (or the file) with its bytes: to prove a store untouched."""
+    if path.is_file():
+        return {path.name: path.read_bytes()}
+    return {
+        str(p.relative_to(path)): p.read_bytes() for p in sorted(path.rglob("*")) if p.is_file()
+    }
+
+
+def dead_pid() -> int:
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait()
+    return child.pid
+
+
+class StoreSuite:
+    """Behaviour every backend shares; subclasses set ``suffix``."""
+
+    suffix = ""
+
+    @pytest.fixture
+    def path(self, tmp_path):
+        return tmp_path / f"results{self.suffix}"
+
+    @pytest.fixture
+    def job(self):
+        return make_job()
+
+    def test_new_store_has_schema_fills_and_attributes(self, path, job):
+        with open_store(path, job) as store:
+            assert not store.done.any()
+            assert store.done.shape == (len(plan_tiles(job)),)
+        with read_store(path) as reader:
+            assert reader.job == job
+            assert reader.names == array_names(job)
+            np.testing.assert_array_equal(reader.coords["omega"], job.omega)
+            np.testing.assert_array_equal(reader.coords["zeta"], job.second_values)
+            for schema in cell_arrays(job):
+                data = reader.read(schema.name)
+                assert data.shape == schema.shape and data.dtype == schema.dtype
+                if schema.dtype.kind == "f":
+                    assert np.isnan(data).all(), schema.name
+                else:
+                    assert (data == -1).all(), schema.name
+            assert reader.read("sections").shape == (5, 7, 3, 2)
+            assert reader.attrs["job"] == job.to_dict()
+            assert reader.attrs["job_hash"] == job.digest()
+            assert reader.attrs["runs"] == []
+            assert {"campar", "numpy", "numba", "zarr", "h5py", "mpi4py"} <= set(
+                reader.attrs["versions"]
+            )
+            assert str(reader.path) == str(path)
+
+    def test_tiles_round_trip_and_others_stay_unset(self, path, job):
+        tiles = plan_tiles(job)
+        written = {t.index: fake_tile(job, t, t.index) for t in (tiles[0], tiles[2])}
+        with open_store(path, job) as store:
+            for index, arrays in written.items():
+                store.write_tile(tiles[index], arrays)
+            assert store.done.tolist() == [True, False, True]
+        with read_store(path) as reader:
+            assert reader.done.tolist() == [True, False, True]
+            for name in reader.names:
+                data = reader.read(name)
+                for index, arrays in written.items():
+                    np.testing.assert_array_equal(data[tiles[index].rows], arrays[name])
+                untouched = data[tiles[1].rows]
+                assert (np.isnan(untouched) if data.dtype.kind == "f" else untouched == -1).all()
+
+    def test_reader_sees_tiles_while_the_run_holds_the_store(self, path, job):
+        tile = plan_tiles(job)[1]
+        arrays = fake_tile(job, tile, 7)
+        with open_store(path, job) as store:
+            store.write_tile(tile, arrays)
+            with read_store(path) as reader:
+                assert reader.done.tolist() == [False, True, False]
+                np.testing.assert_array_equal(reader.read("dc")[tile.rows], arrays["dc"])
+
+    def test_reopening_the_same_job_resumes(self, path, job):
+        tiles = plan_tiles(job)
+        arrays = fake_tile(job, tiles[1], 1)
+        with open_store(path, job) as store:
+            store.write_tile(tiles[1], arrays)
+            store.log_run({"outcome": "interrupted"})
+        with open_store(path, make_job()) as store:
+            assert store.done.tolist() == [False, True, False]
+            assert store.runs == [{"outcome": "interrupted"}]
+            store.log_run({"outcome": "complete"})
+        with read_store(path) as reader:
+            np.testing.assert_array_equal(reader.read("n")[tiles[1].rows], arrays["n"])
+            assert [r["outcome"] for r in reader.attrs["runs"]] == ["interrupted", "complete"]
+
+    def test_a_different_job_is_refused_naming_the_field_and_nothing_changes(self, path, job):
+        with open_store(path, job) as store:
+            store.write_tile(plan_tiles(job)[0], fake_tile(job, plan_tiles(job)[0], 0))
+        before = snapshot(path)
+        with pytest.raises(StoreMismatch) as err:
+            open_store(path, make_job(integrator__rtol=1e-9))
+        assert "integrator.rtol: 1e-08 in the store, 1e-09 in the job" in str(err.value)
+        assert "--overwrite" in str(err.value)
+        assert snapshot(path) == before
+        assert not lock_path(path).exists()
+
+    def test_the_store_path_is_not_part_of_the_job_identity(self, path, job):
+        with open_store(path, job):
+            pass
+        moved = Job.from_dict({**job.to_dict(), "store": "elsewhere.zarr"})
+        with open_store(path, moved) as store:
+            assert not store.done.any()
+
+    def test_overwrite_replaces_a_store_of_another_job(self, path, job):
+        with open_store(path, job) as store:
+            store.write_tile(plan_tiles(job)[0], fake_tile(job, plan_tiles(job)[0], 0))
+        other = make_job(integrator__rtol=1e-9)
+        with open_store(path, other, overwrite=True) as store:
+            assert not store.done.any()
+        with read_store(path) as reader:
+            assert reader.job == other
+
+    def test_something_else_at_the_path_is_never_replaced(self, path, job):
+        if self.suffix == ".h5":
+            path.write_bytes(b"my thesis")
+        else:
+            path.mkdir()
+            (path / "thesis.tex").write_text("precious")
+        before = snapshot(path)
+        with pytest.raises(StoreError, match="not a campar store"):
+            open_store(path, job, overwrite=True)
+        assert snapshot(path) == before
+
+    def test_a_second_run_is_refused_naming_host_and_pid(self, path, job):
+        with open_store(path, job), pytest.raises(StoreLocked) as err:
+            open_store(path, job)
+        assert f"pid {os.getpid()}" in str(err.value)
+        assert socket.gethostname() in str(err.value)
+
+    def test_a_run_in_another_process_holds_the_lock(self, path, job, tmp_path):
+        script = textwrap.dedent(f"""
+            import sys, time
+            from campar.job import Job
+            from campar.store import open_store
+            job = Job.from_dict({job.to_dict()!r})
+            with open_store({str(path)!r}, job):
+                print("holding", flush=True)
+                sys.stdin.read()
+        """)
+        holder = subprocess.Popen(
+            [sys.executable, "-c", script], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+        )
+        try:
+            assert holder.stdout.readline().strip() == "holding"
+            with pytest.raises(StoreLocked, match=f"pid {holder.pid} on host"):
+                open_store(path, job)
+        finally:
+            holder.communicate("", timeout=60)
+        with open_store(path, job):  # released when the holder closed the store
+            pass
+
+    def test_a_stale_lock_is_taken_over_with_a_warning(self, path, job, caplog):
+        with open_store(path, job):
+            pass
+        pid = dead_pid()
+        holder = {"host": socket.gethostname(), "pid": pid, "start": "2020-01-01T00:00:00"}
+        lock_path(path).write_text(json.dumps(holder))
+        with caplog.at_level(logging.WARNING, "campar.store"), open_store(path, job):
+            pass
+        assert f"pid {pid}" in caplog.text and "stale" in caplog.text
+        assert not lock_path(path).exists()
+
+    def test_a_lock_from_another_host_is_refused(self, path, job):
+        lock_path(path).write_text(json.dumps({"host": "node-17", "pid": 4242}))
+        with pytest.raises(StoreLocked, match="pid 4242 on host node-17"):
+            open_store(path, job)
+        assert not path.exists()
+
+    def test_write_tile_rejects_arrays_that_do_not_fit(self, path, job):
+        tile = plan_tiles(job)[0]
+        arrays = fake_tile(job, tile, 0)
+        arrays["n"] = arrays["n"].astype(np.int64)
+        with open_store(path, job) as store:
+            with pytest.raises(ValueError, match="n is int64"):
+                store.write_tile(tile, arrays)
+            del arrays["n"]
+            with pytest.raises(ValueError, match="missing \\['n'\\]"):
+                store.write_tile(tile, arrays)
+            assert not store.done.any()
+
+    def test_reading_an_unknown_array_names_the_ones_present(self, path, job):
+        with open_store(path, job):
+            pass
+        with read_store(path) as reader, pytest.raises(KeyError, match="lyapunov"):
+            reader.read("lyapunov")
+
+    def test_read_store_of_nothing_is_a_store_error(self, path):
+        with pytest.raises(StoreError, match="no store"):
+            read_store(path)
+
+    def test_sigkill_after_commits_loses_no_committed_tile(self, path, job):
+        """A writer killed (SIGKILL) after committing tiles 0 and 2: both survive, resume works."""
+        script = textwrap.dedent(f"""
+            import os, signal
+            import campar.store._hdf5 as h5
+            from campar.job import Job
+            from campar.plan import plan_tiles
+            from campar.store import open_store
+            from test_store import fake_tile
+            h5.CHECKPOINT_TILES = 2  # the first two tiles reach the file, the third the journal
+            job = Job.from_dict({job.to_dict()!r})
+            tiles = plan_tiles(job)
+            store = open_store({str(path)!r}, job)
+            for i in (0, 2, 1):
+                store.write_tile(tiles[i], fake_tile(job, tiles[i], i))
+            os.kill(os.getpid(), signal.SIGKILL)
+        """)
+        env = {**os.environ, "PYTHONPATH": os.path.dirname(__file__)}
+        killed = subprocess.run([sys.executable, "-c", script], env=env, timeout=120)
+        assert killed.returncode == -signal.SIGKILL
+        with read_store(path) as reader:
+            assert reader.done.all()
+            tiles = plan_tiles(job)
+            for i, tile in enumerate(tiles):
+                expected = fake_tile(job, tile, i)
+                for name in reader.names:
+                    np.testing.assert_array_equal(reader.read(name)[tile.rows], expected[name])
+        with open_store(path, job) as store:  # the dead writer's lock is stale
+            assert store.done.all()
+
+
+class TestZarrStore(StoreSuite):
+    suffix = ".zarr"
+
+    def test_xarray_opens_a_labelled_dataset(self, path, job):
+        xr = pytest.importorskip("xarray")
+        tile = plan_tiles(job)[1]
+        arrays = fake_tile(job, tile, 3)
+        with open_store(path, job) as store:
+            store.write_tile(tile, arrays)
+        ds = xr.open_zarr(path)
+        assert ds["n"].dims == ("zeta", "omega")
+        assert ds["state"].dims == ("zeta", "omega", "var")
+        assert ds["sections"].dims == ("zeta", "omega", "section_point", "var")
+        assert ds["multipliers"].dims == ("zeta", "omega", "multiplier", "part")
+        assert ds["done"].dims == ("tile",)
+        np.testing.assert_array_equal(ds["omega"].values, job.omega)
+        np.testing.assert_array_equal(ds["zeta"].values, job.second_values)
+        picked = ds["dc"].sel(zeta=job.second_values[2], omega=job.omega[4]).item()
+        assert picked == arrays["dc"][0, 4]
+        assert ds.attrs["job_hash"] == job.digest()
+
+    def test_chunks_follow_tiles(self, path, job):
+        import zarr
+
+        with open_store(path, job):
+            pass
+        group = zarr.open_group(path, mode="r")
+        assert group["n"].chunks == (2, 7)
+        assert group["sections"].chunks == (2, 7, 3, 2)
+        assert group["done"].chunks == (1,)
+
+    def test_partial_files_of_a_killed_writer_are_cleaned_on_resume(self, path, job):
+        with open_store(path, job):
+            pass
+        leftover = path / "n" / "c" / "0" / f"0.{'ab' * 16}.partial"
+        leftover.parent.mkdir(parents=True, exist_ok=True)
+        leftover.write_bytes(b"half a chunk")
+        with open_store(path, job):
+            assert not leftover.exists()
+
+    def test_a_killed_creation_leaves_no_store(self, path, job):
+        aside = path.with_name(path.name + ".creating-12345")
+        aside.mkdir()
+        (aside / "zarr.json").write_text("{")
+        with open_store(path, job):
+            assert not aside.exists()
+
+
+class TestHdf5Store(StoreSuite):
+    suffix = ".h5"
+
+    def test_dimension_scales_label_the_axes(self, path, job):
+        with open_store(path, job):
+            pass
+        with h5py.File(path, "r") as f:
+            n = f["n"]
+            assert [d.label for d in n.dims] == ["zeta", "omega"]
+            np.testing.assert_array_equal(n.dims[0][0][:], job.second_values)
+            np.testing.assert_array_equal(n.dims[1][0][:], job.omega)
+            assert [d.label for d in f["sections"].dims] == [
+                "zeta",
+                "omega",
+                "section_point",
+                "var",
+            ]
+            assert f["n"].chunks == (2, 7)
+            assert f["done"].chunks == (1,)
+
+    def test_the_file_is_untouched_until_a_checkpoint(self, path, job):
+        tile = plan_tiles(job)[0]
+        with open_store(path, job) as store:
+            before = path.read_bytes()
+            store.write_tile(tile, fake_tile(job, tile, 0))
+            assert path.read_bytes() == before  # only the journal changed
+        with h5py.File(path, "r") as f:
+            assert f["done"][:].tolist() == [True, False, False]
+
+    def test_a_killed_checkpoint_is_discarded_and_the_journal_replayed(self, path, job):
+        tile = plan_tiles(job)[2]
+        arrays = fake_tile(job, tile, 2)
+        with open_store(path, job):
+            pass
+        from campar.store._hdf5 import write_entry
+
+        write_entry(path, tile.index, arrays)  # what a killed run leaves
+        torn = path.with_name(path.name + ".checkpoint-999")
+        torn.write_bytes(path.read_bytes()[:100])
+        with open_store(path, job) as store:
+            assert store.done.tolist() == [False, False, True]
+            assert not torn.exists()
+        with h5py.File(path, "r") as f:
+            np.testing.assert_array_equal(f["dc"][tile.rows], arrays["dc"])
+
+
+@pytest.mark.parametrize("when", ["before the rename", "after the rename"])
+def test_hdf5_sigkill_inside_a_checkpoint_loses_nothing(tmp_path, when):
+    """Kill the writer at the two delicate points of a checkpoint; the journal makes up."""
+    path = tmp_path / "results.h5"
+    job = make_job()
+    script = textwrap.dedent(f"""
+        import os, signal
+        import campar.store._hdf5 as h5
+        from campar.job import Job
+        from campar.plan import plan_tiles
+        from campar.store import open_store
+        from test_store import fake_tile
+        job = Job.from_dict({job.to_dict()!r})
+        tiles = plan_tiles(job)
+        store = open_store({str(path)!r}, job)
+        for i in (0, 1):
+            store.write_tile(tiles[i], fake_tile(job, tiles[i], i))
+        replace = os.replace
+        def dying_replace(src, dst):
+            if {when == "after the rename"}:
+                replace(src, dst)
+            os.kill(os.getpid(), signal.SIGKILL)
+        h5.os.replace = dying_replace
+        store.checkpoint()
+    """)
+    env = {**os.environ, "PYTHONPATH": os.path.dirname(__file__)}
+    killed = subprocess.run([sys.executable, "-c", script], env=env, timeout=120)
+    assert killed.returncode == -signal.SIGKILL
+    leftovers = list(tmp_path.glob("results.h5.checkpoint-*"))
+    assert bool(leftovers) == (when == "before the rename")
+    tiles = plan_tiles(job)
+    for _ in range(2):  # as a reader sees it, then after open_store cleaned up
+        with read_store(path) as reader:
+            assert reader.done.tolist() == [True, True, False]
+            for i in (0, 1):
+                np.testing.assert_array_equal(
+                    reader.read("sections")[tiles[i].rows], fake_tile(job, tiles[i], i)["sections"]
+                )
+        open_store(path, job).close()
+    assert not list(tmp_path.glob("results.h5.checkpoint-*"))
+    assert not (tmp_path / "results.h5.journal").exists()  # emptied and removed
+
+
+def test_a_lock_held_by_a_killed_unreaped_process_is_stale(tmp_path):
+    """A rank killed with its launcher lingers as a zombie until init reaps it."""
+    path, job = tmp_path / "zombie.zarr", make_job()
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        child.kill()
+        for _ in range(200):  # wait until it is a zombie (we do not reap it yet)
+            if process_state(child.pid) == "Z":
+                break
+            time.sleep(0.01)
+        holder = {"host": socket.gethostname(), "pid": child.pid, "start": "now"}
+        lock_path(path).write_text(json.dumps(holder))
+        with open_store(path, job):
+            pass
+    finally:
+        child.wait()
