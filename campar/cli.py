@@ -269,19 +269,22 @@ def run_line(args) -> int:
 def add_gallery(sub):
     p = sub.add_parser("gallery", help="compute and draw the paper's whole figure set")
     p.add_argument("outdir", help="directory for the PNGs, their job files and index.md")
+    p.add_argument("--tensile", choices=("clamp", "allow"), default="clamp")
+    add_plane_arguments(p)
+    p.set_defaults(handler=run_gallery)
+
+
+def add_plane_arguments(p) -> None:
+    """--size and --stores of the commands that compute the paper's planes first."""
     p.add_argument(
         "--size",
         choices=("small", "full"),
         default="small",
         help="small: 48×48 planes, under a minute (CI); full: the jobs' 400×400",
     )
-    p.add_argument("--tensile", choices=("clamp", "allow"), default="clamp")
     p.add_argument(
-        "--stores",
-        metavar="DIR",
-        help="plane stores, reused between runs (default results/paper-SIZE)",
+        "--stores", metavar="DIR", help="plane stores, reused (default results/paper-SIZE)"
     )
-    p.set_defaults(handler=run_gallery)  # fmt: skip
 
 
 def run_gallery(args) -> int:
@@ -301,18 +304,8 @@ def add_report(sub):
         "against campar under both force laws, and the Liouville check",
     )
     p.add_argument("path", help="Markdown file to write (the committed one is docs/paper.md)")
-    p.add_argument(
-        "--size",
-        choices=("small", "full"),
-        default="small",
-        help="map resolution: small 48×48 (fast, CI) or full 400×400",
-    )
-    p.add_argument(
-        "--stores",
-        metavar="DIR",
-        help="plane stores, reused between runs (default results/paper-SIZE)",
-    )
-    p.set_defaults(handler=run_report)  # fmt: skip
+    add_plane_arguments(p)
+    p.set_defaults(handler=run_report)
 
 
 def run_report(args) -> int:

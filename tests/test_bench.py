@@ -1,5 +1,7 @@
 """`campar bench`: every benchmark runs in a tiny configuration and prints its table."""
 
+from pathlib import Path
+
 import pytest
 
 from campar.bench import BENCHMARKS, precision
@@ -10,7 +12,11 @@ HEADERS = {
     "peers": ["RK4 500", "SciPy 500", "agree", "RK4 recipe / campar"],
     "outputs": ["labels CPU s", "all/labels", "converged", "fixed"],
     "stress": ["labels (rtols)", "worst time per cell", "label changes"],
+    "cells": ["cold ms", "warm revs", "ms/cell", "rev/cell"],
+    "map": ["agree %", "adjud. %", "mu_cn     default", "mu_cn     rtol 1e-6"],
+    "scaling": ["cells/s", "speed-up", "1 process", "mpirun -n 2", "same map"],
 }
+REPO = Path(__file__).resolve().parents[1]
 
 
 def test_every_benchmark_is_registered_and_listed(capsys):
@@ -23,7 +29,8 @@ def test_every_benchmark_is_registered_and_listed(capsys):
 
 
 @pytest.mark.parametrize("name", list(HEADERS))
-def test_benchmark_runs_tiny_and_prints_its_table(name, capsys, tmp_path):
+def test_benchmark_runs_tiny_and_prints_its_table(name, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(REPO)  # map and scaling read the planes from jobs/
     extra = ["--plot", str(tmp_path / "precision.png")] if name == "precision" else []
     assert main(["bench", name, "--quick", *extra]) == 0
     out = capsys.readouterr().out
@@ -32,6 +39,8 @@ def test_benchmark_runs_tiny_and_prints_its_table(name, capsys, tmp_path):
         assert text in out, text
     if name == "precision":
         assert (tmp_path / "precision.png").stat().st_size > 10_000
+    if name == "scaling":
+        assert " NO" not in out  # every launch computed the same map
 
 
 @pytest.fixture(scope="module")

@@ -164,6 +164,8 @@ CANDIDATES = {
     "rtol 1e-10": {"integrator": {"rtol": 1e-10}},
     "no Newton": {"transient": {"newton": False}},
     "no early chaos": {"transient": {"chaos_after": 0}},
+    "chaos after 100": {"transient": {"chaos_after": 100}},
+    "chaos after 64": {"transient": {"chaos_after": 64}},
     "paper recipe 500": {"transient": {"mode": "fixed", "max_revolutions": 500}},
 }
 
