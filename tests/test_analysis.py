@@ -78,7 +78,13 @@ def test_eig2_matches_numpy(entries):
     re0, im0, re1, im1 = A.eig2(tuple(entries))
     ours = sorted([complex(re0, im0), complex(re1, im1)], key=lambda c: (c.real, c.imag))
     ref = sorted(np.linalg.eigvals(m), key=lambda c: (c.real, c.imag))
-    np.testing.assert_allclose(ours, ref, atol=1e-9 * (1 + np.abs(m).max()))
+    scale = 1 + np.abs(m).max()
+    tol = 1e-9 * scale
+    if abs(ref[0] - ref[1]) < 1e-4 * scale:
+        # Near a double eigenvalue, rounding the entries (ε) moves the eigenvalues by
+        # O(√ε · |m|) in any method, numpy's included.
+        tol += 4 * np.sqrt(np.finfo(float).eps) * scale
+    np.testing.assert_allclose(ours, ref, atol=tol)
     assert abs(complex(re0, im0)) >= abs(complex(re1, im1)) - 1e-12
 
 
