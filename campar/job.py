@@ -45,9 +45,7 @@ def check_parameter(name: str, value: float) -> float:
 
 
 class Settings(BaseModel):
-    model_config = ConfigDict(
-        extra="forbid", frozen=True, populate_by_name=True, use_attribute_docstrings=True
-    )
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
 
 
 class Axis(Settings):
