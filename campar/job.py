@@ -103,12 +103,16 @@ class TransientSettings(Settings):
     """Distance to the cycle (Newton estimate) at which a cell has converged."""
     window_tol: Annotated[float, Field(gt=0.0, lt=1e-1)] = 1e-6
     """… and the distance of the read window's first point from it."""
-    extrapolate: bool = True
-    """Start a cell from the linear extrapolation of the two previous fixed points."""
-    chaos_after: Annotated[int, Field(ge=0)] = 150
+    extrapolate: Annotated[int, Field(ge=0, le=2)] = 2
+    """Warm start: 0 the previous cell's state; 1 linear, 2 quadratic extrapolation
+    through the previous cells' fixed points (where they are cycles of one period)."""
+    chaos_after: Annotated[int, Field(ge=0)] = 64
     """From this revolution on, a clearly chaotic motion ends the transient (0: never)."""
-    chaos_lyapunov: Annotated[float, Field(gt=0.0)] = 0.05
+    chaos_lyapunov: Annotated[float, Field(gt=0.0)] = 0.1
     """Lyapunov exponent per revolution (last read window) that counts as clearly chaotic."""
+    quasiperiodic_after: Annotated[int, Field(ge=0)] = 150
+    """From this revolution on, a quasi-periodic motion (|Lyapunov exponent| ≤ lyap_tol)
+    ends the transient (0: never)."""
 
 
 class ClassifySettings(Settings):

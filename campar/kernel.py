@@ -85,10 +85,11 @@ class CellSettings(NamedTuple):
     max_jumps: int
     lyap_tol: float
     max_steps: int
-    extrapolate: bool
+    extrapolate: int  # highest polynomial order of the warm start (0: the last state)
     rk4_steps: int  # RK4 steps per revolution
     chaos_after: int  # earliest revolution of a chaotic verdict (0: only at the budget)
     chaos_lyapunov: float  # … for a Lyapunov exponent per revolution above this
+    quasiperiodic_after: int  # earliest quasi-periodic verdict (0: only at the budget)
     outputs: int
 
 
@@ -190,8 +191,11 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
     From revolution cs.chaos_after on (0: never), a motion whose largest
     Lyapunov exponent over the last window exceeds cs.chaos_lyapunov per
     revolution is declared chaotic at once: a clearly positive exponent does not
-    turn into a cycle within the rest of the budget. Returns (status, k,
-    period, base, jumps).
+    turn into a cycle within the rest of the budget. From revolution
+    cs.quasiperiodic_after on (0: never), a motion whose exponent lies within
+    ±lyap_tol, as on an invariant circle, is declared quasi-periodic. Both
+    verdicts trade a few cells on long transients for revolutions (measured
+    by `campar bench map`). Returns (status, k, period, base, jumps).
     """
     k = 0
     base = 0
@@ -206,12 +210,7 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
         )
         if period > 0:
             return OK, k, period, base, jumps
-        clearly_chaotic = (
-            0 < cs.chaos_after <= k
-            and k - base >= cs.window
-            and window_stats(cw.revs, k - cs.window, cs.window)[5] > cs.chaos_lyapunov
-        )
-        if clearly_chaotic:
+        if k - base >= cs.window and nonperiodic_verdict(cw, k, cs):
             return OK, k, 0, base, jumps
         if jump_n > 0 and cs.newton and jumps < cs.max_jumps:
             cw.xs[k, 0] = z0
@@ -219,6 +218,17 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
             base = k
             jumps += 1
     return OK, k, 0, base, jumps
+
+
+@hot
+def nonperiodic_verdict(cw, k, cs):
+    """True when the last window's Lyapunov exponent settles a non-periodic verdict."""
+    chaos_due = 0 < cs.chaos_after <= k
+    qp_due = 0 < cs.quasiperiodic_after <= k
+    if not (chaos_due or qp_due):
+        return False
+    stretch = window_stats(cw.revs, k - cs.window, cs.window)[5]
+    return (chaos_due and stretch > cs.chaos_lyapunov) or (qp_due and abs(stretch) <= cs.lyap_tol)
 
 
 @hot
@@ -372,37 +382,33 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
 
     Cell i has parameters (omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i]). Cell 0
     starts from x_init, every later cell from the final state of the one before
-    (extrapolated from the two before when both were periodic and close), and
-    the cell after a failure from x_init again. Releases the GIL, so a thread
-    can compute while another one talks MPI.
+    (extrapolated through the cycles of the cells before: extrapolation_order),
+    and the cell after a failure from x_init again. Releases the GIL, so a
+    thread can compute while another one talks MPI.
     """
     cw = make_chain_work(cs)
     x_start = np.empty(2)
-    prev1 = np.empty(2)
-    prev2 = np.empty(2)
-    have1 = False
-    have2 = False
-    prev_periodic = False
+    prev = np.empty((3, 2))  # final states of the last three cells, newest first
+    streak = 0  # how many of them are cycles of one period in a row (0: restart)
     prev_n = 0
     h_started = False
     for i in range(omega.shape[0]):
         p = make_params(omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i], clamp)
         opt = solver_options(solver, p, cs)
         flags = 0
-        if not have1:
+        order = min(extrapolation_order(prev, streak), cs.extrapolate)
+        if streak == 0:
             x_start[:] = x_init
             if i > 0:
                 flags |= FLAG_RESTARTED
-        elif (
-            have2
-            and cs.extrapolate
-            and (abs(prev1[0] - prev2[0]) + abs(prev1[1] - prev2[1]) < EXTRAPOLATE_MAX)
-        ):
-            x_start[0] = 2.0 * prev1[0] - prev2[0]
-            x_start[1] = 2.0 * prev1[1] - prev2[1]
+        elif order == 2:
+            x_start[:] = 3.0 * prev[0] - 3.0 * prev[1] + prev[2]
+            flags |= FLAG_WARM_EXTRAPOLATED
+        elif order == 1:
+            x_start[:] = 2.0 * prev[0] - prev[1]
             flags |= FLAG_WARM_EXTRAPOLATED
         else:
-            x_start[:] = prev1
+            x_start[:] = prev[0]
         if not h_started:
             cw.x2[0] = x_start[0]
             cw.x2[1] = x_start[1]
@@ -419,17 +425,35 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
         status, final = run_cell(x_start, p, opt, cs, cw, out, i)
         out.flags[i] |= flags
         if status != OK:
-            have1 = False
-            have2 = False
+            streak = 0
             continue
         periodic = out.kind[i] == PERIODIC
-        have2 = have1 and periodic and prev_periodic and out.n[i] == prev_n
-        prev2[:] = prev1
-        prev1[0] = cw.xs[final, 0]
-        prev1[1] = cw.xs[final, 1]
-        have1 = True
-        prev_periodic = periodic
-        prev_n = out.n[i]
+        same_period = periodic and streak > 0 and out.n[i] == prev_n
+        streak = min(streak + 1, 3) if same_period else 1
+        prev_n = out.n[i] if periodic else -1
+        prev[2] = prev[1]
+        prev[1] = prev[0]
+        prev[0, 0] = cw.xs[final, 0]
+        prev[0, 1] = cw.xs[final, 1]
+
+
+@hot
+def extrapolation_order(prev, streak):
+    """Polynomial order of the warm start from the last cells' cycles (0: the last state).
+
+    Quadratic through three cycles of one period, linear through two, and only
+    while consecutive fixed points are close (far apart, the branch is turning).
+    """
+    if streak < 2 or not close(prev[0], prev[1]):
+        return 0
+    if streak < 3 or not close(prev[1], prev[2]):
+        return 1
+    return 2
+
+
+@hot
+def close(a, b):
+    return abs(a[0] - b[0]) + abs(a[1] - b[1]) < EXTRAPOLATE_MAX
 
 
 @njit(cache=True)

@@ -42,12 +42,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .arrays import array_names
 from .errors import CamparError, Interrupted, JobError, StoreError, StoreLocked, StoreMismatch
 from .job import Job
 from .plan import Tile, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
 from .store import cell_arrays, open_store
-from .tile import array_names, run_tile
+from .tile import run_tile
 
 log = logging.getLogger("campar.run")
 

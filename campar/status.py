@@ -72,7 +72,7 @@ class Flag(enum.IntFlag):
     NEWTON = 1  # the transient was shortened by Newton jumps on the section map
     SLOW = 2  # a multiplier lies within 0.02 of the unit circle: slow convergence
     GRAZING = 4  # a local minimum of ε lies within 1e-5 of 0: p is sensitive (needs dc/eps/pn)
-    WARM_EXTRAPOLATED = 8  # the start was extrapolated from the two previous cells
+    WARM_EXTRAPOLATED = 8  # the start was extrapolated from the previous cells
     RESTARTED = 16  # the previous cell failed; this one started from the job's state
 
 

@@ -20,11 +20,12 @@ from conftest import (
 )
 
 import campar.runner as runner
+from campar.arrays import array_names
 from campar.errors import CamparError, Interrupted
 from campar.plan import plan_tiles
 from campar.progress import Progress, format_duration
 from campar.store import read_store
-from campar.tile import array_names, run_tile
+from campar.tile import run_tile
 
 
 def tiles_done(path) -> list[bool]:

@@ -18,13 +18,13 @@ import h5py
 import numpy as np
 import pytest
 
+from campar.arrays import array_names, array_spec
 from campar.errors import StoreError, StoreLocked, StoreMismatch
 from campar.job import Job
 from campar.plan import plan_tiles
 from campar.store import lock_path, open_store, read_store
 from campar.store._lock import process_state
 from campar.store._schema import cell_arrays
-from campar.tile import array_names, array_spec
 
 JOB = {
     "name": "store_suite",

@@ -31,7 +31,7 @@ from ..tile import run_tile
 PLANES = ("mu_cn", "mu_kn", "omega_f0")
 REFERENCE = {
     "integrator": {"method": "dp54", "rtol": 1e-11, "atol": 1e-13, "max_steps": 50_000_000},
-    "transient": {"mode": "fixed", "max_revolutions": 500},
+    "transient": {"mode": "fixed", "max_revolutions": 500, "extrapolate": 1},
     "classify": {"window_revolutions": 64},
 }
 ADJUDICATION_REVOLUTIONS = 4000
@@ -163,9 +163,28 @@ CANDIDATES = {
     "rtol 1e-9": {"integrator": {"rtol": 1e-9}},
     "rtol 1e-10": {"integrator": {"rtol": 1e-10}},
     "no Newton": {"transient": {"newton": False}},
-    "no early chaos": {"transient": {"chaos_after": 0}},
+    "chaos 150 no QP linear": {  # the defaults before the QP verdict and quadratic starts
+        "transient": {
+            "chaos_after": 150,
+            "chaos_lyapunov": 0.05,
+            "quasiperiodic_after": 0,
+            "extrapolate": 1,
+        }
+    },
+    "no early verdicts": {"transient": {"chaos_after": 0, "quasiperiodic_after": 0}},
+    "chaos after 150": {"transient": {"chaos_after": 150}},
     "chaos after 100": {"transient": {"chaos_after": 100}},
-    "chaos after 64": {"transient": {"chaos_after": 64}},
+    "no QP verdict at 150": {"transient": {"quasiperiodic_after": 0}},
+    "QP after 100": {"transient": {"quasiperiodic_after": 100}},
+    "QP after 250": {"transient": {"quasiperiodic_after": 250}},
+    "chaos after 48 window 48": {
+        "transient": {"chaos_after": 48},
+        "classify": {"window_revolutions": 48},
+    },
+    "chaos lyapunov 0.05": {"transient": {"chaos_lyapunov": 0.05}},
+    "conv_tol 1e-6": {"transient": {"conv_tol": 1e-6}},
+    "linear warm start": {"transient": {"extrapolate": 1}},
+    "no extrapolation": {"transient": {"extrapolate": 0}},
     "paper recipe 500": {"transient": {"mode": "fixed", "max_revolutions": 500}},
 }
 
@@ -212,7 +231,7 @@ def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: 
     """Run every candidate on every plane; print one table row per (plane, candidate)."""
     results = {}
     header = (
-        f"{'plane':9} {'candidate':18} {'time s':>7} {'rev/cell':>8} {'agree %':>8} "
+        f"{'plane':9} {'candidate':26} {'time s':>7} {'rev/cell':>8} {'agree %':>8} "
         f"{'adjud. %':>8} {'disagree':>8} {'slow':>5} {'|ΔDC| mean':>10} {'|ΔDC| max':>9}"
     )
     print(header, file=out)
@@ -231,7 +250,7 @@ def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: 
             c = compare(cand, ref, verdicts)
             results[(plane, name)] = (c, seconds, float(cand["revolutions"].mean()))
             print(
-                f"{plane:9} {name:18} {seconds:7.1f} {cand['revolutions'].mean():8.2f} "
+                f"{plane:9} {name:26} {seconds:7.1f} {cand['revolutions'].mean():8.2f} "
                 f"{100 * c.agree:8.2f} {100 * c.adjudicated:8.2f} {len(c.disagreements):8d} "
                 f"{c.flagged:5d} {c.dc_error_mean:10.1e} {c.dc_error_max:9.1e}",
                 file=out,

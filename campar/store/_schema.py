@@ -15,10 +15,10 @@ from importlib import metadata
 import numpy as np
 
 from .. import __version__
+from ..arrays import array_names, array_spec
 from ..errors import StoreMismatch
 from ..job import Job
 from ..plan import Tile, plan_tiles
-from ..tile import array_names, array_spec
 
 FORMAT = 1  # bumped when the layout changes in a way old readers cannot follow
 
