@@ -147,6 +147,28 @@ def assess_revolution(xs, jac, k, base, n_max, conv_tol, window_tol, jump_r_max,
 
 
 @hot
+def slow_cycle_nearby(xs, jac, k, first, n_max, reach, margin):
+    """True when, from the section points after ``first``, some P^n (n ≤ n_max)
+    has a stable fixed point within ``reach`` of xs[k] (one Newton step) with a
+    multiplier within ``margin`` of the unit circle: a non-periodic verdict
+    there may be a cycle the budget did not reach.
+    """
+    avail = min(n_max, k - first)
+    if avail < 1:
+        return False
+    m = jacobian_at(jac, k - 1)
+    for n in range(1, avail + 1):
+        if n > 1:
+            m = mat2_mul(m, jacobian_at(jac, k - n))
+        if not spectral_radius(m) < 1.0:
+            continue
+        _, _, dist_now, _ = newton_fixed_point(xs[k, 0], xs[k, 1], xs[k - n, 0], xs[k - n, 1], m)
+        if dist_now <= reach and near_unit_circle(m, margin):
+            return True
+    return False
+
+
+@hot
 def distinct_period(xs, k, n, tol):
     """Number of distinct points (within tol, ∞-norm) of the n-cycle xs[k-n+1..k].
 

@@ -28,6 +28,7 @@ from .analysis import (
     near_unit_circle,
     nonperiodic_kind,
     repeat_period,
+    slow_cycle_nearby,
     spectral_radius,
     stretch_tangent,
     window_stats,
@@ -65,6 +66,7 @@ FLAG_WARM_EXTRAPOLATED = 8
 FLAG_RESTARTED = 16
 
 SLOW_MARGIN = 0.02  # a multiplier this close to the unit circle marks a slow cell
+SLOW_REACH = 0.1  # … and, for a non-periodic cell, a stable cycle estimate this close
 GRAZE_TOL = 1e-5  # a dip of ε this close to 0 marks a cell whose p is sensitive
 EXTRAPOLATE_MAX = 0.05  # extrapolate the warm start only between close fixed points
 
@@ -359,6 +361,8 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
         stretch, _ = record_window(out, i, cw, k - count, count, period_time)
         out.n[i] = 0
         out.kind[i] = nonperiodic_kind(stretch, cs.lyap_tol)
+        if slow_cycle_nearby(cw.xs, cw.jac, k, k - count, cs.n_max, SLOW_REACH, SLOW_MARGIN):
+            flags |= FLAG_SLOW
         if out.lyapunov.shape[0] > 0:
             out.lyapunov[i] = stretch / period_time
         if out.multipliers.shape[0] > 0:

@@ -70,7 +70,9 @@ class Flag(enum.IntFlag):
 
     NONE = 0
     NEWTON = 1  # the transient was shortened by Newton jumps on the section map
-    SLOW = 2  # a multiplier lies within 0.02 of the unit circle: slow convergence
+    # a multiplier lies within 0.02 of the unit circle: slow convergence; on a
+    # non-periodic cell, of a stable cycle estimated within 0.1 (maybe a cycle not reached)
+    SLOW = 2
     GRAZING = 4  # a local minimum of ε lies within 1e-5 of 0: p is sensitive (needs dc/eps/pn)
     WARM_EXTRAPOLATED = 8  # the start was extrapolated from the previous cells
     RESTARTED = 16  # the previous cell failed; this one started from the job's state

@@ -87,3 +87,16 @@ def test_quasiperiodic_verdict_agrees_with_a_long_run():
     assert late.label == "QP"
     # an invariant circle: the largest exponent vanishes (|λ| per revolution ≪ lyap_tol)
     assert abs(late.lyapunov * 2 * np.pi / QUASIPERIODIC.omega) < 2e-3
+
+
+SLOW_CYCLE = Cell("slow 1-1", 3.257293, mu_cn=0.504912)
+
+
+def test_a_quasiperiodic_verdict_near_a_slow_stable_cycle_is_flagged_slow():
+    early = simulate_point(SLOW_CYCLE.omega, **SLOW_CYCLE.parameters)
+    assert early.label == "QP" and "slow" in early.flags
+    late = simulate_point(SLOW_CYCLE.omega, transient="fixed", revolutions=3000,
+                          **SLOW_CYCLE.parameters)  # fmt: skip
+    assert late.n > 0  # the flag was right: a cycle the 150-revolution verdict did not reach
+    chaos = simulate_point(CHAOS.omega, **CHAOS.parameters)
+    assert "slow" not in chaos.flags
