@@ -93,10 +93,10 @@ class Comparison:
     dc_error_max: float
     disagreements: list = field(default_factory=list)  # (i, j, ref, cand, verdict, flags)
 
-    @property
-    def flagged(self) -> int:
-        """Disagreeing cells the candidate flagged slow (a multiplier near the unit circle)."""
-        return sum(1 for d in self.disagreements if d[5] & Flag.SLOW)
+    def flagged(self, flag: Flag) -> int:
+        """Disagreeing cells the candidate flagged so (slow: a multiplier near the unit
+        circle; grazing: p sensitive to a dip of ε near 0)."""
+        return sum(1 for d in self.disagreements if d[5] & flag)
 
 
 def compare(cand, ref, verdicts: dict | None = None) -> Comparison:
@@ -232,7 +232,8 @@ def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: 
     results = {}
     header = (
         f"{'plane':9} {'candidate':26} {'time s':>7} {'rev/cell':>8} {'agree %':>8} "
-        f"{'adjud. %':>8} {'disagree':>8} {'slow':>5} {'|ΔDC| mean':>10} {'|ΔDC| max':>9}"
+        f"{'adjud. %':>8} {'disagree':>8} {'slow':>5} {'graze':>5} {'|ΔDC| mean':>10} "
+        f"{'|ΔDC| max':>9}"
     )
     print(header, file=out)
     for plane in planes:
@@ -252,7 +253,8 @@ def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: 
             print(
                 f"{plane:9} {name:26} {seconds:7.1f} {cand['revolutions'].mean():8.2f} "
                 f"{100 * c.agree:8.2f} {100 * c.adjudicated:8.2f} {len(c.disagreements):8d} "
-                f"{c.flagged:5d} {c.dc_error_mean:10.1e} {c.dc_error_max:9.1e}",
+                f"{c.flagged(Flag.SLOW):5d} {c.flagged(Flag.GRAZING):5d} "
+                f"{c.dc_error_mean:10.1e} {c.dc_error_max:9.1e}",
                 file=out,
                 flush=True,
             )
