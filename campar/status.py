@@ -71,7 +71,8 @@ class Flag(enum.IntFlag):
     NONE = 0
     NEWTON = 1  # the transient was shortened by Newton jumps on the section map
     # a multiplier lies within 0.02 of the unit circle: slow convergence; on a
-    # non-periodic cell, of a stable cycle estimated within 0.1 (maybe a cycle not reached)
+    # non-periodic cell, the multiplier of a stable cycle estimated within 0.1 of its
+    # last section point (the verdict may be a cycle the budget did not reach)
     SLOW = 2
     GRAZING = 4  # a local minimum of ε lies within 1e-5 of 0: p is sensitive (needs dc/eps/pn)
     WARM_EXTRAPOLATED = 8  # the start was extrapolated from the previous cells

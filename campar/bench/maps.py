@@ -94,7 +94,7 @@ class Comparison:
     disagreements: list = field(default_factory=list)  # (i, j, ref, cand, verdict, flags)
 
     def flagged(self, flag: Flag) -> int:
-        """Disagreeing cells the candidate flagged so (slow: a multiplier near the unit
+        """Disagreeing cells carrying ``flag`` (slow: a multiplier near the unit
         circle; grazing: p sensitive to a dip of ε near 0)."""
         return sum(1 for d in self.disagreements if d[5] & flag)
 
