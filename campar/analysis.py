@@ -17,8 +17,11 @@ within ``window_tol`` of xs[k-n] and M is stable. Unlike a plain repeat test
 |xs[k] − xs[k−n]| < tol, this measures the distance to the cycle itself, so a
 slowly converging 1-cycle (multiplier near −1) cannot pass as a 2-cycle. Where
 no period has converged yet, a capped Newton jump to z of the smallest
-plausible period shortens the transient; the jump is only a new start, the
-cycle is accepted by the same test afterwards.
+plausible period shortens the transient: near the cycle (small residual), or
+far from it when consecutive estimates of z agree (a slowly attracting cycle,
+multiplier near the unit circle, which plain revolutions reach only after
+thousands). The jump is only a new start, the cycle is accepted by the same
+test afterwards.
 """
 
 import math
@@ -36,6 +39,9 @@ REV_PN_MAX = 4
 REV_LOG_STRETCH = 5  # growth of the tangent vector (Lyapunov exponent)
 REV_GRAZE = 6  # smallest |ε| at a local minimum of ε: a shallow flight or a near miss
 N_REV_STATS = 7
+
+# Longest Newton jump taken on agreeing estimates (assess_revolution).
+TRUSTED_JUMP_MAX = 0.2
 
 
 @hot
@@ -112,12 +118,21 @@ def newton_fixed_point(x_now0, x_now1, x_then0, x_then1, m):
 
 
 @hot
-def assess_revolution(xs, jac, k, base, n_max, conv_tol, window_tol, jump_r_max, jump_cap):
+def assess_revolution(xs, jac, est, k, base, n_max, conv_tol, window_tol, jump_r_max, jump_cap,
+                      agree):  # fmt: skip
     """Decide, after revolution k, whether the motion has converged to a cycle.
 
     Only revolutions after ``base`` (the last restart) are used. Returns
     (period, jump_period, z0, z1): period > 0 when the cycle of that period has
     converged; otherwise jump_period > 0 proposes a Newton jump to (z0, z1).
+
+    A jump is proposed where |x_k − x_{k−n}| ≤ jump_r_max and the estimate is
+    within jump_cap, or (agree > 0) where the estimate agrees with the one made
+    n revolutions earlier to within ``agree`` times its distance and lies
+    within TRUSTED_JUMP_MAX: then the section map is linear enough around the
+    path for the estimate to be trusted however far the transient still has
+    to go. ``est`` (n_max, n_max, 3) keeps each period's estimates by
+    revolution, rows (revolution, z0, z1); reset it for every cell.
     """
     jump_n = 0
     jz0 = 0.0
@@ -130,16 +145,29 @@ def assess_revolution(xs, jac, k, base, n_max, conv_tol, window_tol, jump_r_max,
         if n > 1:
             m = mat2_mul(m, jacobian_at(jac, k - n))
         r = max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1]))
-        if not r <= jump_r_max:
+        near = r <= jump_r_max
+        if not (near or (agree > 0.0 and r <= TRUSTED_JUMP_MAX)):
             continue
         if not spectral_radius(m) < 1.0:
             continue  # an unstable cycle cannot be the steady motion
         z0, z1, dist_now, dist_then = newton_fixed_point(
             xs[k, 0], xs[k, 1], xs[k - n, 0], xs[k - n, 1], m
         )
-        if dist_now <= conv_tol and dist_then <= window_tol:
+        if near and dist_now <= conv_tol and dist_then <= window_tol:
             return n, 0, z0, z1
-        if jump_n == 0 and dist_now <= jump_cap:
+        then = est[n - 1, k % n]  # the estimate made n revolutions ago (same cycle point)
+        agreeing = (
+            agree > 0.0
+            and then[0] == k - n
+            and k - 2 * n >= base
+            and max(abs(z0 - then[1]), abs(z1 - then[2])) <= agree * dist_now
+        )
+        then[0] = k
+        then[1] = z0
+        then[2] = z1
+        if jump_n == 0 and (
+            (near and dist_now <= jump_cap) or (agreeing and dist_now <= TRUSTED_JUMP_MAX)
+        ):
             jump_n = n
             jz0 = z0
             jz1 = z1

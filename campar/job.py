@@ -99,6 +99,9 @@ class TransientSettings(Settings):
     jump_residual: Annotated[float, Field(gt=0.0)] = 1e-3
     """Newton jumps are tried only where |x_k − x_{k−n}| is below this."""
     max_jumps: Annotated[int, Field(ge=0)] = 20
+    jump_agree: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.1
+    """Also jump (up to 0.2) where the estimate agrees with the one n revolutions
+    earlier to this fraction of its distance, whatever the residual (0: off)."""
     conv_tol: Annotated[float, Field(gt=0.0, lt=1e-2)] = 1e-8
     """Distance to the cycle (Newton estimate) at which a cell has converged."""
     window_tol: Annotated[float, Field(gt=0.0, lt=1e-1)] = 1e-6
@@ -110,7 +113,7 @@ class TransientSettings(Settings):
     """From this revolution on, a clearly chaotic motion ends the transient (0: never)."""
     chaos_lyapunov: Annotated[float, Field(gt=0.0)] = 0.1
     """Lyapunov exponent per revolution (last read window) that counts as clearly chaotic."""
-    quasiperiodic_after: Annotated[int, Field(ge=0)] = 150
+    quasiperiodic_after: Annotated[int, Field(ge=0)] = 0
     """From this revolution on, a quasi-periodic motion (|Lyapunov exponent| ≤ lyap_tol)
     ends the transient (0: never)."""
 

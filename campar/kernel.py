@@ -85,6 +85,7 @@ class CellSettings(NamedTuple):
     jump_r_max: float
     jump_cap: float
     max_jumps: int
+    jump_agree: float  # trust a far estimate agreeing with the last one to this fraction (0: off)
     lyap_tol: float
     max_steps: int
     extrapolate: int  # highest polynomial order of the warm start (0: the last state)
@@ -127,6 +128,7 @@ class ChainWork(NamedTuple):
     mode: np.ndarray  # [cam phase, contact mode]
     xs: np.ndarray  # (R+1, 2) section points
     jac: np.ndarray  # (R, 4) one-revolution Jacobians
+    est: np.ndarray  # (n_max, n_max, 3) cycle estimates by period (assess_revolution)
     revs: np.ndarray  # (R, N_REV_STATS)
     u: np.ndarray  # tangent vector for the Lyapunov exponent
     no_trace: Trace
@@ -145,6 +147,7 @@ def make_chain_work(cs):
         np.zeros(2, dtype=np.int64),
         np.zeros((rows + 1, 2)),
         np.zeros((rows, 4)),
+        np.full((cs.n_max, cs.n_max, 3), -1.0),
         np.zeros((rows, N_REV_STATS)),
         np.array([1.0, 0.0]),
         make_trace(0, 0, 1),
@@ -202,14 +205,16 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
     k = 0
     base = 0
     jumps = 0
+    cw.est[:, :, 0] = -1.0  # no estimates of this cell yet
     while k < cs.max_revolutions:
         status = step_revolution(cw, k, True, p, opt, cs, want_stats, step_budget)
         if status != OK:
             return status, k, 0, base, jumps
         k += 1
         period, jump_n, z0, z1 = assess_revolution(
-            cw.xs, cw.jac, k, base, cs.n_max, cs.conv_tol, cs.window_tol, cs.jump_r_max, cs.jump_cap
-        )
+            cw.xs, cw.jac, cw.est, k, base, cs.n_max, cs.conv_tol, cs.window_tol,
+            cs.jump_r_max, cs.jump_cap, cs.jump_agree,
+        )  # fmt: skip
         if period > 0:
             return OK, k, period, base, jumps
         if k - base >= cs.window and nonperiodic_verdict(cw, k, cs):

@@ -58,6 +58,7 @@ def cell_settings(job: Job) -> CellSettings:
         tr.jump_residual,
         tr.jump_cap,
         tr.max_jumps,
+        tr.jump_agree,
         cl.lyap_tol,
         job.integrator.max_steps,
         tr.extrapolate,

@@ -20,7 +20,8 @@ def linear_history(z, L, x0, revolutions):
 
 
 def assess(xs, jac, k, base=0, conv_tol=1e-9):
-    return A.assess_revolution(xs, jac, k, base, 32, conv_tol, 1e-6, 0.05, 0.02)
+    est = np.full((32, 32, 3), -1.0)
+    return A.assess_revolution(xs, jac, est, k, base, 32, conv_tol, 1e-6, 0.05, 0.02, 0.0)
 
 
 def test_slow_one_cycle_is_not_taken_for_a_two_cycle():
@@ -56,6 +57,42 @@ def test_unstable_cycle_is_never_accepted():
     xs, jac = linear_history(z, np.diag([1.5, 0.5]), z + [1e-12, 0.0], 3)
     period, jump, *_ = assess(xs, jac, 3)
     assert period == 0 and jump == 0
+
+
+def assess_each_revolution(xs, jac, agree):
+    """assess_revolution after every revolution, as the kernel calls it (one est buffer)."""
+    est = np.full((32, 32, 3), -1.0)
+    return [A.assess_revolution(xs, jac, est, k, 0, 32, 1e-9, 1e-6, 1e-3, 0.02, agree)
+            for k in range(1, xs.shape[0])]  # fmt: skip
+
+
+def test_slow_cycle_far_away_is_reached_by_a_jump_on_agreeing_estimates():
+    # multiplier 0.998: |x_k − x_{k−1}| is 500× smaller than the distance 0.1 to the
+    # cycle, far beyond the jump cap; on an affine map every estimate is exact, so the
+    # estimates agree and the jump is trusted from the second revolution on
+    z = np.array([0.3, -0.2])
+    xs, jac = linear_history(z, np.diag([0.998, 0.5]), z + [0.1, 0.0], 4)
+    assert all(jump == 0 for _, jump, *_ in assess_each_revolution(xs, jac, agree=0.0))
+    results = assess_each_revolution(xs, jac, agree=0.1)
+    assert results[0][1] == 0  # one estimate alone is not trusted
+    period, jump, z0, z1 = results[1]
+    assert period == 0 and jump == 1
+    np.testing.assert_allclose([z0, z1], z, atol=1e-12)
+
+
+def test_estimates_that_disagree_are_not_trusted():
+    # x ↦ z + λ e + a e² (e = x − z), stable but strongly nonlinear at e = 0.1: each
+    # Newton estimate moves by about a fifth of its distance from one to the next
+    lam, a, z = 0.95, -1.5, 0.3
+    xs = np.zeros((6, 2))
+    jac = np.zeros((5, 4))
+    xs[0] = [z + 0.1, 0.0]
+    for k in range(5):
+        e = xs[k, 0] - z
+        xs[k + 1] = [z + lam * e + a * e * e, 0.0]
+        jac[k] = [lam + 2 * a * e, 0.0, 0.0, 0.5]
+    assert all(jump == 0 for _, jump, *_ in assess_each_revolution(xs, jac, agree=0.1))
+    assert any(jump == 1 for _, jump, *_ in assess_each_revolution(xs, jac, agree=0.5))
 
 
 def test_distinct_period_merges_points_within_tolerance():

@@ -163,20 +163,17 @@ CANDIDATES = {
     "rtol 1e-9": {"integrator": {"rtol": 1e-9}},
     "rtol 1e-10": {"integrator": {"rtol": 1e-10}},
     "no Newton": {"transient": {"newton": False}},
-    "chaos 150 no QP linear": {  # the defaults before the QP verdict and quadratic starts
-        "transient": {
-            "chaos_after": 150,
-            "chaos_lyapunov": 0.05,
-            "quasiperiodic_after": 0,
-            "extrapolate": 1,
-        }
+    "QP at 150 no agree jumps": {  # the defaults before jumps on agreeing estimates
+        "transient": {"jump_agree": 0.0, "quasiperiodic_after": 150}
     },
-    "no early verdicts": {"transient": {"chaos_after": 0, "quasiperiodic_after": 0}},
-    "chaos after 150": {"transient": {"chaos_after": 150}},
-    "chaos after 100": {"transient": {"chaos_after": 100}},
-    "no QP verdict at 150": {"transient": {"quasiperiodic_after": 0}},
-    "QP after 100": {"transient": {"quasiperiodic_after": 100}},
+    "no agree jumps": {"transient": {"jump_agree": 0.0}},
+    "jump agree 0.03": {"transient": {"jump_agree": 0.03}},
+    "jump agree 0.3": {"transient": {"jump_agree": 0.3}},
+    "QP after 150": {"transient": {"quasiperiodic_after": 150}},
     "QP after 250": {"transient": {"quasiperiodic_after": 250}},
+    "no early verdicts": {"transient": {"chaos_after": 0}},
+    "chaos after 100": {"transient": {"chaos_after": 100}},
+    "chaos after 150": {"transient": {"chaos_after": 150}},
     "chaos after 48 window 48": {
         "transient": {"chaos_after": 48},
         "classify": {"window_revolutions": 48},
