@@ -85,7 +85,7 @@ class CellSettings(NamedTuple):
     jump_r_max: float
     jump_cap: float
     max_jumps: int
-    jump_agree: float  # trust a far estimate agreeing with the last one to this fraction (0: off)
+    jump_agree: float  # trust a far estimate agreeing to this fraction with the one n revs before
     lyap_tol: float
     max_steps: int
     extrapolate: int  # highest polynomial order of the warm start (0: the last state)
