@@ -13,7 +13,7 @@ HEADERS = {
     "outputs": ["labels CPU s", "all/labels", "converged", "fixed"],
     "stress": ["labels (rtols)", "worst time per cell", "label changes"],
     "cells": ["cold ms", "warm revs", "ms/cell", "rev/cell"],
-    "map": ["agree %", "adjud. %", "mu_cn     default", "mu_cn     rtol 1e-6"],
+    "map": ["agree %", "adjud. %", "mu_cn     default", "mu_cn     rtol 1e-6", "audit: "],
     "scaling": ["cells/s", "speed-up", "1 process", "mpirun -n 2", "same map"],
 }
 REPO = Path(__file__).resolve().parents[1]
@@ -31,8 +31,8 @@ def test_every_benchmark_is_registered_and_listed(capsys):
 @pytest.mark.parametrize("name", list(HEADERS))
 def test_benchmark_runs_tiny_and_prints_its_table(name, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(REPO)  # map and scaling read the planes from jobs/
-    extra = ["--plot", str(tmp_path / "precision.png")] if name == "precision" else []
-    assert main(["bench", name, "--quick", *extra]) == 0
+    extra = {"precision": ["--plot", str(tmp_path / "precision.png")], "map": ["--audit"]}
+    assert main(["bench", name, "--quick", *extra.get(name, [])]) == 0
     out = capsys.readouterr().out
     assert out.startswith("machine: ") and "load average" in out
     for text in HEADERS[name]:

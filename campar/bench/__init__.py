@@ -143,6 +143,8 @@ def _map_arguments(p):
     p.add_argument("--no-adjudication", action="store_true",
                    help="skip the long runs of disagreeing cells")  # fmt: skip
     p.add_argument("--list", action="store_true", help="print the disagreeing cells")
+    p.add_argument("--audit", action="store_true",
+                   help="audit long runs that found twice campar's period")  # fmt: skip
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 

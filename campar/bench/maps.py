@@ -123,34 +123,78 @@ def compare(cand, ref, verdicts: dict | None = None) -> Comparison:
     )
 
 
-def adjudicate(ref_job: Job, ref: dict, cells, cache: Path) -> dict[str, str]:
-    """Long-run verdicts of cells, from the reference's warm start; cached in ``cache``.
-
-    Each cell is run with the reference's own settings but a transient of
+def long_run_job(ref_job: Job, ref: dict, i: int, j: int, outputs: list[str]) -> Job:
+    """Cell (i, j) by the reference's own settings with a transient of
     ADJUDICATION_REVOLUTIONS, from the reference's final state at the previous
-    cell of its chain (the state the reference itself started from).
-    """
+    cell of its chain (the state the reference itself started from)."""
+    data = ref_job.to_dict()
+    data["name"] = f"{ref_job.name}_adjudication"
+    data["sweep"]["omega"] = {"from": float(ref_job.omega[j]), "to": float(ref_job.omega[j]),
+                              "points": 1}  # fmt: skip
+    value = float(ref_job.second_values[i])
+    data["sweep"][ref_job.second] = {"from": value, "to": value, "points": 1}
+    if j > 0 and np.all(np.isfinite(ref["state"][i, j - 1])):
+        y, v = (float(x) for x in ref["state"][i, j - 1])
+        data["initial"] = {"y": y, "v": v}  # else the chain restarted there too
+    data["transient"]["max_revolutions"] = ADJUDICATION_REVOLUTIONS
+    data["outputs"] = outputs
+    return Job.from_dict(data)
+
+
+def adjudicate(ref_job: Job, ref: dict, cells, cache: Path) -> dict[str, str]:
+    """Long-run verdicts (long_run_job) of cells; cached in ``cache``."""
     verdicts = json.loads(cache.read_text()) if cache.exists() else {}
-    omega = ref_job.omega
-    second = ref_job.second_values
     for i, j in cells:
         key = f"{i},{j}"
         if key in verdicts:
             continue
-        data = ref_job.to_dict()
-        data["name"] = f"{ref_job.name}_adjudication"
-        data["sweep"]["omega"] = {"from": float(omega[j]), "to": float(omega[j]), "points": 1}
-        value = float(second[i])
-        data["sweep"][ref_job.second] = {"from": value, "to": value, "points": 1}
-        if j > 0 and np.all(np.isfinite(ref["state"][i, j - 1])):
-            y, v = (float(x) for x in ref["state"][i, j - 1])
-            data["initial"] = {"y": y, "v": v}  # else the chain restarted there too
-        data["transient"]["max_revolutions"] = ADJUDICATION_REVOLUTIONS
-        data["outputs"] = ["label"]
-        cell, _ = compute(Job.from_dict(data))
+        cell, _ = compute(long_run_job(ref_job, ref, i, j, ["label"]))
         verdicts[key] = label_of(cell, 0, 0)
         cache.write_text(json.dumps(verdicts, indent=0, sort_keys=True))
     return verdicts
+
+
+def period_of_label(label: str | None) -> int:
+    """n of an n-p label (0 for QP, chaos, unconverged or no label)."""
+    return int(label.split("-")[0]) if label and label[0].isdigit() else 0
+
+
+def audit_doubled_periods(candidate: Job, ref_job: Job, ref: dict, comparison: Comparison,
+                          out) -> int:  # fmt: skip
+    """Audit the disagreeing cells whose long run found twice campar's period.
+
+    The long run reads its period with the plain repeat test, which takes a
+    slowly converging n-cycle (multiplier near −1) for a 2n-cycle. For each
+    such cell the long run is repeated with its multipliers and section points,
+    and the cell is run again from the long run's final state with the
+    candidate's own settings. Returns how many cells are such a misread: the
+    restart gives campar's label and the long run's P^2n has a multiplier
+    above 0.99 (the square of one near −1).
+    """
+    misread = 0
+    for i, j, _, mine, verdict, _ in comparison.disagreements:
+        n = period_of_label(mine)
+        if n == 0 or period_of_label(verdict) != 2 * n:
+            continue
+        outputs = ["label", "multipliers", "sections"]
+        long, _ = compute(long_run_job(ref_job, ref, i, j, outputs))
+        y, v = (float(x) for x in long["state"][0, 0])
+        data = long_run_job(ref_job, ref, i, j, outputs).to_dict()
+        data.update(transient=candidate.transient.model_dump(), initial={"y": y, "v": v},
+                    integrator=candidate.integrator.model_dump(),
+                    classify=candidate.classify.model_dump())  # fmt: skip
+        again, _ = compute(Job.from_dict(data))
+        lead = float(np.hypot(*long["multipliers"][0, 0, 0]))
+        points = long["sections"][0, 0]
+        spread = float(np.abs(points[0] - points[1]).max())
+        same = label_of(again, 0, 0) == mine
+        misread += same and lead > 0.99
+        restart_lead = float(np.hypot(*again["multipliers"][0, 0, 0]))
+        print(f"  cell ({i}, {j}): campar {mine}; long run {verdict}, multiplier {lead:.4f}, "
+              f"its two points {spread:.1e} apart; from its end campar's test gives "
+              f"{label_of(again, 0, 0)} in {int(again['revolutions'][0, 0])} revolutions "
+              f"(|multiplier| {restart_lead:.4f})", file=out, flush=True)  # fmt: skip
+    return misread
 
 
 # -- the benchmark ---------------------------------------------------------------------------
@@ -224,8 +268,10 @@ def run_reference(job: Job, path: Path, ranks: int) -> None:
     subprocess.run(command, check=True)
 
 
-def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: bool, out):
-    """Run every candidate on every plane; print one table row per (plane, candidate)."""
+def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: bool, out,
+              audit: bool = False):  # fmt: skip
+    """Run every candidate on every plane; print one table row per (plane, candidate),
+    and with ``audit`` the audit of its doubled-period cells (audit_doubled_periods)."""
     results = {}
     header = (
         f"{'plane':9} {'candidate':26} {'time s':>7} {'rev/cell':>8} {'agree %':>8} "
@@ -255,6 +301,12 @@ def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: 
                 file=out,
                 flush=True,
             )
+            if audit and long_runs:
+                misread = audit_doubled_periods(job, reference_job(base, size), ref, c, out)
+                right = c.adjudicated * c.cells + misread
+                print(f"  audit: {misread} long-run verdicts are slow cycles of campar's period "
+                      f"read as twice it; adjudicated with them {100 * right / c.cells:.2f} %",
+                      file=out, flush=True)  # fmt: skip
     return results
 
 
@@ -280,7 +332,7 @@ def run(args) -> int:
         directory = Path(tmp) if args.quick else Path(args.references)
         results = bench_map(
             args.planes, args.size, candidates, directory, args.ranks,
-            not args.no_adjudication, sys.stdout,
+            not args.no_adjudication, sys.stdout, args.audit,
         )  # fmt: skip
     if args.list:
         for (plane, name), (c, _, _) in results.items():
