@@ -176,10 +176,10 @@ def audit_doubled_periods(candidate: Job, ref_job: Job, ref: dict, comparison: C
         n = period_of_label(mine)
         if n == 0 or period_of_label(verdict) != 2 * n:
             continue
-        outputs = ["label", "multipliers", "sections"]
-        long, _ = compute(long_run_job(ref_job, ref, i, j, outputs))
+        long_job = long_run_job(ref_job, ref, i, j, ["label", "multipliers", "sections"])
+        long, _ = compute(long_job)
         y, v = (float(x) for x in long["state"][0, 0])
-        data = long_run_job(ref_job, ref, i, j, outputs).to_dict()
+        data = long_job.to_dict()
         data.update(transient=candidate.transient.model_dump(), initial={"y": y, "v": v},
                     integrator=candidate.integrator.model_dump(),
                     classify=candidate.classify.model_dump())  # fmt: skip
@@ -281,6 +281,7 @@ def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: 
     print(header, file=out)
     for plane in planes:
         base = plane_job(plane)
+        ref_job = reference_job(base, size)
         ref = reference_arrays(base, size, directory, ranks)
         for name in candidates:
             job = subplane_job(base, size, f"{plane}_{size}_candidate", CANDIDATES[name])
@@ -290,7 +291,7 @@ def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: 
                 first = compare(cand, ref)
                 cells = [(i, j) for i, j, *_ in first.disagreements]
                 cache = directory / f"{base.name}_{size}_verdicts.json"
-                verdicts = adjudicate(reference_job(base, size), ref, cells, cache)
+                verdicts = adjudicate(ref_job, ref, cells, cache)
             c = compare(cand, ref, verdicts)
             results[(plane, name)] = (c, seconds, float(cand["revolutions"].mean()))
             print(
@@ -302,7 +303,7 @@ def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: 
                 flush=True,
             )
             if audit and long_runs:
-                misread = audit_doubled_periods(job, reference_job(base, size), ref, c, out)
+                misread = audit_doubled_periods(job, ref_job, ref, c, out)
                 right = c.adjudicated * c.cells + misread
                 print(f"  audit: {misread} long-run verdicts are slow cycles of campar's period "
                       f"read as twice it; adjudicated with them {100 * right / c.cells:.2f} %",
