@@ -2,14 +2,16 @@
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from campar.bench import BENCHMARKS, precision
+from campar.bench import BENCHMARKS, peers, precision
 from campar.cli import main
+from campar.job import load_job
 
 HEADERS = {
     "precision": ["state err", "event-time err", "Observed slopes", "DP5 state err vs rtol"],
-    "peers": ["RK4 500", "SciPy 500", "agree", "RK4 recipe / campar"],
+    "peers": ["SciPy 500", "RK4 recipe / campar, periodic", "agree on 3", "map row: RK4 recipe"],
     "outputs": ["labels CPU s", "all/labels", "converged", "fixed"],
     "stress": ["labels (rtols)", "worst time per cell", "label changes"],
     "cells": ["cold ms", "warm revs", "ms/cell", "rev/cell"],
@@ -66,3 +68,16 @@ def test_dp5_error_falls_with_rtol_in_proportion(precision_runs):
 def test_event_sequences_match_the_reference(precision_runs):
     runs, _ = precision_runs
     assert all(r.events_match for r in runs if r.method == "dp54" and r.setting <= 1e-6)
+
+
+def test_peers_map_row_is_a_piece_of_the_mu_cn_plane():
+    """The row the peers compute is chain ROW_CHAIN of jobs/mu_cn.yaml, as that job runs it."""
+    plane = load_job(REPO / "jobs" / "mu_cn.yaml")
+    first, stop = peers.ROW_OMEGA
+    row = peers.row_job(first, stop, "dp54", "converged", 500, 64)
+    np.testing.assert_allclose(row.omega, plane.omega[first:stop], rtol=0, atol=1e-12)
+    assert row.second == plane.second
+    assert row.second_values[0] == plane.second_values[peers.ROW_CHAIN]
+    assert row.fixed == plane.fixed
+    for section in ("model", "initial", "integrator", "transient", "classify"):
+        assert getattr(row, section) == getattr(plane, section), section

@@ -96,6 +96,11 @@ def _peers_arguments(p):
     p.add_argument("--scipy-rtol", type=float, default=1e-8, help="SciPy rtol (1e-8; atol /100)")
     p.add_argument("--min-seconds", type=float, default=0.3,
                    help="repeat each campar timing at least this long")  # fmt: skip
+    p.add_argument(
+        "--no-row",
+        action="store_true",
+        help="skip the map row (16 warm-started cells of the μcn plane, ~90 s)",
+    )
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 

@@ -20,18 +20,28 @@ where the peers agree. A second SciPy ratio charges SciPy only for the
 revolutions campar needed (its time per revolution × campar's revolutions):
 what SciPy would cost with campar's transient policy, i.e. the compiled
 kernel's share of the speed-up.
+
+A second comparison computes a piece of a map the way each peer computes a
+map: consecutive cells of the (ω, μcn) plane's 400 × 400 grid (jobs/mu_cn.yaml)
+along ω, each cell started from the previous cell's final state (the first
+from rest), by campar (one ``run_tile`` of the row), by the SciPy script
+(500 + 64 revolutions per cell, warm-started the same way) and by the paper's
+recipe. Its ratio is the row's total time; it is quoted only when every peer
+agrees on every cell.
 """
 
 import math
+from functools import partial
 from typing import NamedTuple
 
 import numpy as np
 
+from ..job import Job
 from ..plan import Tile
 from ..point import point_job
 from ..status import Kind, cell_label
 from ..tile import run_tile
-from .common import Cell, best_time, format_table, machine_line, timed
+from .common import Cell, Timing, best_time, format_table, machine_line, timed
 from .scipy_peer import scipy_cell
 
 CELLS = (
@@ -43,8 +53,15 @@ CELLS = (
     Cell("2-2 ω3.5 μcn.5", 3.5, mu_cn=0.5),
     Cell("chaos ω4.5 μcn.97", 4.5, mu_cn=0.97),
 )
+# The map row: the grid of jobs/mu_cn.yaml (ω 6.0 → 0.02 and μcn 0.99 → 0.50, 400
+# points each), chain 155 (μcn ≈ 0.80), ω points 299 … 314 (ω ≈ 1.52 … 1.29):
+# 1-1, then 1-2 from ω ≈ 1.504, then 1-1 again from ω ≈ 1.294.
+ROW_GRID = {"omega": (6.0, 0.02, 400), "mu_cn": (0.99, 0.50, 400)}
+ROW_FIXED = {"zeta": 0.2, "mu_kn": 0.8, "f0": 0.5}
+ROW_CHAIN = 155
+ROW_OMEGA = (299, 315)
 QUICK = {"cells": ["1-0 ω0.3", "1-2 ω1.2 f0.01"], "revolutions": 20, "window": 8,
-         "scipy_cells": 1, "min_seconds": 0.02}  # fmt: skip
+         "scipy_cells": 1, "min_seconds": 0.02, "row_omega": (299, 302)}  # fmt: skip
 DC_AGREEMENT = 0.002
 OUTPUTS = ["label", "dc", "eps", "pn"]
 
@@ -58,21 +75,32 @@ class Outcome(NamedTuple):
     wall: float
 
 
+def with_window(job: Job, window: int) -> Job:
+    return job.model_copy(update={"classify": job.classify.model_copy(
+        update={"window_revolutions": window})})  # fmt: skip
+
+
+def campar_outcomes(job: Job, min_seconds: float) -> tuple[list[Outcome], Timing]:
+    """Every cell of a one-chain job, and the fastest time of the whole chain."""
+    tile = Tile(0, 0, 1)
+    out = {name: arr[0] for name, arr in run_tile(job, tile).items()}
+    took = best_time(lambda: run_tile(job, tile), min_seconds)
+    cells = []
+    for j in range(out["kind"].size):
+        kind = int(out["kind"][j])
+        label = cell_label(kind, int(out["n"][j]), int(out["p"][j]), job.classify.chatter_p)
+        cells.append(Outcome(label, kind == Kind.PERIODIC, float(out["dc"][j]),
+                             int(out["revolutions"][j]), took.cpu, took.wall))  # fmt: skip
+    return cells, took
+
+
 def campar_outcome(cell: Cell, method: str, transient: str, revolutions: int, window: int,
                    min_seconds: float) -> Outcome:  # fmt: skip
     job = point_job(
         cell.omega, cell.f0, cell.mu_kn, cell.mu_cn, cell.zeta, cell.tensile, 0.0, 0.0,
         transient, revolutions, 1e-8, 1e-10, method, OUTPUTS,
     )  # fmt: skip
-    job = job.model_copy(update={"classify": job.classify.model_copy(
-        update={"window_revolutions": window})})  # fmt: skip
-    tile = Tile(0, 0, 1)
-    cell_out = {name: arr[0, 0] for name, arr in run_tile(job, tile).items()}
-    took = best_time(lambda: run_tile(job, tile), min_seconds)
-    kind = int(cell_out["kind"])
-    label = cell_label(kind, int(cell_out["n"]), int(cell_out["p"]), job.classify.chatter_p)
-    return Outcome(label, kind == Kind.PERIODIC, float(cell_out["dc"]),
-                   int(cell_out["revolutions"]), took.cpu, took.wall)  # fmt: skip
+    return campar_outcomes(with_window(job, window), min_seconds)[0][0]
 
 
 def scipy_outcome(cell: Cell, revolutions: int, window: int, rtol: float) -> Outcome:
@@ -109,6 +137,96 @@ def measure(cells=None, revolutions=500, window=64, scipy_cells=None, scipy_rtol
         ok = agree(a, c) and (b is None or (agree(a, b) and agree(b, c)))
         rows.append(PeerRow(cell, a, c, b, ok))
     return rows
+
+
+def row_job(first: int, stop: int, method: str, transient: str, revolutions: int,
+            window: int) -> Job:  # fmt: skip
+    """ω points first … stop−1 of chain ROW_CHAIN of the map row's grid, as one chain."""
+    omega = np.linspace(*ROW_GRID["omega"])
+    mu_cn = float(np.linspace(*ROW_GRID["mu_cn"])[ROW_CHAIN])
+    data = {
+        "name": "peers_row",
+        "sweep": {
+            "omega": {
+                "from": float(omega[first]),
+                "to": float(omega[stop - 1]),
+                "points": stop - first,
+            },
+            "mu_cn": {"from": mu_cn, "to": mu_cn, "points": 1},
+        },
+        "fixed": ROW_FIXED,
+        "integrator": {"method": method, "rtol": 1e-8, "atol": 1e-10},
+        "transient": {"mode": transient, "max_revolutions": revolutions},
+        "outputs": OUTPUTS,
+        "tiles": {"rows": 1},
+    }
+    return with_window(Job.from_dict(data, source="peers row"), window)
+
+
+class RowResult(NamedTuple):
+    omega: np.ndarray
+    mu_cn: float
+    campar: list[Outcome]  # per cell; seconds are those of the whole row
+    paper: list[Outcome]
+    scipy: list[Outcome]  # per cell, its own seconds
+    campar_time: Timing
+    paper_time: Timing
+    agree: list[bool]
+
+
+def measure_row(row_omega=ROW_OMEGA, revolutions=500, window=64, scipy_rtol=1e-8,
+                min_seconds=0.3) -> RowResult:  # fmt: skip
+    """The map row by every peer, each cell warm-started from the one before."""
+    first, stop = row_omega
+    job = row_job(first, stop, "dp54", "converged", revolutions, window)
+    campar, campar_time = campar_outcomes(job, min_seconds)
+    paper_job = row_job(first, stop, "rk4", "fixed", revolutions, window)
+    paper, paper_time = campar_outcomes(paper_job, min_seconds)
+    mu_cn = float(job.second_values[0])
+    scipy = []
+    x = np.zeros(2)
+    for omega in job.omega:
+        cell = Cell("", float(omega), f0=ROW_FIXED["f0"], mu_kn=ROW_FIXED["mu_kn"], mu_cn=mu_cn,
+                    zeta=ROW_FIXED["zeta"])  # fmt: skip
+        took, r = timed(partial(scipy_cell, cell.scipy_model(), x, revolutions, window,
+                                rtol=scipy_rtol))  # fmt: skip
+        scipy.append(Outcome(r.label, r.n > 0, r.dc, revolutions + window, took.cpu, took.wall))
+        x = r.sections[-1]  # the next cell starts where this one ended
+    ok = [agree(a, b) and agree(a, c) and agree(b, c)
+          for a, b, c in zip(campar, scipy, paper, strict=True)]  # fmt: skip
+    return RowResult(job.omega, mu_cn, campar, paper, scipy, campar_time, paper_time, ok)
+
+
+def format_row(row: RowResult) -> str:
+    headers = ["ω", "campar", "DC", "revs", "RK4 500", "DC", "SciPy 500", "DC", "CPU s",
+               "agree"]  # fmt: skip
+    lines = []
+    for omega, a, c, b, ok in zip(row.omega, row.campar, row.paper, row.scipy, row.agree,
+                                  strict=True):  # fmt: skip
+        lines.append([float(omega), a.label, a.dc, a.revolutions, c.label, c.dc, b.label, b.dc,
+                      b.seconds, "yes" if ok else "NO"])  # fmt: skip
+    return format_table(headers, lines)
+
+
+def row_summary(row: RowResult) -> str:
+    cells = len(row.campar)
+    campar = row.campar_time.cpu
+    paper = row.paper_time.cpu
+    scipy = sum(b.seconds for b in row.scipy)
+    revs = sum(a.revolutions for a in row.campar) / cells
+    agreeing = sum(row.agree)
+    lines = [
+        f"map row, μcn {row.mu_cn:.4f}, ω {row.omega[0]:.4f} … {row.omega[-1]:.4f}, {cells} "
+        f"cells warm-started along ω: all peers agree on {agreeing} of {cells}",
+        f"  campar {campar * 1e3:.2f} CPU ms ({campar / cells * 1e3:.3f} ms, {revs:.2f} "
+        f"revolutions per cell); RK4 recipe {paper:.2f} s; SciPy {scipy:.1f} s",
+    ]
+    if agreeing == cells:
+        lines.append(f"  map row: RK4 recipe / campar {paper / campar:.0f}×, SciPy / campar "
+                     f"{scipy / campar:.0f}×")  # fmt: skip
+    else:
+        lines.append("  map row: no ratio (the peers disagree on some cells)")
+    return "\n".join(lines)
 
 
 def geometric_mean(values) -> float:
@@ -177,13 +295,22 @@ def run(args) -> int:
         "window": args.window,
         "scipy_cells": args.scipy_cells if args.scipy_cells >= 0 else None,
         "min_seconds": args.min_seconds,
+        "row_omega": ROW_OMEGA,
     }
     if args.quick:
         config.update({k: v for k, v in QUICK.items() if k != "cells" or not args.cells})
+    row_omega = config.pop("row_omega")
     print(machine_line())
     rows = measure(scipy_rtol=args.scipy_rtol, **config)
     print(format_rows(rows))
     print()
     print(summary(rows))
+    if not args.no_row:
+        row = measure_row(row_omega, config["revolutions"], config["window"], args.scipy_rtol,
+                          config["min_seconds"])  # fmt: skip
+        print()
+        print(format_row(row))
+        print()
+        print(row_summary(row))
     print(f"load average at the end: {machine_line().rsplit('load average ', 1)[1]}")
     return 0
