@@ -1,4 +1,4 @@
-"""``campar bench peers``: one cell by campar, by a SciPy script and by the paper's recipe.
+"""``campar bench peers``: cells and a map row by campar, a SciPy script and the paper's recipe.
 
 Every peer computes the same cells cold, from (y, y') = (0, 0) at θ = 0:
 
