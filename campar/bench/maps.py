@@ -230,11 +230,10 @@ CANDIDATES = {
 }
 
 
-def reference_arrays(job: Job, size: int, directory: Path, ranks: int) -> dict[str, np.ndarray]:
-    """The reference map of a plane: read its store, computing it first if needed."""
+def reference_arrays(ref: Job, directory: Path, ranks: int) -> dict[str, np.ndarray]:
+    """The reference map (reference_job): read its store, computing it first if needed."""
     from ..store import read_store
 
-    ref = reference_job(job, size)
     path = directory / f"{ref.name}.zarr"
     if not _complete(path):
         run_reference(ref, path, ranks)
@@ -282,7 +281,7 @@ def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: 
     for plane in planes:
         base = plane_job(plane)
         ref_job = reference_job(base, size)
-        ref = reference_arrays(base, size, directory, ranks)
+        ref = reference_arrays(ref_job, directory, ranks)
         for name in candidates:
             job = subplane_job(base, size, f"{plane}_{size}_candidate", CANDIDATES[name])
             cand, seconds = compute(job)
