@@ -1,20 +1,32 @@
 """campar — two-parameter bifurcation maps of the cam–follower impact oscillator.
 
-The numerical core (``model``, ``integrator``, ``analysis``, ``kernel``) is
-compiled with numba; ``simulate_point`` runs one cell from Python.
+The package, layer by layer (each may import only the layers above it):
+
+- ``campar.core``: the numerical core, compiled with numba (model, integrator,
+  analysis, one revolution, the cell kernel);
+- ``campar.sweep``: the sweep machinery (job, plan, tile, runner, progress, store);
+- ``campar.views``: one cell, one bifurcation line, and figures;
+- ``campar.paper``: the study of the source paper (claims, figure set, report);
+- ``campar.bench``: ``campar bench``; ``campar.cli``: the ``campar`` command.
+
+Importing campar does nothing but define names: the numba cache is checked when
+the kernel is first run (``campar.core.jitcache.ensure_fresh_cache``).
 """
 
 __version__ = "0.1.0"
 
-from .jitcache import ensure_fresh_cache
-
-ensure_fresh_cache()
+# Lazy: importing campar for its version or CLI must not compile the kernel.
+_EXPORTS = {
+    "simulate_point": "campar.views.point",
+    "PointResult": "campar.views.point",
+    "Job": "campar.sweep.job",
+    "load_job": "campar.sweep.job",
+}
 
 
 def __getattr__(name):
-    # Lazy: importing campar for its version or CLI must not compile the kernel.
-    if name in ("simulate_point", "PointResult"):
-        from . import point
+    if name in _EXPORTS:
+        import importlib
 
-        return getattr(point, name)
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
     raise AttributeError(f"module 'campar' has no attribute {name!r}")

@@ -71,7 +71,7 @@ def add_point(sub):
 def run_point(args) -> int:
     import json
 
-    from .point import simulate_point
+    from .views.point import simulate_point
 
     if args.revolutions < 1:
         raise JobError(f"--revolutions must be ≥ 1, got {args.revolutions}")
@@ -97,7 +97,7 @@ def run_point(args) -> int:
     else:
         print(format_point(result))
     if args.plot:
-        from .plot import plot_orbit
+        from .views.plot import plot_orbit
 
         plot_orbit(result).savefig(args.plot, dpi=150)
     return 0
@@ -122,7 +122,7 @@ def format_point(r) -> str:
 
 @subcommand
 def add_plot(sub):
-    from .plot import MAP_VIEWS, parse_range  # cheap: matplotlib loads only to draw
+    from .views.plot import MAP_VIEWS, parse_range  # cheap: matplotlib loads only to draw
 
     p = sub.add_parser("plot", help="draw a map of a result store (n-p labels, duty cycle, …)")
     p.add_argument("store", help="result store of `campar run` (Zarr directory or HDF5 file)")
@@ -136,7 +136,7 @@ def add_plot(sub):
 
 
 def run_plot(args) -> int:
-    from .plot import plot_store
+    from .views.plot import plot_store
 
     path = plot_store(args.store, args.what, args.output, omega=args.omega, second=args.second)
     print(f"wrote {path}")
@@ -155,10 +155,10 @@ def add_run(sub):
 
 
 def run_run(args) -> int:
-    from .job import load_job
+    from .sweep.job import load_job
 
     job = load_job(args.job)  # before anything touches the disk
-    from .runner import run_job, setup_logging
+    from .sweep.runner import run_job, setup_logging
 
     setup_logging()
     try:
@@ -178,8 +178,8 @@ def add_status(sub):
 
 
 def run_status(args) -> int:
-    from .progress import describe
-    from .store import read_store
+    from .sweep.progress import describe
+    from .sweep.store import read_store
 
     with read_store(args.store) as reader:
         print(describe(reader))
@@ -195,7 +195,7 @@ def add_bench(sub):
 
 @subcommand
 def add_line(sub):
-    from .plot import parse_range  # cheap: matplotlib loads only to draw
+    from .views.plot import parse_range  # cheap: matplotlib loads only to draw
 
     p = sub.add_parser("line", help="bifurcation diagram: σn points y and detachments p "
                        "against ω (continuation, ω decreasing)")  # fmt: skip
@@ -238,7 +238,7 @@ def run_line(args) -> int:
     import time
     from pathlib import Path
 
-    from .line import compute_lines, describe_line, line_job, varied_parameters
+    from .views.line import compute_lines, describe_line, line_job, varied_parameters
 
     if args.points < 2:
         raise JobError(f"--points must be ≥ 2, got {args.points}")
@@ -257,8 +257,8 @@ def run_line(args) -> int:
         for i, line in enumerate(lines):
             path = Path(args.npz)
             line.to_npz(path if len(lines) == 1 else path.with_stem(f"{path.stem}-{i + 1}"))
-    from .plot import save_figure
-    from .plot.bifurcation import plot_line, plot_lines
+    from .views.plot import save_figure
+    from .views.plot.bifurcation import plot_line, plot_lines
 
     figure = plot_line(lines[0]) if len(lines) == 1 else plot_lines(lines)
     print(f"wrote {save_figure(figure, args.output)}")
@@ -288,8 +288,8 @@ def add_plane_arguments(p) -> None:
 
 
 def run_gallery(args) -> int:
-    from .gallery import make_gallery
-    from .runner import setup_logging
+    from .paper.gallery import make_gallery
+    from .sweep.runner import setup_logging
 
     setup_logging()  # the planes' progress lines
     make_gallery(args.outdir, args.size, args.tensile, args.stores)
@@ -309,8 +309,8 @@ def add_report(sub):
 
 
 def run_report(args) -> int:
-    from .report import write_report
-    from .runner import setup_logging
+    from .paper.report import write_report
+    from .sweep.runner import setup_logging
 
     setup_logging()  # the planes' progress lines
     write_report(args.path, args.size, args.stores)

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 import yaml
 
-from campar.job import Job
-from campar.plan import plan_tiles
-from campar.tile import run_tile
+from campar.sweep.job import Job
+from campar.sweep.plan import plan_tiles
+from campar.sweep.tile import run_tile
 
 CAMPAR = [sys.executable, "-m", "campar.cli"]
 MPIRUN = Path(sys.executable).parent / "mpirun"
@@ -105,7 +105,7 @@ def start_campar(*args, launcher=(), **kwargs) -> subprocess.Popen:
 def wait_for_tiles(store, count: int, proc: subprocess.Popen, timeout=300.0) -> int:
     """Poll a store being written until ``count`` tiles are done; returns how many are."""
     from campar.errors import StoreError
-    from campar.store import read_store
+    from campar.sweep.store import read_store
 
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:

@@ -5,8 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from campar import analysis as A
-from campar.status import CHAOTIC, QUASIPERIODIC, UNCONVERGED
+from campar.core import analysis as A
+from campar.core.codes import CHAOTIC, QUASIPERIODIC, UNCONVERGED
 
 
 def linear_history(z, L, x0, revolutions):

@@ -1,72 +1,141 @@
-"""The dependency rules of DESIGN.md / STYLE.md, checked on the import graph."""
+"""The layering of campar (its subpackages' docstrings, STYLE.md), checked on the import graph."""
 
 import ast
+import importlib
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "campar"
-LEAVES = {"status", "hermite", "jit", "errors"}  # constants and tiny shared helpers
+
+# Each layer may import the layers listed for it (and itself); nothing else of campar.
+LAYERS = {
+    "errors": set(),
+    "core": {"errors"},
+    "sweep": {"core", "errors"},
+    "views": {"core", "sweep", "errors"},
+    "paper": {"core", "sweep", "views", "errors"},
+    "bench": {"core", "sweep", "views", "errors"},
+    "cli": {"core", "sweep", "views", "paper", "bench", "errors", "__init__"},
+}
 
 
-def campar_imports(path: Path) -> set[str]:
-    """campar modules (top-level names) and third-party roots a module imports."""
+def imports_of(path: Path) -> set[str]:
+    """Absolute dotted names a module imports (relative imports resolved)."""
+    rel = path.relative_to(PACKAGE.parent).with_suffix("")
+    package = list(rel.parts[:-1])
     found = set()
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.ImportFrom):
-            if node.level:  # relative: from . import x / from .x import y
+            if node.level:
+                base = package[: len(package) - (node.level - 1)]
                 if node.module:
-                    found.add("campar." + node.module.split(".")[0])
+                    found.add(".".join([*base, node.module]))
                 else:
-                    found.update("campar." + a.name for a in node.names)
+                    found.update(".".join([*base, a.name]) for a in node.names)
             elif node.module:
-                found.add(node.module.split(".")[0])
+                found.add(node.module)
         elif isinstance(node, ast.Import):
-            found.update(a.name.split(".")[0] for a in node.names)
+            found.update(a.name for a in node.names)
     return found
 
 
 def modules():
     for path in sorted(PACKAGE.rglob("*.py")):
-        rel = path.relative_to(PACKAGE).with_suffix("")
-        yield ".".join(rel.parts), path
+        rel = path.relative_to(PACKAGE.parent).with_suffix("")
+        yield ".".join(rel.parts).removesuffix(".__init__"), path
 
 
 MODULES = dict(modules())
 
 
-@pytest.mark.parametrize("name", ["model", "integrator", "analysis", "hermite", "status", "jit"])
-def test_numerical_core_imports_only_leaves(name):
-    inside = {m.removeprefix("campar.") for m in campar_imports(MODULES[name]) if "campar." in m}
-    assert inside <= LEAVES, f"{name} imports {inside - LEAVES}"
+def layer(module: str) -> str:
+    """campar.core.kernel -> core; campar.cli -> cli; campar -> __init__."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 and parts[1] != "__version__" else "__init__"
 
 
-def test_integrator_knows_no_cam():
-    text = MODULES["integrator"].read_text()
-    assert "cam" not in campar_imports(MODULES["integrator"])
-    for word in ("omega", "yc", "PHASE"):
-        assert word not in text
+def campar_layers(path: Path) -> set[str]:
+    return {layer(m) for m in imports_of(path) if m == "campar" or m.startswith("campar.")}
+
+
+def test_every_module_belongs_to_a_layer():
+    assert {layer(m) for m in MODULES} <= {*LAYERS, "__init__"}
+
+
+@pytest.mark.parametrize("name", sorted(MODULES))
+def test_imports_point_down_the_layers(name):
+    own = layer(name)
+    if own == "__init__":
+        assert campar_layers(MODULES[name]) <= {"__init__"}  # lazy exports by name only
+        return
+    allowed = LAYERS[own] | {own, "__init__"}  # __init__: campar.__version__
+    assert campar_layers(MODULES[name]) <= allowed, f"{name} imports {campar_layers(MODULES[name])}"
+
+
+def test_every_subpackage_says_what_it_holds_and_may_import():
+    for sub in ("core", "sweep", "views", "paper", "bench"):
+        doc = ast.get_docstring(ast.parse((PACKAGE / sub / "__init__.py").read_text()))
+        assert doc and "import" in doc, sub
+
+
+def test_the_integrator_knows_no_cam():
+    path = MODULES["campar.core.integrator"]
+    assert "campar.core.model" not in imports_of(path)
+    code = "".join(
+        ast.unparse(node)
+        for node in ast.parse(path.read_text()).body
+        if not isinstance(node, ast.Expr)
+    )  # the source without its docstring
+    for word in ("omega", "yc", "PHASE", "cam"):
+        assert word not in code, word
 
 
 def test_only_the_runner_imports_mpi4py():
-    users = {name for name, path in MODULES.items() if "mpi4py" in campar_imports(path)}
-    assert users <= {"runner"}, users
+    users = {
+        name
+        for name, path in MODULES.items()
+        if any(m.startswith("mpi4py") for m in imports_of(path))
+    }
+    assert users <= {"campar.sweep.runner"}, users
 
 
-def test_plotting_never_imports_the_integrator():
+def test_plotting_never_imports_the_integration():
     for name, path in MODULES.items():
-        if name.startswith("plot"):
-            imports = campar_imports(path)
-            assert not imports & {"campar.integrator", "campar.kernel"}, name
+        if name.startswith("campar.views.plot"):
+            bad = {
+                m
+                for m in imports_of(path)
+                if m.startswith("campar.core.") and not m.endswith(".codes")
+            }
+            assert not bad, (name, bad)
 
 
-def test_store_knows_nothing_of_integration():
+def test_the_store_knows_nothing_of_integration():
     for name, path in MODULES.items():
-        if name.startswith("store"):
-            imports = campar_imports(path)
-            assert not imports & {"campar.integrator", "campar.kernel", "campar.model"}, name
+        if name.startswith("campar.sweep.store"):
+            bad = {
+                m
+                for m in imports_of(path)
+                if m.startswith("campar.core.") and not m.endswith(".codes")
+            }
+            assert not bad, (name, bad)
 
 
 def test_modules_stay_small():
     for name, path in MODULES.items():
         assert len(path.read_text().splitlines()) <= 600, f"{name} has grown past 600 lines"
+
+
+def test_importing_campar_has_no_side_effects():
+    code = "import sys, campar; print(sorted(m for m in sys.modules if m.startswith(('campar', 'numba'))))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "['campar']"
+
+
+def test_lazy_exports_resolve():
+    campar = importlib.import_module("campar")
+    for name in campar._EXPORTS:
+        assert callable(getattr(campar, name))

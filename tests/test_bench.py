@@ -7,7 +7,7 @@ import pytest
 
 from campar.bench import BENCHMARKS, peers, precision
 from campar.cli import main
-from campar.job import load_job
+from campar.sweep.job import load_job
 
 HEADERS = {
     "precision": ["state err", "event-time err", "Observed slopes", "DP5 state err vs rtol"],

@@ -12,10 +12,10 @@ import pytest
 from campar import simulate_point
 from campar.bench.common import Cell
 from campar.bench.scipy_peer import scipy_cell
-from campar.job import Job
-from campar.plan import plan_tiles
-from campar.status import Flag, Kind
-from campar.tile import run_tile
+from campar.core.codes import Flag, Kind
+from campar.sweep.job import Job
+from campar.sweep.plan import plan_tiles
+from campar.sweep.tile import run_tile
 
 
 def chain(extrapolate: int):

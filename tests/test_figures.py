@@ -10,14 +10,14 @@ import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from campar import paper
 from campar.cli import main
-from campar.line import bifurcation_line, continued_state, describe_line, varied_parameters
-from campar.plot import PlotError, plot_orbit
-from campar.plot.bifurcation import plot_line, plot_lines
-from campar.plot.figures import plot_force_row, plot_gap_family, plot_phase_grid
-from campar.plot.orbit import plot_gap, plot_phase
-from campar.point import simulate_point
+from campar.paper import setups as paper
+from campar.views.line import bifurcation_line, continued_state, describe_line, varied_parameters
+from campar.views.plot import PlotError, plot_orbit
+from campar.views.plot.bifurcation import plot_line, plot_lines
+from campar.views.plot.figures import plot_force_row, plot_gap_family, plot_phase_grid
+from campar.views.plot.orbit import plot_gap, plot_phase
+from campar.views.point import simulate_point
 
 PNG = b"\x89PNG\r\n\x1a\n"
 # A chaotic cell of the (ω, f0) plane, from rest (found on its 48 × 48 grid).
@@ -180,15 +180,15 @@ def test_point_command_writes_a_png(tmp_path):
 
 def test_importing_the_views_stays_light():
     code = (
-        "import sys, campar.plot, campar.plot.orbit; "
-        "print('matplotlib.pyplot' in sys.modules, 'campar.kernel' in sys.modules)"
+        "import sys, campar.views.plot, campar.views.plot.orbit; "
+        "print('matplotlib.pyplot' in sys.modules, 'campar.core.kernel' in sys.modules)"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.stdout.split() == ["False", "False"], done.stderr
 
 
 def test_gallery_writes_every_figure_with_its_job_file(tmp_path, monkeypatch):
-    from campar.gallery import make_gallery
+    from campar.paper.gallery import make_gallery
 
     monkeypatch.setitem(paper.SIZES, "small", paper.Size(plane=6, line=60))
     pngs = make_gallery(tmp_path / "g", "small", stores=tmp_path / "stores", log=lambda _: None)
@@ -200,7 +200,7 @@ def test_gallery_writes_every_figure_with_its_job_file(tmp_path, monkeypatch):
     for path in pngs:
         assert path.read_bytes().startswith(PNG)
     for job in ("omega_f0", "mu_kn", "mu_cn"):  # the plane jobs, runnable with campar run
-        from campar.job import load_job
+        from campar.sweep.job import load_job
 
         assert load_job(tmp_path / "g" / f"{job}.yaml").shape == (6, 6)
     assert (tmp_path / "g" / "fig5_lines.yaml").exists()

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from campar import integrator as I
+from campar.core import integrator as I
 
 
 class Omega(NamedTuple):

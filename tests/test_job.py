@@ -4,7 +4,7 @@ import pytest
 
 from campar.cli import main
 from campar.errors import JobError
-from campar.job import load_job
+from campar.sweep.job import load_job
 
 GOOD_SWEEP = "sweep: {omega: {from: 6, to: 1, points: 4}, mu_cn: {from: 0.9, to: 0.5, points: 3}}"
 
@@ -90,7 +90,7 @@ def test_every_job_key_is_documented_in_jobs_readme():
 
     from pydantic import BaseModel
 
-    from campar.job import Job
+    from campar.sweep.job import Job
 
     readme = (Path(__file__).parents[1] / "jobs" / "README.md").read_text()
 

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from campar import model as M
+from campar.core import model as M
 
 BOUNDARIES = M.PHASE_BOUNDS[1:]
 

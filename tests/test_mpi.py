@@ -22,7 +22,7 @@ from conftest import (
     wait_for_tiles,
 )
 
-from campar.store import read_store
+from campar.sweep.store import read_store
 
 pytestmark = [
     pytest.mark.mpi,
@@ -104,9 +104,9 @@ def run_with_faults(ranks, job_path, fault) -> subprocess.CompletedProcess:
     """campar run under mpirun with run_tile replaced by one that raises per ``fault``."""
     script = textwrap.dedent(f"""
         import os, sys
-        import campar.runner as runner
+        import campar.sweep.runner as runner
         from campar.cli import main
-        from campar.tile import run_tile
+        from campar.sweep.tile import run_tile
         rank = int(os.environ["PMI_RANK"])
         def faulty(job, tile):
             if {fault}:
@@ -158,8 +158,8 @@ def test_every_rank_of_an_spmd_caller_sees_the_masters_error(write_job):
     script = textwrap.dedent(f"""
         import os
         from campar.errors import StoreMismatch
-        from campar.job import Job
-        from campar.runner import run_job
+        from campar.sweep.job import Job
+        from campar.sweep.runner import run_job
         job = Job.from_dict({changed.to_dict()!r})
         try:
             run_job(job)
@@ -183,11 +183,11 @@ def test_no_rank_spins_while_waiting(write_job):
     path, job = write_job()
     script = textwrap.dedent(f"""
         import sys, time
-        import campar.runner as runner
+        import campar.sweep.runner as runner
         from campar.cli import main
-        from campar.job import load_job
-        from campar.plan import plan_tiles
-        from campar.tile import run_tile
+        from campar.sweep.job import load_job
+        from campar.sweep.plan import plan_tiles
+        from campar.sweep.tile import run_tile
         first = run_tile(load_job({str(path)!r}), plan_tiles(load_job({str(path)!r}))[0])
         def sleepy(job, tile):  # every tile is one chain: the same shapes
             time.sleep(0.5)

@@ -14,10 +14,12 @@ from matplotlib.collections import QuadMesh
 from matplotlib.patches import Rectangle
 
 from campar.cli import main
-from campar.job import Job
-from campar.plan import plan_tiles
-from campar.plot import MAP_VIEWS, PlotError, parse_range
-from campar.plot.labels import (
+from campar.core.codes import CHAOTIC, PERIODIC, QUASIPERIODIC, cell_label
+from campar.core.codes import FAILED as KIND_FAILED
+from campar.sweep.job import Job
+from campar.sweep.plan import plan_tiles
+from campar.views.plot import MAP_VIEWS, PlotError, parse_range
+from campar.views.plot.labels import (
     DESIGNED,
     FAILED,
     GAP_STYLE,
@@ -30,7 +32,7 @@ from campar.plot.labels import (
     map_kinds,
     map_labels,
 )
-from campar.plot.maps import (
+from campar.views.plot.maps import (
     LEGEND_MAX,
     QUANTITIES,
     MapGrid,
@@ -43,8 +45,6 @@ from campar.plot.maps import (
     quantity_scale,
     select_cells,
 )
-from campar.status import CHAOTIC, PERIODIC, QUASIPERIODIC, cell_label
-from campar.status import FAILED as KIND_FAILED
 
 P, QP, CH, FA = PERIODIC, QUASIPERIODIC, CHAOTIC, KIND_FAILED
 
@@ -178,7 +178,7 @@ def test_rare_labels_get_deterministic_colours_away_from_the_designed_ones():
     colours = [fallback_colour(n, p) for n, p in rare]
     assert all(min(delta_e(c, d) for d in DESIGNED.values()) >= 15.0 for c in colours)
     # the same in a fresh process (no dependence on str hashing or call order)
-    code = "from campar.plot.labels import label_colour as c; print(c('9-3'), c('7-p~'))"
+    code = "from campar.views.plot.labels import label_colour as c; print(c('9-3'), c('7-p~'))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == f"{label_colour('9-3')} {label_colour('7-p~')}"
 
@@ -345,10 +345,10 @@ def test_views_and_quantities_agree():
 
 
 def test_importing_the_views_loads_neither_pyplot_nor_the_kernel():
-    # (numba itself is imported by campar/__init__ for its cache check, not by the views)
     code = (
-        "import sys, campar.plot.maps\n"
-        "bad = ('matplotlib.pyplot', 'campar.integrator', 'campar.kernel', 'campar.tile')\n"
+        "import sys, campar.views.plot.maps\n"
+        "bad = ('matplotlib.pyplot', 'numba', 'campar.core.integrator', 'campar.core.kernel',"
+        " 'campar.sweep.tile')\n"
         "print([m for m in bad if m in sys.modules])"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -403,7 +403,7 @@ def test_computed_mask_marks_the_rows_of_done_tiles():
 @pytest.fixture(params=[".zarr", ".h5"])
 def store_path(request, tmp_path):
     """A real result store of the SMOKE job (Zarr or HDF5) with its first tile committed."""
-    from campar.store import cell_arrays, open_store
+    from campar.sweep.store import cell_arrays, open_store
 
     job = Job.from_dict(SMOKE)
     data = random_map(4, 5, seed=1)
@@ -433,7 +433,7 @@ def test_plot_store_draws_uncommitted_tiles_as_not_computed(store_path, tmp_path
 
 
 def read_map(path):
-    from campar.store import read_store
+    from campar.sweep.store import read_store
 
     with read_store(path) as store:
         arrays = {name: store.read(name) for name in ("kind", "n", "p")}

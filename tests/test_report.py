@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from campar import paper
-from campar.claims import average_ranks, rank_correlation
-from campar.point import simulate_point
-from campar.report import CLAIMS, build_report, divergence_integral, liouville_bound
+from campar.paper import setups as paper
+from campar.paper.claims import average_ranks, rank_correlation
+from campar.paper.report import CLAIMS, build_report, divergence_integral, liouville_bound
+from campar.views.point import simulate_point
 
 COMMITTED = Path(__file__).resolve().parents[1] / "docs" / "paper.md"
 ROW = re.compile(r"^\| ([PETLM]\d+) \| (.*) \|$")

@@ -19,13 +19,13 @@ from conftest import (
     wait_for_tiles,
 )
 
-import campar.runner as runner
-from campar.arrays import array_names
+import campar.sweep.runner as runner
 from campar.errors import CamparError, Interrupted
-from campar.plan import plan_tiles
-from campar.progress import Progress, format_duration
-from campar.store import read_store
-from campar.tile import run_tile
+from campar.sweep.arrays import array_names
+from campar.sweep.plan import plan_tiles
+from campar.sweep.progress import Progress, format_duration
+from campar.sweep.store import read_store
+from campar.sweep.tile import run_tile
 
 
 def tiles_done(path) -> list[bool]:
@@ -287,7 +287,7 @@ def test_repeated_sigkills_at_random_moments_then_resume_give_the_same_map(
     also land inside checkpoints) until a run completes; the map is still exact."""
     path, job = write_job(slow=True, store=str(tmp_path / f"killed{suffix}"))
     script = (
-        "import sys, campar.store._hdf5 as h5; h5.CHECKPOINT_TILES = 1\n"
+        "import sys, campar.sweep.store._hdf5 as h5; h5.CHECKPOINT_TILES = 1\n"
         f"from campar.cli import main; sys.exit(main(['run', {str(path)!r}]))"
     )
     rng = np.random.default_rng(3)

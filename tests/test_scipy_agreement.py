@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from campar.bench.scipy_model import Model, integrate
-from campar.kernel import trace_orbit
-from campar.point import EVENT_NAMES, point_job
-from campar.revolution import make_trace
-from campar.tile import cell_settings, solver_options
+from campar.core.kernel import trace_orbit
+from campar.core.revolution import make_trace
+from campar.sweep.tile import cell_settings, solver_options
+from campar.views.point import EVENT_NAMES, point_job
 
 # (omega, f0, mu_kn, mu_cn, clamp, start state, revolutions): contact only, impacting,
 # a 2-cycle with the clamp active, the paper's literal law, and fast with strong damping.

@@ -119,7 +119,7 @@ def wait_for(what, predicate, timeout):
 
 def tiles_done(store):
     """(tiles done, tiles in all) from the store's commit flags, or None if not readable yet."""
-    from campar.store import read_store
+    from campar.sweep.store import read_store
 
     try:
         with read_store(store) as s:
@@ -130,7 +130,7 @@ def tiles_done(store):
 
 
 def read_all(store):
-    from campar.store import read_store
+    from campar.sweep.store import read_store
 
     with read_store(store) as s:
         return {name: np.asarray(s.read(name)) for name in s.names}

@@ -18,13 +18,13 @@ import h5py
 import numpy as np
 import pytest
 
-from campar.arrays import array_names, array_spec
 from campar.errors import StoreError, StoreLocked, StoreMismatch
-from campar.job import Job
-from campar.plan import plan_tiles
-from campar.store import lock_path, open_store, read_store
-from campar.store._lock import process_state
-from campar.store._schema import cell_arrays
+from campar.sweep.arrays import array_names, array_spec
+from campar.sweep.job import Job
+from campar.sweep.plan import plan_tiles
+from campar.sweep.store import lock_path, open_store, read_store
+from campar.sweep.store._lock import process_state
+from campar.sweep.store._schema import cell_arrays
 
 JOB = {
     "name": "store_suite",
@@ -201,8 +201,8 @@ class StoreSuite:
     def test_a_run_in_another_process_holds_the_lock(self, path, job, tmp_path):
         script = textwrap.dedent(f"""
             import sys, time
-            from campar.job import Job
-            from campar.store import open_store
+            from campar.sweep.job import Job
+            from campar.sweep.store import open_store
             job = Job.from_dict({job.to_dict()!r})
             with open_store({str(path)!r}, job):
                 print("holding", flush=True)
@@ -226,7 +226,7 @@ class StoreSuite:
         pid = dead_pid()
         holder = {"host": socket.gethostname(), "pid": pid, "start": "2020-01-01T00:00:00"}
         lock_path(path).write_text(json.dumps(holder))
-        with caplog.at_level(logging.WARNING, "campar.store"), open_store(path, job):
+        with caplog.at_level(logging.WARNING, "campar.sweep.store"), open_store(path, job):
             pass
         assert f"pid {pid}" in caplog.text and "stale" in caplog.text
         assert not lock_path(path).exists()
@@ -263,10 +263,10 @@ class StoreSuite:
         """A writer killed (SIGKILL) after committing tiles 0 and 2: both survive, resume works."""
         script = textwrap.dedent(f"""
             import os, signal
-            import campar.store._hdf5 as h5
-            from campar.job import Job
-            from campar.plan import plan_tiles
-            from campar.store import open_store
+            import campar.sweep.store._hdf5 as h5
+            from campar.sweep.job import Job
+            from campar.sweep.plan import plan_tiles
+            from campar.sweep.store import open_store
             from test_store import fake_tile
             h5.CHECKPOINT_TILES = 2  # the first two tiles reach the file, the third the journal
             job = Job.from_dict({job.to_dict()!r})
@@ -372,7 +372,7 @@ class TestHdf5Store(StoreSuite):
         arrays = fake_tile(job, tile, 2)
         with open_store(path, job):
             pass
-        from campar.store._hdf5 import write_entry
+        from campar.sweep.store._hdf5 import write_entry
 
         write_entry(path, tile.index, arrays)  # what a killed run leaves
         torn = path.with_name(path.name + ".checkpoint-999")
@@ -391,10 +391,10 @@ def test_hdf5_sigkill_inside_a_checkpoint_loses_nothing(tmp_path, when):
     job = make_job()
     script = textwrap.dedent(f"""
         import os, signal
-        import campar.store._hdf5 as h5
-        from campar.job import Job
-        from campar.plan import plan_tiles
-        from campar.store import open_store
+        import campar.sweep.store._hdf5 as h5
+        from campar.sweep.job import Job
+        from campar.sweep.plan import plan_tiles
+        from campar.sweep.store import open_store
         from test_store import fake_tile
         job = Job.from_dict({job.to_dict()!r})
         tiles = plan_tiles(job)

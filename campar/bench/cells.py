@@ -20,10 +20,10 @@ import time
 
 import numpy as np
 
-from ..job import Job
-from ..plan import plan_tiles
-from ..point import simulate_point
-from ..tile import run_tile
+from ..sweep.job import Job
+from ..sweep.plan import plan_tiles
+from ..sweep.tile import run_tile
+from ..views.point import simulate_point
 from .common import best_time, format_table, machine_line
 
 OMEGAS = (0.02, 0.1, 0.5, 1.0, 2.0, 4.0, 6.0)

@@ -23,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..job import Job, load_job
-from ..plan import plan_tiles
-from ..status import Flag, Kind, cell_label
-from ..tile import run_tile
+from ..core.codes import Flag, Kind, cell_label
+from ..sweep.job import Job, load_job
+from ..sweep.plan import plan_tiles
+from ..sweep.tile import run_tile
 
 PLANES = ("mu_cn", "mu_kn", "omega_f0")
 REFERENCE = {
@@ -232,7 +232,7 @@ CANDIDATES = {
 
 def reference_arrays(ref: Job, directory: Path, ranks: int) -> dict[str, np.ndarray]:
     """The reference map (reference_job): read its store, computing it first if needed."""
-    from ..store import read_store
+    from ..sweep.store import read_store
 
     path = directory / f"{ref.name}.zarr"
     if not _complete(path):
@@ -242,7 +242,7 @@ def reference_arrays(ref: Job, directory: Path, ranks: int) -> dict[str, np.ndar
 
 
 def _complete(path: Path) -> bool:
-    from ..store import read_store
+    from ..sweep.store import read_store
 
     if not path.exists():
         return False

@@ -20,9 +20,9 @@ Floquet/Lyapunov bookkeeping — small against the integration itself.
 
 import numpy as np
 
-from ..job import OUTPUT_NAMES, Job
-from ..plan import plan_tiles
-from ..tile import run_tile
+from ..sweep.job import OUTPUT_NAMES, Job
+from ..sweep.plan import plan_tiles
+from ..sweep.tile import run_tile
 from .common import Timing, format_table, machine_line, timed
 
 QUICK = {"rows": 2, "omegas": 6, "repeat": 1, "min_seconds": 0.0}

@@ -36,11 +36,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..job import Job
-from ..plan import Tile
-from ..point import point_job
-from ..status import Kind, cell_label
-from ..tile import run_tile
+from ..core.codes import Kind, cell_label
+from ..sweep.job import Job
+from ..sweep.plan import Tile
+from ..sweep.tile import run_tile
+from ..views.point import point_job
 from .common import Cell, Timing, best_time, format_table, machine_line, timed
 from .scipy_peer import scipy_cell
 

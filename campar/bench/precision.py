@@ -27,10 +27,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..kernel import trace_orbit
-from ..point import EVENT_NAMES, point_job, simulate_point
-from ..revolution import make_trace
-from ..tile import cell_settings, solver_options
+from ..core.kernel import trace_orbit
+from ..core.revolution import make_trace
+from ..sweep.tile import cell_settings, solver_options
+from ..views.point import EVENT_NAMES, point_job, simulate_point
 from .common import (
     Cell,
     Timing,

@@ -64,21 +64,21 @@ def launch(job: Path, store: Path, ranks: int) -> tuple[dict, float]:
     wall = time.perf_counter() - start
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed ({done.returncode}):\n{done.stderr}")
-    from campar.store import read_store
+    from campar.sweep.store import read_store
 
     with read_store(store) as reader:
         return reader.attrs["runs"][-1], wall
 
 
 def mean_revolutions(store: Path) -> float:
-    from campar.store import read_store
+    from campar.sweep.store import read_store
 
     with read_store(store) as reader:
         return float(np.mean(reader.read("revolutions")))
 
 
 def same_maps(a: Path, b: Path) -> bool:
-    from campar.store import read_store
+    from campar.sweep.store import read_store
 
     with read_store(a) as x, read_store(b) as y:
         return all(np.array_equal(x.read(n), y.read(n), equal_nan=True) for n in x.names)

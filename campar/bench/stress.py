@@ -29,10 +29,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..plan import Tile
-from ..point import point_job
-from ..status import FAILED, OK, PERIODIC, Flag, Status, cell_label
-from ..tile import run_tile
+from ..core.codes import FAILED, OK, PERIODIC, Flag, Status, cell_label
+from ..sweep.plan import Tile
+from ..sweep.tile import run_tile
+from ..views.point import point_job
 from .common import Cell, format_table, machine_line
 from .scipy_model import integrate
 

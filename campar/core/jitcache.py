@@ -2,19 +2,20 @@
 
 numba invalidates a cached function when *its own* source file changes, not
 when a function it inlined from another file does: after an edit of
-integrator.py, kernel.run_chain would still load the old integrator from the
+core/integrator.py, kernel.run_chain would still load the old integrator from the
 cache. So before the kernel is first used, a digest of every compiled module
 is compared with the one the cache was built from, and a mismatch clears the
 cached entries of those modules.
 """
 
+import functools
 import hashlib
 import os
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_MODULES = (
-    "jit", "status", "hermite", "model", "integrator", "analysis", "revolution", "kernel"
+    "jit", "codes", "hermite", "model", "integrator", "analysis", "revolution", "kernel"
 )  # fmt: skip
 STAMP = "campar-core.digest"
 
@@ -34,8 +35,13 @@ def cache_dirs() -> list[Path]:
     return dirs
 
 
+@functools.cache
 def ensure_fresh_cache() -> None:
-    """Drop cached compiled functions of the core if its sources changed since."""
+    """Drop cached compiled functions of the core if its sources changed since.
+
+    Called explicitly before the kernel first runs in a process (``run_tile``,
+    the CLI); once per process, later calls return at once.
+    """
     want = core_digest()
     for directory in cache_dirs():
         stamp = directory / STAMP

@@ -1,6 +1,6 @@
 """Single-parameter bifurcation diagrams: σn points y against ω, detachments p beneath.
 
-The data is a ``campar.line.BifurcationLine`` (or any object with its
+The data is a ``campar.views.line.BifurcationLine`` (or any object with its
 attributes): per cell ω, the σn points (NaN-padded), n, p, kind and the n-p
 labels. Drawn as in the paper's Fig. 5 — (a) the section points y of the
 steady motion against ω, (a1) the number of detachments p in one period —

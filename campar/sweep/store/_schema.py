@@ -14,9 +14,9 @@ from importlib import metadata
 
 import numpy as np
 
-from .. import __version__
+from ... import __version__
+from ...errors import StoreMismatch
 from ..arrays import array_names, array_spec
-from ..errors import StoreMismatch
 from ..job import Job
 from ..plan import Tile, plan_tiles
 

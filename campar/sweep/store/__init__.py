@@ -7,7 +7,7 @@ tiles remain. Views open any store read-only with ``read_store(path)``.
 
 Layout (both backends, same names): coordinates ``omega`` and the second
 parameter (e.g. ``mu_cn``); per-cell arrays over (second, omega[, tail]) named
-as in ``campar.tile``; ``done`` per tile; attributes ``job`` (normalised),
+as in ``campar.sweep.tile``; ``done`` per tile; attributes ``job`` (normalised),
 ``job_hash``, ``versions``, ``runs`` (the run log), ``campar_store`` (format).
 """
 
@@ -15,7 +15,7 @@ import os
 import shutil
 from pathlib import Path
 
-from ..errors import StoreError
+from ...errors import StoreError
 from ..job import Job
 from . import _hdf5, _zarr
 from ._base import Store, StoreReader

@@ -6,10 +6,9 @@ a plain function of plain data with no MPI and no files inside.
 
 import numpy as np
 
-from .arrays import array_names, array_spec
-from .integrator import DP54, RK4, SolverOptions
-from .job import Job
-from .kernel import (
+from ..core.integrator import DP54, RK4, SolverOptions
+from ..core.jitcache import ensure_fresh_cache
+from ..core.kernel import (
     CONVERGED,
     FIXED,
     OUT_LYAPUNOV,
@@ -20,7 +19,9 @@ from .kernel import (
     CellSettings,
     run_chain,
 )
-from .model import N_STATE
+from ..core.model import N_STATE
+from .arrays import array_names, array_spec
+from .job import Job
 from .plan import Tile, chain_parameters
 
 
@@ -97,6 +98,7 @@ def allocate_outputs(n_cells: int, bits: int, n_sections: int) -> CellOutputs:
 
 def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     """Compute every chain of a tile; arrays shaped (tile rows, ω points, …)."""
+    ensure_fresh_cache()
     _, n_omega = job.shape
     names = array_names(job)
     result = {}

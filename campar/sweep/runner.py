@@ -42,8 +42,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import CamparError, Interrupted, JobError, StoreError, StoreLocked, StoreMismatch
 from .arrays import array_names
-from .errors import CamparError, Interrupted, JobError, StoreError, StoreLocked, StoreMismatch
 from .job import Job
 from .plan import Tile, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)

@@ -18,11 +18,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import JobError
-from .job import Job
-from .plan import Tile
-from .status import KIND_NAMES, Kind, cell_label
-from .tile import run_tile
+from ..core.codes import KIND_NAMES, Kind, cell_label
+from ..errors import JobError
+from ..sweep.job import Job
+from ..sweep.plan import Tile
+from ..sweep.tile import run_tile
 
 # Second parameter of the one-row job (any swept parameter would do; its one value
 # is the line's μkn).
@@ -43,7 +43,7 @@ class BifurcationLine:
     sections: np.ndarray  # (N, S, 2) σn points (y, y'), NaN-padded
     n: np.ndarray  # (N,) period in revolutions; 0 if not periodic
     p: np.ndarray  # (N,) detachments in n revolutions (non-periodic: in the read window)
-    kind: np.ndarray  # (N,) campar.status.Kind codes
+    kind: np.ndarray  # (N,) campar.core.codes.Kind codes
     dc: np.ndarray  # (N,) duty cycle
     state: np.ndarray  # (N, 2) final (y, y') at θ = 0 of each cell
     parameters: dict  # f0, mu_kn, mu_cn, zeta (floats) and tensile

@@ -24,9 +24,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .codes import NONFINITE, OK, STEP_UNDERFLOW
 from .hermite import hermite_extremum
 from .jit import compiled, hot
-from .status import NONFINITE, OK, STEP_UNDERFLOW
 
 DP54 = 0
 RK4 = 1

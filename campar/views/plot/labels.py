@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from matplotlib.colors import hsv_to_rgb, to_rgba
 
-from ..status import Kind
+from ...core.codes import Kind
 
 RGBA = tuple[float, float, float, float]
 
@@ -252,7 +252,7 @@ def map_labels(arrays, chatter_p: int = 7) -> CategoryMap:
 
     ``arrays`` maps "kind", "n", "p" (and optionally "computed", a boolean mask
     of cells already computed) to arrays shaped (second, omega). Labels follow
-    ``campar.status.cell_label``; chattering ones are grouped per n ("1-p~").
+    ``campar.core.codes.cell_label``; chattering ones are grouped per n ("1-p~").
     Cells holding a store's fill (kind −1) or zeros (a periodic cell with n < 1,
     which the kernel never writes) count as not computed.
     """

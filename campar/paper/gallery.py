@@ -1,6 +1,6 @@
 """``campar gallery``: the paper's whole figure set from one command.
 
-Computes what each figure needs (``campar.paper``), draws it (``campar.plot``)
+Computes what each figure needs (``campar.paper.setups``), draws it (``campar.views.plot``)
 and writes, next to every PNG, the file it came from: the plane's job file
 (runnable with ``campar run``) or a recipe (the ``campar`` command that
 redraws the figure and the normalised jobs and point parameters behind it).
@@ -18,8 +18,8 @@ from pathlib import Path
 
 import yaml
 
-from . import paper
-from .point import point_job
+from ..views.point import point_job
+from . import setups
 
 MAP_FIGURES = {"omega_f0": "fig2", "mu_kn": "fig4", "mu_cn": "fig7"}
 MAP_VIEWS = {"labels": "n-p labels", "dc": "duty cycle DC"}
@@ -42,7 +42,7 @@ class Gallery:
         return stem if self.tensile == "clamp" else f"{stem}-{self.tensile}"
 
     def save(self, figure, stem: str, caption: str, recipe: dict | None = None) -> Path:
-        from .plot import save_figure
+        from ..views.plot import save_figure
 
         path = save_figure(figure, self.outdir / f"{self.name(stem)}.png", dpi=PNG_DPI)
         if recipe is not None:
@@ -64,13 +64,13 @@ def default_stores(size: str) -> Path:
 def make_gallery(outdir, size: str = "small", tensile: str = "clamp", stores=None,
                  log=print) -> list[Path]:  # fmt: skip
     """Compute and draw every figure into ``outdir``; returns the PNG paths."""
-    if size not in paper.SIZES:
-        raise ValueError(f"size must be one of {', '.join(paper.SIZES)}, got {size!r}")
+    if size not in setups.SIZES:
+        raise ValueError(f"size must be one of {', '.join(setups.SIZES)}, got {size!r}")
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     g = Gallery(outdir, size, tensile, Path(stores or default_stores(size)), log=log)
     start = time.perf_counter()
-    for plane in paper.PLANES:
+    for plane in setups.PLANES:
         draw_plane(g, plane)
     draw_lines(g)
     draw_phase_portraits(g)
@@ -82,11 +82,11 @@ def make_gallery(outdir, size: str = "small", tensile: str = "clamp", stores=Non
 
 
 def draw_plane(g: Gallery, plane: str) -> None:
-    from .plot import computed_mask, plot_map
-    from .store import read_store
+    from ..sweep.store import read_store
+    from ..views.plot import computed_mask, plot_map
 
-    job = paper.plane_job(plane, g.size, g.tensile)
-    store = paper.run_plane(job, g.stores)
+    job = setups.plane_job(plane, g.size, g.tensile)
+    store = setups.run_plane(job, g.stores)
     with read_store(store) as reader:
         arrays = {name: reader.read(name) for name in ("kind", "n", "p", "dc")}
         arrays["computed"] = computed_mask(reader.job, reader.done)
@@ -103,18 +103,20 @@ def draw_plane(g: Gallery, plane: str) -> None:
 
 
 def draw_lines(g: Gallery) -> None:
-    from .plot.bifurcation import plot_lines
+    from ..views.plot.bifurcation import plot_lines
 
-    lines = paper.paper_lines(g.size, g.tensile)
+    lines = setups.paper_lines(g.size, g.tensile)
     titles = [rf"$\mu_{{\mathrm{{kn}}}}$ = {max(f'{mu:.2f}', f'{mu:g}', key=len)}"
-              for mu in paper.FIG5_MU_KN]  # fmt: skip
-    points = paper.SIZES[g.size].line
-    mu_list = " ".join(f"{mu:g}" for mu in paper.FIG5_MU_KN)
+              for mu in setups.FIG5_MU_KN]  # fmt: skip
+    points = setups.SIZES[g.size].line
+    mu_list = " ".join(f"{mu:g}" for mu in setups.FIG5_MU_KN)
     recipe = {
         "figure": "the paper's Fig. 5: σn points y and detachments p against ω",
         "command": f"campar line --omega 6:0.02 --points {points} --mu-kn {mu_list} "
         f"--tensile {g.tensile} -o fig5_lines.png",
-        "jobs": [paper.paper_line_job(mu, g.size, g.tensile).to_dict() for mu in paper.FIG5_MU_KN],
+        "jobs": [
+            setups.paper_line_job(mu, g.size, g.tensile).to_dict() for mu in setups.FIG5_MU_KN
+        ],
     }
     caption = (f"bifurcation lines (Fig. 5): σn points y and detachments p against ω, "
                f"{points} ω values from 6.0 down (continuation), μkn = {mu_list}")  # fmt: skip
@@ -122,7 +124,7 @@ def draw_lines(g: Gallery) -> None:
 
 
 def continuation_recipe(omega: float, tensile: str, params: dict) -> dict:
-    from .line import CONTINUATION_STEP, PAPER_START, continuation_points, line_job
+    from ..views.line import CONTINUATION_STEP, PAPER_START, continuation_points, line_job
 
     job = line_job((PAPER_START, omega), continuation_points(omega), tensile=tensile,
                    sections=1, **params)  # fmt: skip
@@ -131,12 +133,12 @@ def continuation_recipe(omega: float, tensile: str, params: dict) -> dict:
 
 
 def draw_phase_portraits(g: Gallery) -> None:
-    from .plot.figures import plot_phase_grid
+    from ..views.plot.figures import plot_phase_grid
 
-    params = {**paper.BASE, "mu_kn": paper.FIG6_MU_KN}
+    params = {**setups.BASE, "mu_kn": setups.FIG6_MU_KN}
     panels, recipes = [], []
-    for omega, claim in paper.FIG6_CLAIMS:
-        found = paper.continued_point(omega, g.tensile, **params)
+    for omega, claim in setups.FIG6_CLAIMS:
+        found = setups.continued_point(omega, g.tensile, **params)
         r = found.result
         head = f"paper {claim}, campar {r.label}"
         panels.append({"kind": "phase", "result": r, "heading": f"$\\omega$ = {omega}\n{head}"})
@@ -162,24 +164,24 @@ def point_recipe(omega: float, tensile: str, params: dict) -> dict:
 
 
 def draw_gaps(g: Gallery) -> None:
-    from .plot.figures import plot_gap_family
+    from ..views.plot.figures import plot_gap_family
 
     for stem, f0, varied, caption in (
-        ("fig3_gap_preload", None, (("f0", paper.FIG3_F0),),
+        ("fig3_gap_preload", None, (("f0", setups.FIG3_F0),),
          "penetration ε(t) over the steady orbit (Fig. 3) for three preloads f0 at ω = 1, 3, 5"),
-        ("fig8_gap_stiffness_damping", paper.FIG8_F0,
-         (("mu_kn", paper.FIG8_RATIOS), ("mu_cn", paper.FIG8_RATIOS)),
+        ("fig8_gap_stiffness_damping", setups.FIG8_F0,
+         (("mu_kn", setups.FIG8_RATIOS), ("mu_cn", setups.FIG8_RATIOS)),
          "penetration ε(t) (Fig. 8) at f0 = 2.5 for three μkn (top) and three μcn (bottom), "
          "ω = 1, 3, 5"),
     ):  # fmt: skip
         rows, recipes = [], []
         for name, values in varied:
             by_speed = []
-            for omega in paper.SPEEDS:
+            for omega in setups.SPEEDS:
                 results = []
                 for value in values:
-                    params = {**paper.BASE, **({"f0": f0} if f0 is not None else {}), name: value}
-                    results.append(paper.steady_point(omega, g.tensile, **params))
+                    params = {**setups.BASE, **({"f0": f0} if f0 is not None else {}), name: value}
+                    results.append(setups.steady_point(omega, g.tensile, **params))
                     recipes.append(point_recipe(omega, g.tensile, params))
                 by_speed.append(results)
             rows.append((name, values, by_speed))
@@ -194,22 +196,22 @@ def draw_gaps(g: Gallery) -> None:
 
 
 def draw_forces(g: Gallery) -> None:
-    from .plot.figures import plot_force_row
+    from ..views.plot.figures import plot_force_row
 
-    params = {**paper.BASE, "f0": paper.FIG9_F0}
-    results = [paper.steady_point(omega, g.tensile, **params) for omega in paper.SPEEDS]
+    params = {**setups.BASE, "f0": setups.FIG9_F0}
+    results = [setups.steady_point(omega, g.tensile, **params) for omega in setups.SPEEDS]
     recipe = {"figure": "the paper's Fig. 9", "start": "rest, (y, y') = (0, 0) at θ = 0",
-              "points": [point_recipe(w, g.tensile, params) for w in paper.SPEEDS]}  # fmt: skip
+              "points": [point_recipe(w, g.tensile, params) for w in setups.SPEEDS]}  # fmt: skip
     caption = ("contact force Pn(t) (red) with the cam input yc(t) (blue), impacts ○ and "
                "detachments ★ (Fig. 9), f0 = 0.5, ω = 1, 3, 5")  # fmt: skip
     g.save(plot_force_row(results), "fig9_force", caption, recipe)
 
 
 def draw_orbit_example(g: Gallery) -> None:
-    from .plot import plot_orbit
+    from ..views.plot import plot_orbit
 
-    params = {**paper.BASE, "mu_kn": paper.FIG6_MU_KN}
-    result = paper.steady_point(3.0, g.tensile, **params)
+    params = {**setups.BASE, "mu_kn": setups.FIG6_MU_KN}
+    result = setups.steady_point(3.0, g.tensile, **params)
     caption = ("one point's orbit as `campar point --plot` draws it: phase portrait, ε(t), "
                "Pn(t) with yc(t); ω = 3, μkn = 0.91, from rest")  # fmt: skip
     g.save(plot_orbit(result), "orbit_point", caption, point_recipe(3.0, g.tensile, params))

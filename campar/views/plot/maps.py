@@ -19,8 +19,8 @@ from matplotlib.colors import ListedColormap, LogNorm, Normalize, TwoSlopeNorm
 from matplotlib.patches import Patch, Rectangle
 from matplotlib.ticker import FuncFormatter, MaxNLocator
 
-from ..job import PARAMETERS, Job
-from ..plan import plan_tiles
+from ...sweep.job import PARAMETERS, Job
+from ...sweep.plan import plan_tiles
 from . import MAP_VIEWS, PlotError
 from .labels import (
     FAILED,
@@ -363,7 +363,7 @@ def plot_store(path, what: str = "labels", output=None, omega=None, second=None)
     omega, second: (a, b) zoom ranges. output defaults to "<store name>-<what>.png"
     in the current directory. Tiles not committed yet are drawn as "not computed".
     """
-    from ..store import read_store  # only this view reads files
+    from ...sweep.store import read_store  # only this view reads files
 
     needed = arrays_for(what)
     with read_store(path) as store:

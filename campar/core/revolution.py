@@ -12,6 +12,7 @@ import numpy as np
 
 from . import model
 from .analysis import REV_DETACH, add_step_stats, reset_revolution_stats
+from .codes import EVENT_LOOP, OK, STEP_LIMIT
 from .integrator import SolverOptions, advance, dense_eval
 from .jit import compiled, hot
 from .model import (
@@ -30,7 +31,6 @@ from .model import (
     is_detachment,
     mode_after_event,
 )
-from .status import EVENT_LOOP, OK, STEP_LIMIT
 
 MAX_STUCK_EVENTS = 8  # zero-length events in a row before a cell is declared stuck
 

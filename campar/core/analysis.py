@@ -26,9 +26,9 @@ test afterwards.
 
 import math
 
+from .codes import CHAOTIC, QUASIPERIODIC, UNCONVERGED
 from .hermite import hermite_extremum
 from .jit import hot
-from .status import CHAOTIC, QUASIPERIODIC, UNCONVERGED
 
 # Columns of the per-revolution statistics.
 REV_T_FREE = 0  # time with ε < 0 (separated)

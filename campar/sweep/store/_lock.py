@@ -16,9 +16,9 @@ import socket
 from datetime import UTC, datetime
 from pathlib import Path
 
-from ..errors import StoreLocked
+from ...errors import StoreLocked
 
-log = logging.getLogger("campar.store")
+log = logging.getLogger("campar.sweep.store")
 
 
 def lock_path(store: Path) -> Path:

@@ -8,13 +8,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import JobError
-from .job import Job, check_parameter
-from .kernel import trace_orbit
-from .plan import Tile
-from .revolution import make_trace
-from .status import KIND_NAMES, Flag, Kind, cell_label, status_message
-from .tile import cell_settings, run_tile, solver_options
+from ..core.codes import KIND_NAMES, Flag, Kind, cell_label, status_message
+from ..core.kernel import trace_orbit
+from ..core.revolution import make_trace
+from ..errors import JobError
+from ..sweep.job import Job, check_parameter
+from ..sweep.plan import Tile
+from ..sweep.tile import cell_settings, run_tile, solver_options
 
 # Event codes of a trace: 2·(contact mode before) + (event index), see kernel.Trace.
 EVENT_NAMES = {0: "impact", 2: "detachment", 3: "force zero", 4: "detachment", 5: "force resumes"}

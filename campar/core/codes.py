@@ -1,6 +1,9 @@
-"""Status codes of a cell and kinds of steady motion: one table, text given once here.
+"""Codes of a cell's outcome: status, kind of steady motion, flags; text given once here.
 
-A leaf module: njit code returns these integers, Python code translates them.
+A leaf module: njit code returns and sets these integers (module-level ints,
+which numba folds into constants), Python code translates them with the enums
+and tables below. Not to be confused with ``campar status``, the progress of a
+run's store (``campar.sweep.progress``).
 """
 
 import enum
@@ -17,6 +20,13 @@ QUASIPERIODIC = 1
 CHAOTIC = 2
 UNCONVERGED = 3
 FAILED = 4
+
+# Flag bits of a cell (see Flag for their meaning).
+FLAG_NEWTON = 1
+FLAG_SLOW = 2
+FLAG_GRAZING = 4
+FLAG_WARM_EXTRAPOLATED = 8
+FLAG_RESTARTED = 16
 
 
 class Status(enum.IntEnum):
@@ -69,14 +79,18 @@ class Flag(enum.IntFlag):
     """Remarks on a cell that a reader of a map should know about."""
 
     NONE = 0
-    NEWTON = 1  # the transient was shortened by Newton jumps on the section map
+    # the transient was shortened by Newton jumps on the section map
+    NEWTON = FLAG_NEWTON
     # a multiplier lies within 0.02 of the unit circle: slow convergence; on a
     # non-periodic cell, the multiplier of a stable cycle estimated within 0.1 of its
     # last section point (the verdict may be a cycle the budget did not reach)
-    SLOW = 2
-    GRAZING = 4  # a local minimum of ε lies within 1e-5 of 0: p is sensitive (needs dc/eps/pn)
-    WARM_EXTRAPOLATED = 8  # the start was extrapolated from the previous cells
-    RESTARTED = 16  # the previous cell failed; this one started from the job's state
+    SLOW = FLAG_SLOW
+    # a local minimum of ε lies within 1e-5 of 0: p is sensitive (needs dc/eps/pn)
+    GRAZING = FLAG_GRAZING
+    # the start was extrapolated from the previous cells
+    WARM_EXTRAPOLATED = FLAG_WARM_EXTRAPOLATED
+    # the previous cell failed; this one started from the job's state
+    RESTARTED = FLAG_RESTARTED
 
 
 def status_message(code: int) -> str:

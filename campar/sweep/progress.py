@@ -15,9 +15,9 @@ from datetime import UTC, datetime
 
 import numpy as np
 
-from . import __version__
+from .. import __version__
+from ..core.codes import KIND_NAMES, Kind, cell_label, status_message
 from .plan import plan_tiles
-from .status import KIND_NAMES, Kind, cell_label, status_message
 
 log = logging.getLogger("campar.run")
 

@@ -23,7 +23,7 @@ the CLI can name the views without paying for matplotlib.
 import argparse
 import importlib
 
-from ..errors import CamparError
+from ...errors import CamparError
 
 
 class PlotError(CamparError):

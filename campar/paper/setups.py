@@ -10,7 +10,7 @@ leaves them open says what was chosen, and computes them:
 - planes: the job files ``jobs/{omega_f0,mu_kn,mu_cn}.yaml``, at their own
   400 × 400 (size "full") or on a coarser grid (size "small"), through the
   sweep runner into a store (which resumes, so a second command reuses it);
-- lines: one continuation chain each (``campar.line``), ω from 6.0 down;
+- lines: one continuation chain each (``campar.views.line``), ω from 6.0 down;
 - orbits of Fig. 6 and of the point claims: reached as the paper reaches them,
   by continuation from ω = 6.0 (``continued_state``), then traced with
   ``simulate_point`` from that state;
@@ -26,9 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import JobError
-from .job import Job, load_job
-from .line import (
+from ..errors import JobError
+from ..sweep.job import Job, load_job
+from ..views.line import (
     BifurcationLine,
     bifurcation_line,
     compute_line,
@@ -89,7 +89,7 @@ QUOTED_MU_KN = 0.90
 
 def jobs_dir() -> Path:
     """The repository's ``jobs/`` directory (next to the package in a source checkout)."""
-    return Path(__file__).resolve().parents[1] / "jobs"
+    return Path(__file__).resolve().parents[2] / "jobs"
 
 
 def plane_job(name: str, size: str = "full", tensile: str = "clamp",
@@ -115,8 +115,8 @@ def run_plane(job: Job, stores: Path) -> Path:
     MPI under mpirun) and return the store's path. A finished store of the same job is
     reused as is; one of another version of the job (older settings or campar) is
     replaced: ``stores`` belongs to the gallery and the report, a cache of their planes."""
-    from .errors import StoreMismatch
-    from .runner import run_job
+    from ..errors import StoreMismatch
+    from ..sweep.runner import run_job
 
     path = Path(stores) / f"{job.name}.zarr"
     try:
@@ -159,7 +159,7 @@ class ContinuedPoint:
 
 def continued_point(omega: float, tensile: str = "clamp", **params) -> ContinuedPoint:
     """Reach ``omega`` by continuation from 6.0 and trace the attractor found there."""
-    from .point import simulate_point
+    from ..views.point import simulate_point
 
     params = {**BASE, **params}
     line, state = continued_state(omega, tensile=tensile, **params)
@@ -181,6 +181,6 @@ def section_cloud(omega: float, state, revolutions: int = CLOUD_REVOLUTIONS, **o
 
 def steady_point(omega: float, tensile: str = "clamp", **params):
     """``simulate_point`` from rest at θ = 0 with trace (Figs. 3, 8, 9)."""
-    from .point import simulate_point
+    from ..views.point import simulate_point
 
     return simulate_point(omega, tensile=tensile, trace=True, **{**BASE, **params})

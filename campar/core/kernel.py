@@ -33,6 +33,17 @@ from .analysis import (
     stretch_tangent,
     window_stats,
 )
+from .codes import (
+    FAILED,
+    FLAG_GRAZING,
+    FLAG_NEWTON,
+    FLAG_RESTARTED,
+    FLAG_SLOW,
+    FLAG_WARM_EXTRAPOLATED,
+    NONFINITE,
+    OK,
+    PERIODIC,
+)
 from .integrator import StepWork, initial_step, make_work
 from .jit import compiled, hot
 from .model import (
@@ -46,7 +57,6 @@ from .model import (
     make_params,
 )
 from .revolution import Trace, make_trace, run_revolution, solver_options
-from .status import FAILED, NONFINITE, OK, PERIODIC
 
 # Transient policies.
 CONVERGED = 0  # stop once the section has converged to a cycle (Newton-accelerated)
@@ -58,13 +68,6 @@ OUT_SECTIONS = 2  # σn points of the steady motion
 OUT_MULTIPLIERS = 4  # Floquet multipliers of periodic cells
 OUT_LYAPUNOV = 8  # largest Lyapunov exponent
 
-# Flags (campar.status.Flag).
-FLAG_NEWTON = 1
-FLAG_SLOW = 2
-FLAG_GRAZING = 4
-FLAG_WARM_EXTRAPOLATED = 8
-FLAG_RESTARTED = 16
-
 SLOW_MARGIN = 0.02  # a multiplier this close to the unit circle marks a slow cell
 SLOW_REACH = 0.1  # … and, for a non-periodic cell, a stable cycle estimate this close
 GRAZE_TOL = 1e-5  # a dip of ε this close to 0 marks a cell whose p is sensitive
@@ -72,7 +75,7 @@ EXTRAPOLATE_MAX = 0.05  # extrapolate the warm start only between close fixed po
 
 
 class CellSettings(NamedTuple):
-    """How one cell is run and classified (see campar.job for the meaning of each)."""
+    """How one cell is run and classified (see campar.sweep.job for the meaning of each)."""
 
     transient: int  # CONVERGED or FIXED
     max_revolutions: int  # CONVERGED: budget of revolutions; FIXED: transient length
@@ -101,9 +104,9 @@ class CellOutputs(NamedTuple):
 
     n: np.ndarray  # int32: period in revolutions (0: not periodic)
     p: np.ndarray  # int32: detachments in n revolutions (non-periodic: in the window)
-    kind: np.ndarray  # int8: campar.status.Kind
-    status: np.ndarray  # int8: campar.status.Status
-    flags: np.ndarray  # int16: campar.status.Flag
+    kind: np.ndarray  # int8: campar.core.codes.Kind
+    status: np.ndarray  # int8: campar.core.codes.Status
+    flags: np.ndarray  # int16: campar.core.codes.Flag
     dc: np.ndarray  # duty cycle: fraction of time separated
     eps_min: np.ndarray
     eps_max: np.ndarray

@@ -20,8 +20,9 @@ import time
 
 import numpy as np
 
-from . import __version__, paper
+from .. import __version__
 from . import map_claims as mc
+from . import setups
 from .claims import (
     Claim,
     Evidence,
@@ -48,9 +49,9 @@ def _claims() -> list[Claim]:
         Claim(f"P{i + 1}", F6, f"μkn = 0.91, ω = {omega}: {label}",
               "n-p label at ω, reached by continuation from ω = 6.0 (step 0.005) as in the "
               "paper's maps; 'from rest': started at (0, 0)", label_claim(omega, label))
-        for i, (omega, label) in enumerate(paper.FIG6_CLAIMS)
+        for i, (omega, label) in enumerate(setups.FIG6_CLAIMS)
     ]  # fmt: skip
-    w1, w2 = paper.QUOTED_MULTIPLIERS[0][0], paper.QUOTED_MULTIPLIERS[1][0]
+    w1, w2 = setups.QUOTED_MULTIPLIERS[0][0], setups.QUOTED_MULTIPLIERS[1][0]
     rows += [
         Claim("P7", "text on Figs. 4d, 5c", "μkn = 0.91: Hopf (Neimark–Sacker) bifurcation of "
               "the period-1 motion at ω = 3.208583", "multipliers of the cycle there: a complex "
@@ -158,19 +159,19 @@ def divergence_integral(result) -> float:
     return float(-2.0 * zeta * (tr.t[-1] - tr.t[0]) - k * c * contact)
 
 
-def liouville_bound(omega: float, zeta: float = paper.BASE["zeta"], n: int = 1) -> float:
+def liouville_bound(omega: float, zeta: float = setups.BASE["zeta"], n: int = 1) -> float:
     """Largest det DP any orbit of n revolutions can have: div f ≤ −2ζ everywhere."""
     return math.exp(-2.0 * zeta * n * 2.0 * math.pi / omega)
 
 
 def liouville_rows(evidence: dict[str, Evidence]) -> list[dict]:
     rows = []
-    for omega, quoted, conclusion in paper.QUOTED_MULTIPLIERS:
+    for omega, quoted, conclusion in setups.QUOTED_MULTIPLIERS:
         product = (quoted[0] * quoted[1]).real
         row = {"omega": omega, "quoted": quoted, "conclusion": conclusion, "product": product,
                "bound": liouville_bound(omega), "models": {}}  # fmt: skip
         for tensile, ev in evidence.items():
-            r = ev.continued(omega, paper.QUOTED_MU_KN).result
+            r = ev.continued(omega, setups.QUOTED_MU_KN).result
             if r.kind != "periodic" or r.trace is None:
                 row["models"][tensile] = (r.label, math.nan, math.nan, math.nan)
                 continue
@@ -262,10 +263,10 @@ def summary(results) -> list[str]:
 def build_report(size: str = "small", stores=None, log=print) -> str:
     """The whole Markdown document at a size ("small" or "full")."""
     start = time.perf_counter()
-    evidence = {t: Evidence(t, size, stores) for t in paper.TENSILE}
+    evidence = {t: Evidence(t, size, stores) for t in setups.TENSILE}
     results = evaluate_all(evidence)
     liouville = liouville_rows(evidence)
-    grid = paper.plane_job("omega_f0", size).shape
+    grid = setups.plane_job("omega_f0", size).shape
     log(f"report: {len(results)} claims evaluated in {time.perf_counter() - start:.1f} s")
     text = [
         "# Reproduction report: cam with flat-bottomed follower (seed paper)",
@@ -315,7 +316,7 @@ def build_report(size: str = "small", stores=None, log=print) -> str:
         "",
         "Besides, neither quoted pair shows the bifurcation the paper names: a period "
         "doubling needs a real multiplier at −1 (the first pair is complex with "
-        f"|λ| = {abs(paper.QUOTED_MULTIPLIERS[0][1][0]):.3f}), and two real multipliers "
+        f"|λ| = {abs(setups.QUOTED_MULTIPLIERS[0][1][0]):.3f}), and two real multipliers "
         "inside the unit circle (the second pair) belong to a stable cycle, not to the "
         "onset of chaos.",
         "",

@@ -19,7 +19,7 @@ import numpy as np
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from .errors import JobError
+from ..errors import JobError
 
 PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 # The paper's base values (MODEL.md) for parameters a job does not sweep or fix.

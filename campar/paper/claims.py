@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import paper
-from .status import PERIODIC
+from ..core.codes import PERIODIC
+from . import setups
 
 TREND = 0.8  # |Spearman ρ| from which "increases/decreases with" counts as shown
 
@@ -79,30 +79,30 @@ class Evidence:
         return self._keep(("plane", name), lambda: self._read_plane(name))
 
     def _read_plane(self, name: str) -> Plane:
-        from .store import read_store
+        from ..sweep.store import read_store
 
-        job = paper.plane_job(name, self.size, self.tensile)
-        with read_store(paper.run_plane(job, self.stores)) as reader:
+        job = setups.plane_job(name, self.size, self.tensile)
+        with read_store(setups.run_plane(job, self.stores)) as reader:
             if not reader.done.all():
                 raise RuntimeError(f"{reader.path} is not complete")
             arrays = {k: reader.read(k) for k in ("kind", "n", "p", "dc", "eps_max", "eps_min")}
         return Plane(job.omega, job.second_values, job.second, arrays)
 
     def continued(self, omega: float, mu_kn: float):
-        """The orbit at ω reached by continuation from 6.0 (``paper.continued_point``)."""
+        """The orbit at ω reached by continuation from 6.0 (``setups.continued_point``)."""
         return self._keep(
             ("continued", omega, mu_kn),
-            lambda: paper.continued_point(omega, self.tensile, mu_kn=mu_kn),
+            lambda: setups.continued_point(omega, self.tensile, mu_kn=mu_kn),
         )
 
     def steady(self, omega: float, **params):
-        """The orbit at ω from rest (``paper.steady_point``)."""
+        """The orbit at ω from rest (``setups.steady_point``)."""
         key = ("steady", omega, *sorted(params.items()))
-        return self._keep(key, lambda: paper.steady_point(omega, self.tensile, **params))
+        return self._keep(key, lambda: setups.steady_point(omega, self.tensile, **params))
 
     def fine_line(self, mu_kn: float):
         """The line at μkn from ω = 6.0 down to 2.0 in steps of 0.001 (context for P rows)."""
-        return self._keep(("line", mu_kn), lambda: paper.fine_line(mu_kn, self.tensile))
+        return self._keep(("line", mu_kn), lambda: setups.fine_line(mu_kn, self.tensile))
 
 
 # -- helpers ---------------------------------------------------------------------
@@ -167,11 +167,11 @@ def distinct_labels(plane: Plane, rows: np.ndarray) -> int:
 
 def label_claim(omega: float, expected: str) -> Callable:
     def evaluate(ev: Evidence) -> Verdict:
-        found = ev.continued(omega, paper.FIG6_MU_KN).result
-        cold = ev.steady(omega, mu_kn=paper.FIG6_MU_KN)
+        found = ev.continued(omega, setups.FIG6_MU_KN).result
+        cold = ev.steady(omega, mu_kn=setups.FIG6_MU_KN)
         text = f"{found.label} ({found.kind}; from rest: {cold.label})"
         if expected in ("chaos", "QP"):
-            text += "; " + nearest_cells(ev.fine_line(paper.FIG6_MU_KN), expected, omega)
+            text += "; " + nearest_cells(ev.fine_line(setups.FIG6_MU_KN), expected, omega)
         return Verdict(text, found.label == expected)
 
     return evaluate
@@ -188,7 +188,7 @@ def nearest_cells(line, label: str, omega: float) -> str:
 
 
 def hopf_claim(ev: Evidence) -> Verdict:
-    r = ev.continued(3.208583, paper.FIG6_MU_KN).result
+    r = ev.continued(3.208583, setups.FIG6_MU_KN).result
     mult = r.multipliers or ()
     moduli = [abs(m) for m in mult]
     complex_pair = bool(mult) and abs(mult[0].imag) > 1e-9
@@ -200,10 +200,10 @@ def hopf_claim(ev: Evidence) -> Verdict:
 
 
 def multiplier_claim(index: int) -> Callable:
-    omega, quoted, _ = paper.QUOTED_MULTIPLIERS[index]
+    omega, quoted, _ = setups.QUOTED_MULTIPLIERS[index]
 
     def evaluate(ev: Evidence) -> Verdict:
-        r = ev.continued(omega, paper.QUOTED_MU_KN).result
+        r = ev.continued(omega, setups.QUOTED_MU_KN).result
         if r.multipliers is None or r.kind != "periodic":
             return Verdict(f"{r.label}: not periodic, no multipliers", False)
         mult = ", ".join(complex_text(m) for m in r.multipliers)
@@ -223,11 +223,11 @@ def complex_text(z: complex) -> str:
 
 
 def fig3(ev: Evidence, omega: float):
-    return [ev.steady(omega, f0=f0) for f0 in paper.FIG3_F0]
+    return [ev.steady(omega, f0=f0) for f0 in setups.FIG3_F0]
 
 
 def fig8(ev: Evidence, omega: float, name: str):
-    return [ev.steady(omega, f0=paper.FIG8_F0, **{name: v}) for v in paper.FIG8_RATIOS]
+    return [ev.steady(omega, f0=setups.FIG8_F0, **{name: v}) for v in setups.FIG8_RATIOS]
 
 
 def series_trend(results_of, quantity: str, sign: int, only_detached: bool = False) -> Callable:
@@ -235,7 +235,7 @@ def series_trend(results_of, quantity: str, sign: int, only_detached: bool = Fal
 
     def evaluate(ev: Evidence) -> Verdict:
         parts, ok = [], []
-        for omega in paper.SPEEDS:
+        for omega in setups.SPEEDS:
             results = results_of(ev, omega)
             values = [getattr(r, quantity) for r in results]
             if only_detached and any(v >= 0 for v in values):
@@ -253,8 +253,8 @@ def speed_trend(quantity: str) -> Callable:
 
     def evaluate(ev: Evidence) -> Verdict:
         parts, ok = [], []
-        for i, f0 in enumerate(paper.FIG3_F0):
-            values = [fig3(ev, omega)[i].__getattribute__(quantity) for omega in paper.SPEEDS]
+        for i, f0 in enumerate(setups.FIG3_F0):
+            values = [fig3(ev, omega)[i].__getattribute__(quantity) for omega in setups.SPEEDS]
             ok.append(monotone(values, 1))
             parts.append(f"f0={f0:g}: " + "/".join(fmt(v) for v in values))
         return Verdict("; ".join(parts), all(ok))
@@ -264,7 +264,7 @@ def speed_trend(quantity: str) -> Callable:
 
 def never_fully_detached(ev: Evidence) -> Verdict:
     worst = []
-    for omega in paper.SPEEDS:
+    for omega in setups.SPEEDS:
         for r in fig3(ev, omega):
             tr = r.trace
             rev = np.floor((tr.t - tr.t[0]) / tr.period + 1e-9).astype(int)
@@ -276,7 +276,7 @@ def never_fully_detached(ev: Evidence) -> Verdict:
 
 def stiffness_beats_damping(ev: Evidence) -> Verdict:
     parts, ok = [], []
-    for omega in paper.SPEEDS:
+    for omega in setups.SPEEDS:
         dk = fig8(ev, omega, "mu_kn")[0].eps_max - fig8(ev, omega, "mu_kn")[-1].eps_max
         dc = fig8(ev, omega, "mu_cn")[0].eps_max - fig8(ev, omega, "mu_cn")[-1].eps_max
         ok.append(dk > dc)
@@ -291,8 +291,8 @@ def cam_angle(trace, times) -> np.ndarray:
 
 def detachment_phases(ev: Evidence) -> Verdict:
     parts, ok = [], []
-    for omega in paper.SPEEDS:
-        r = ev.steady(omega, f0=paper.FIG9_F0)
+    for omega in setups.SPEEDS:
+        r = ev.steady(omega, f0=setups.FIG9_F0)
         angles = cam_angle(r.trace, r.trace.events_named("detachment")[:, 0])
         ok += [60 <= a <= 120 or a >= 180 for a in angles]
         parts.append(f"ω={omega:g}: " + ", ".join(f"{a:.0f}°" for a in angles))
@@ -301,8 +301,8 @@ def detachment_phases(ev: Evidence) -> Verdict:
 
 def force_peak_phase(ev: Evidence) -> Verdict:
     parts, ok = [], []
-    for omega in paper.SPEEDS:
-        tr = ev.steady(omega, f0=paper.FIG9_F0).trace
+    for omega in setups.SPEEDS:
+        tr = ev.steady(omega, f0=setups.FIG9_F0).trace
         theta = float(cam_angle(tr, [tr.t[int(np.argmax(tr.pn))]])[0])
         ok.append(abs(theta - 60.0) <= 10.0)
         parts.append(f"ω={omega:g}: {theta:.0f}°")

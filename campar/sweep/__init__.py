@@ -1,0 +1,15 @@
+"""The sweep machinery: from a job file to a finished, resumable store of a map.
+
+- ``job``: the YAML schema, the paper's base values and every default, validation;
+- ``plan``: tiles and continuation chains of the grid, pending tiles;
+- ``arrays``: what each requested output stores (names, dtypes, shapes);
+- ``tile``: one tile through the kernel (``run_tile``) and the kernel settings
+  built from a job, in one place;
+- ``runner``: the serial runner and the MPI master/workers, signals;
+- ``progress``: the live progress line, the run log, ``campar status``;
+- ``store``: Zarr and HDF5 backends behind one interface, commit flags, lock.
+
+May import: ``campar.core``, ``campar.errors`` and itself. ``runner`` is the only
+module of campar that imports mpi4py; ``store`` imports nothing of the
+integration (``core`` beyond its codes).
+"""

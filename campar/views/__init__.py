@@ -1,0 +1,10 @@
+"""Views of the model for a person: one cell, one bifurcation line, and figures.
+
+- ``point``: ``simulate_point`` — one cell from Python (``campar point``), with
+  an optional dense trace of its steady orbit;
+- ``line``: single-parameter bifurcation lines along ω by continuation (``campar line``);
+- ``plot``: figures of computed results (maps of a store, orbits, bifurcation
+  diagrams); it never recomputes and never imports the kernel.
+
+May import: ``campar.core``, ``campar.sweep``, ``campar.errors`` and itself.
+"""
