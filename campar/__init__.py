@@ -21,6 +21,7 @@ _EXPORTS = {
     "PointResult": "campar.views.point",
     "Job": "campar.sweep.job",
     "load_job": "campar.sweep.job",
+    "open": "campar.views.dataset",
 }
 
 

@@ -130,7 +130,10 @@ def test_modules_stay_small():
 
 
 def test_importing_campar_has_no_side_effects():
-    code = "import sys, campar; print(sorted(m for m in sys.modules if m.startswith(('campar', 'numba'))))"
+    code = (
+        "import sys, campar\n"
+        "print(sorted(m for m in sys.modules if m.startswith(('campar', 'numba'))))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "['campar']"
 

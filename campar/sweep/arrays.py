@@ -1,7 +1,9 @@
-"""What each job output stores: the per-cell arrays, their dtypes and shapes.
+"""What each job output stores: the per-cell arrays, their dtypes, shapes and meaning.
 
 A leaf module (no numba): the store and the runner's master need this table
-without loading the compiled kernel.
+without loading the compiled kernel. The model is dimensionless (docs/model.md):
+lengths in units of the stroke h, time t in units of 1/ωn, forces in units of
+K1·h; the cam angle is θ = ω t.
 """
 
 import numpy as np
@@ -37,6 +39,72 @@ ARRAY_SPECS = {
     "multipliers": (np.float64, (2, 2)),
     "sections": (np.float64, ("S", 2)),
 }
+
+# Names of the trailing dimensions, one per entry of the trailing shape above.
+TAIL_DIMS = {
+    "state": ("component",),
+    "sections": ("section_point", "component"),
+    "multipliers": ("multiplier", "part"),
+}
+
+# Labels along the trailing dimensions that have names rather than indices.
+COMPONENTS = ("y", "ydot")  # the state (y, ẏ)
+PARTS = ("real", "imag")  # of a complex Floquet multiplier
+
+# What a reader of the store needs to know of each array: long name, units ("1":
+# dimensionless, None: a code or count without units) and a comment. The codes'
+# values and names are in campar.core.codes; the store states them from there.
+ARRAY_DOCS = {
+    "n": (
+        "period of the steady motion", "1",
+        "cam revolutions per period: points of the stroboscopic section σn (θ = 0 mod 2π); "
+        "0 where kind is not periodic",
+    ),
+    "p": (
+        "detachments per period", "1",
+        "contact→separation events (ε crossing 0 downward) in n revolutions; where kind is "
+        "not periodic, in the read window",
+    ),
+    "kind": ("kind of steady motion", None, "the label of a map cell is n-p where periodic"),
+    "status": ("why the cell ended", None, "anything but ok is a failed cell (its numbers NaN)"),
+    "flags": ("remarks on the cell", None, "bits that a reader of a map should know about"),
+    "dc": (
+        "duty cycle", "1",
+        "fraction of time separated (ε < 0) in the steady window: 0 never, 1 always detached",
+    ),
+    "eps_min": (
+        "minimum penetration", "1",
+        "min ε = yc − y over the steady window, in units of the stroke h; < 0: detachment height",
+    ),
+    "eps_max": (
+        "intrusion depth", "1",
+        "max ε = yc − y over the steady window, in units of the stroke h",
+    ),
+    "pn_max": (
+        "maximum contact force", "1",
+        "max Pn over the steady window, in units of K1·h (Hunt–Crossley, docs/model.md)",
+    ),
+    "state": (
+        "final state at θ = 0", "1",
+        "the cell's last section point, where the next cell of the chain starts: y in units of "
+        "the stroke h, ydot = dy/dt with t in units of 1/ωn",
+    ),
+    "revolutions": ("revolutions computed", "1", "transient and read window: the cell's cost"),
+    "steps": ("integrator steps accepted", "1", "the cell's cost"),
+    "lyapunov": (
+        "largest Lyapunov exponent", "1",
+        "per unit dimensionless time t (t in units of 1/ωn); of the cycle where periodic",
+    ),
+    "multipliers": (
+        "Floquet multipliers", "1",
+        "eigenvalues of the Jacobian of the period-n section map, largest modulus first; "
+        "NaN where not periodic or where the Jacobian was not integrated",
+    ),
+    "sections": (
+        "stroboscopic section points σn", "1",
+        "(y, ydot) at θ = 0 mod 2π over the last revolutions, in order; NaN-padded",
+    ),
+}  # fmt: skip
 
 
 def array_names(job: Job) -> list[str]:

@@ -3,6 +3,8 @@
 - ``point``: ``simulate_point`` — one cell from Python (``campar point``), with
   an optional dense trace of its steady orbit;
 - ``line``: single-parameter bifurcation lines along ω by continuation (``campar line``);
+- ``dataset``: ``open`` — a result store as a labelled, CF-annotated xarray
+  Dataset, either backend, with the n-p labels as strings (``campar.open``);
 - ``plot``: figures of computed results (maps of a store, orbits, bifurcation
   diagrams); it never recomputes and never imports the kernel.
 

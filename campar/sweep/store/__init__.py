@@ -7,8 +7,15 @@ tiles remain. Views open any store read-only with ``read_store(path)``.
 
 Layout (both backends, same names): coordinates ``omega`` and the second
 parameter (e.g. ``mu_cn``); per-cell arrays over (second, omega[, tail]) named
-as in ``campar.sweep.tile``; ``done`` per tile; attributes ``job`` (normalised),
+as in ``campar.sweep.arrays``; ``done`` per tile; attributes ``job`` (normalised),
 ``job_hash``, ``versions``, ``runs`` (the run log), ``campar_store`` (format).
+
+From format 2 on the store speaks CF-1.10 (``_cf``): every variable has its
+long name, units and meaning, codes their flag values and meanings, every
+dimension is a coordinate (``component`` y/ydot, ``tile`` with its row range),
+and the HDF5 file is a netCDF-4 file, so ``xarray.open_zarr`` and
+``xarray.open_dataset(path, engine="h5netcdf")`` give the same Dataset
+(``campar.open``). Format 1 stores are still read; only the current format resumes.
 """
 
 import os
@@ -20,10 +27,21 @@ from ..job import Job
 from . import _hdf5, _zarr
 from ._base import Store, StoreReader
 from ._lock import StoreLock, lock_path
-from ._schema import FORMAT, cell_arrays, check_same_job, fill_value, job_differences
+from ._schema import (
+    FORMAT,
+    ArraySchema,
+    cell_arrays,
+    check_readable,
+    check_same_job,
+    fill_value,
+    job_differences,
+    store_arrays,
+    upgraded_attrs,
+)
 
 __all__ = [
     "FORMAT",
+    "ArraySchema",
     "Store",
     "StoreReader",
     "backend_name",
@@ -33,6 +51,8 @@ __all__ = [
     "lock_path",
     "open_store",
     "read_store",
+    "store_arrays",
+    "upgraded_attrs",
 ]
 
 HDF5_SUFFIXES = (".h5", ".hdf5")
@@ -90,6 +110,7 @@ def read_store(path: str | Path) -> StoreReader:
     attrs = backend.read_attrs(path)
     if attrs is None:
         raise StoreError(f"{path} is not a campar {backend_name(path)} store")
+    check_readable(path, attrs)
     return _READERS[backend](path, attrs)
 
 

@@ -9,7 +9,10 @@ For developers — a backend implements:
 - ``clean_leftovers(path)``: remove what a killed writer left behind and
   finish any commit it left half done;
 - a ``Store`` subclass with ``_write_tile``, ``_write_runs`` and ``_close``;
-- a ``StoreReader`` subclass with ``_read``, ``_done`` and ``close``.
+- a ``StoreReader`` subclass with ``_read``, ``_done`` and ``close`` (and
+  ``journaled`` if committed tiles can wait outside the store's arrays);
+- the layout and attributes of ``_schema.store_arrays`` and ``initial_attrs``,
+  so that xarray opens every backend to the same Dataset.
 
 The commit protocol every backend keeps: a tile's arrays are durable before
 its ``done`` flag is, so ``done`` never claims a tile whose data a kill lost.
@@ -33,6 +36,7 @@ class StoreReader(ABC):
         self.path = path
         self.attrs = attrs
         self.job = Job.from_dict(attrs["job"], source=f"job stored in {path}")
+        self.format = attrs.get("campar_store")
         self.names = [a.name for a in cell_arrays(self.job)]
         self.coords = coordinates(self.job)
 
@@ -46,6 +50,12 @@ class StoreReader(ABC):
         if name not in self.names:
             raise KeyError(f"{self.path} has no array {name!r}; it has {', '.join(self.names)}")
         return self._read(name)
+
+    @property
+    def journaled(self) -> dict[int, dict[str, np.ndarray]]:
+        """Committed tiles whose arrays are not in the store's own arrays yet, by tile
+        index (HDF5 between checkpoints); ``read`` and ``done`` include them already."""
+        return {}
 
     @abstractmethod
     def _done(self) -> np.ndarray: ...

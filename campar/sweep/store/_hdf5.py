@@ -17,10 +17,17 @@ the next ``open_store`` replays them, and readers overlay them, so
 ``campar status`` counts every finished tile even during a run. Replaying is
 idempotent (an entry holds the same numbers as the file), so a kill between
 the rename and the deletions loses nothing either.
+
+The file is a netCDF-4 file (what netCDF-C and h5netcdf read): every coordinate
+of a dimension is an HDF5 dimension scale named after it (with
+``_Netcdf4Dimid``, its order), every axis of every other variable has its scale
+attached, ``_FillValue`` is an attribute of the variable's type equal to the
+HDF5 fill value, and creation order is tracked so tools list variables in the
+Zarr store's order. Checkpoints only write into existing datasets and
+attributes, which keeps that structure.
 """
 
 import contextlib
-import json
 import os
 import re
 import shutil
@@ -34,11 +41,10 @@ from ..job import Job
 from ..plan import Tile, plan_tiles
 from ._base import Store, StoreReader
 from ._lock import StoreLock
-from ._schema import cell_arrays, coordinates, done_array, initial_attrs
+from ._schema import ArraySchema, decode_attrs, initial_attrs, run_attrs, store_arrays
 
 CHECKPOINT_TILES = 64
 CHECKPOINT_SECONDS = 60.0
-JSON_ATTRS = ("job", "versions", "runs")  # HDF5 attributes cannot nest: stored as JSON text
 ENTRY = re.compile(r"^tile-(\d+)\.npz$")
 
 
@@ -57,41 +63,48 @@ def read_attrs(path: Path) -> dict | None:
     return attrs if "job_hash" in attrs else None
 
 
-def decode_attrs(raw) -> dict:
-    attrs = {}
-    for key, value in raw.items():
-        if isinstance(value, bytes):
-            value = value.decode()
-        elif isinstance(value, np.generic):
-            value = value.item()
-        attrs[key] = json.loads(value) if key in JSON_ATTRS else value
-    return attrs
-
-
-def write_attrs(f: h5py.File, attrs: dict) -> None:
+def write_attrs(node, attrs: dict, dtype: np.dtype | None = None) -> None:
+    """HDF5 attributes: text as UTF-8 strings, numbers typed as netCDF wants them."""
     for key, value in attrs.items():
-        f.attrs[key] = json.dumps(value) if key in JSON_ATTRS else value
+        if key == "_FillValue" or isinstance(value, np.ndarray):
+            value = np.asarray(value, dtype)  # CF: the variable's own type
+        elif isinstance(value, bool | int):
+            value = np.int32(value)
+        node.attrs[key] = value
 
 
 def create(path: Path, job: Job) -> None:
     """Write the whole empty store aside, then rename it to ``path``."""
     shutil.rmtree(journal_dir(path), ignore_errors=True)  # entries of an older store
     tmp = path.with_name(f"{path.name}.creating-{os.getpid()}")
-    with h5py.File(tmp, "w") as f:
+    arrays = store_arrays(job)
+    with h5py.File(tmp, "w", track_order=True) as f:
         write_attrs(f, initial_attrs(job))
-        for name, values in coordinates(job).items():
-            f.create_dataset(name, data=values).make_scale(name)
-        for a in [*cell_arrays(job), done_array(job)]:
-            data = f.create_dataset(
-                a.name, shape=a.shape, dtype=a.dtype, chunks=a.chunks, fillvalue=a.fill,
-                compression=None if a.name == "done" else "gzip",
-            )  # fmt: skip
-            for axis, dim in enumerate(a.dims):
-                data.dims[axis].label = dim
-                if dim in f and dim != a.name:
+        dims = [a.name for a in arrays if a.is_dimension]
+        for a in arrays:
+            data = _create_dataset(f, a)
+            if a.is_dimension:
+                data.make_scale(a.name)
+                data.attrs["_Netcdf4Dimid"] = np.int32(dims.index(a.name))
+            else:
+                for axis, dim in enumerate(a.dims):
                     data.dims[axis].attach_scale(f[dim])
+            write_attrs(data, a.attrs, a.dtype)
     _fsync(tmp)
     os.replace(tmp, path)
+
+
+def _create_dataset(f: h5py.File, a: ArraySchema) -> h5py.Dataset:
+    if a.dtype.kind == "U":
+        return f.create_dataset(
+            a.name, data=a.values.astype(object), dtype=h5py.string_dtype(), track_order=True
+        )
+    if a.values is not None:
+        return f.create_dataset(a.name, data=a.values, dtype=a.dtype, track_order=True)
+    return f.create_dataset(
+        a.name, shape=a.shape, dtype=a.dtype, chunks=a.chunks, fillvalue=a.fill,
+        compression=None if a.name == "done" else "gzip", track_order=True,
+    )  # fmt: skip
 
 
 def remove(path: Path) -> None:
@@ -162,9 +175,9 @@ def apply_journal(path: Path, job: Job, runs: list[dict] | None = None) -> int:
             for name, values in load_entry(entry).items():
                 f[name][tiles[index].rows] = values
         for index in entries:
-            f["done"][index] = True
+            f["done"][index] = 1
         if runs is not None:
-            write_attrs(f, {"runs": runs})
+            write_attrs(f, run_attrs(job, decode_attrs(f.attrs), runs))
     _fsync(tmp)
     os.replace(tmp, path)
     for entry in entries.values():
@@ -183,8 +196,8 @@ def _fsync(path: Path) -> None:
 class Hdf5Store(Store):
     def __init__(self, path: Path, job: Job, lock: StoreLock):
         with h5py.File(path, "r") as f:
-            runs = decode_attrs(f.attrs).get("runs", [])
-            self._done = f["done"][:]
+            runs = decode_attrs(f.attrs)["runs"]
+            self._done = f["done"][:].astype(bool)
         super().__init__(path, job, lock, runs)  # the journal is empty: clean_leftovers replayed it
         self._journaled = 0
         self._runs_dirty = False
@@ -229,8 +242,12 @@ class Hdf5Reader(StoreReader):
         super().__init__(path, decode_attrs(self._file.attrs))
         self._tiles = plan_tiles(self.job)
 
+    @property
+    def journaled(self) -> dict[int, dict[str, np.ndarray]]:
+        return dict(self._journal)
+
     def _done(self) -> np.ndarray:
-        done = self._file["done"][:]
+        done = self._file["done"][:].astype(bool)  # int8 from format 2 on
         done[list(self._journal)] = True
         return done
 

@@ -9,40 +9,47 @@ with a neighbour's.
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
 from importlib import metadata
 
 import numpy as np
 
 from ... import __version__
-from ...errors import StoreMismatch
-from ..arrays import array_names, array_spec
+from ...errors import StoreError, StoreMismatch
+from ..arrays import COMPONENTS, PARTS, TAIL_DIMS, array_names, array_spec
 from ..job import Job
 from ..plan import Tile, plan_tiles
+from ._cf import cell_attrs, coordinate_attrs, done_attrs, global_attrs, history
 
-FORMAT = 1  # bumped when the layout changes in a way old readers cannot follow
-
-# Names of the trailing dimensions of arrays with per-cell vectors.
-TAIL_DIMS = {
-    "state": ("var",),  # (y, ẏ)
-    "sections": ("section_point", "var"),
-    "multipliers": ("multiplier", "part"),  # (re, im) of each Floquet multiplier
-}
+# Bumped when the layout changes in a way old readers cannot follow. 1: no CF
+# metadata, tail dimension "var" unlabelled, ``done`` bool, Zarr attributes as
+# nested JSON. 2: CF-1.10 attributes, every dimension a coordinate, ``done`` int8,
+# the HDF5 file a netCDF-4 file, attributes job/versions/runs JSON text in both.
+FORMAT = 2
+READABLE_FORMATS = (1, 2)  # read_store reads these; only FORMAT is resumed
+JSON_ATTRS = ("job", "versions", "runs")  # nested: JSON text (netCDF attributes cannot nest)
 
 DEPENDENCIES = ("numpy", "numba", "zarr", "h5py", "mpi4py", "pydantic")
 
 
 @dataclass(frozen=True)
 class ArraySchema:
+    """One variable of the store; ``values`` for coordinates, written at creation."""
+
     name: str
-    dtype: np.dtype
+    dtype: np.dtype  # kind "U": text (a variable-length string in the store)
     shape: tuple[int, ...]
     chunks: tuple[int, ...]
     dims: tuple[str, ...]
+    fill: object = None  # the value of elements never written
+    attrs: dict = field(default_factory=dict, compare=False)
+    values: np.ndarray | None = field(default=None, compare=False)
 
     @property
-    def fill(self):
-        return fill_value(self.dtype)
+    def is_dimension(self) -> bool:
+        """A coordinate variable: the labels of its own dimension (a dimension scale)."""
+        return self.dims == (self.name,)
 
 
 def fill_value(dtype: np.dtype):
@@ -56,27 +63,63 @@ def fill_value(dtype: np.dtype):
 
 
 def cell_arrays(job: Job) -> list[ArraySchema]:
-    """Per-cell arrays of a job, in ``tile.array_names`` order."""
+    """Per-cell arrays of a job, in ``arrays.array_names`` order."""
     n_second, n_omega = job.shape
     arrays = []
     for name in array_names(job):
         dtype, tail = array_spec(job, name)
-        dims = (job.second, "omega", *TAIL_DIMS.get(name, ())[: len(tail)])
+        fill = fill_value(dtype)
         arrays.append(
             ArraySchema(
-                name, dtype, (n_second, n_omega, *tail), (job.tiles.rows, n_omega, *tail), dims
+                name, dtype, (n_second, n_omega, *tail), (job.tiles.rows, n_omega, *tail),
+                (job.second, "omega", *TAIL_DIMS.get(name, ())), fill,
+                cell_attrs(job, name, dtype, fill),
             )
-        )
+        )  # fmt: skip
     return arrays
 
 
 def done_array(job: Job) -> ArraySchema:
-    n_tiles = len(plan_tiles(job))
-    return ArraySchema("done", np.dtype(bool), (n_tiles,), (1,), ("tile",))
+    """The commit flag per tile: int8 (netCDF has no bool), 0 pending, 1 committed."""
+    n_tiles, dtype = len(plan_tiles(job)), np.dtype(np.int8)
+    return ArraySchema("done", dtype, (n_tiles,), (1,), ("tile",), 0, done_attrs(dtype))
 
 
 def coordinates(job: Job) -> dict[str, np.ndarray]:
     return {"omega": job.omega, job.second: job.second_values}
+
+
+def coordinate_arrays(job: Job) -> list[ArraySchema]:
+    """Coordinates: one per dimension, the tiles' row ranges, the fixed parameters (scalars)."""
+    sizes = {d: n for a in cell_arrays(job) for d, n in zip(a.dims, a.shape, strict=True)}
+    tiles = plan_tiles(job)
+    labels = {
+        job.second: job.second_values,
+        "omega": job.omega,
+        "component": np.array(COMPONENTS),
+        "section_point": np.arange(sizes.get("section_point", 0), dtype=np.int32),
+        "multiplier": np.arange(sizes.get("multiplier", 0), dtype=np.int32),
+        "part": np.array(PARTS),
+        "tile": np.arange(len(tiles), dtype=np.int32),
+    }
+    values = {name: (v, (name,)) for name, v in labels.items() if name in sizes or name == "tile"}
+    for end in ("start", "stop"):
+        rows = np.array([getattr(t, f"row_{end}") for t in tiles], np.int32)
+        values[f"tile_row_{end}"] = (rows, ("tile",))
+    for name in sorted(job.fixed):
+        values[name] = (np.array(job.fixed[name], np.float64), ())
+    arrays = []
+    for name, (v, dims) in values.items():
+        if dims == (name,) and name in sizes and sizes[name] != v.size:
+            raise ValueError(f"{name}: {v.size} labels for a dimension of {sizes[name]}")
+        attrs = coordinate_attrs(job, name)
+        arrays.append(ArraySchema(name, v.dtype, v.shape, v.shape, dims, None, attrs, v))
+    return arrays
+
+
+def store_arrays(job: Job) -> list[ArraySchema]:
+    """Every variable of the store, in the order they are created."""
+    return [*coordinate_arrays(job), *cell_arrays(job), done_array(job)]
 
 
 def versions() -> dict[str, str]:
@@ -91,14 +134,68 @@ def versions() -> dict[str, str]:
     return found
 
 
+def utc_now() -> str:
+    return datetime.now(UTC).isoformat(timespec="seconds")
+
+
 def initial_attrs(job: Job) -> dict:
+    """The attributes of a new store, as stored (nested ones as JSON text)."""
     return {
+        **global_attrs(job, utc_now()),
         "campar_store": FORMAT,
-        "job": job.to_dict(),
+        "job": json.dumps(job.to_dict()),
         "job_hash": job.digest(),
-        "versions": versions(),
-        "runs": [],
+        "versions": json.dumps(versions()),
+        "runs": "[]",
     }
+
+
+def upgraded_attrs(job: Job, attrs: dict) -> dict:
+    """A readable older store's attributes (decoded) as the current format states them:
+    its format, job, versions and run log kept; created when its first run started."""
+    runs = attrs.get("runs", [])
+    created = runs[0].get("start", "unknown") if runs else "unknown"
+    version = attrs.get("versions", {}).get("campar", "unknown")
+    return {
+        **global_attrs(job, created),
+        "campar_version": version,
+        "campar_store": attrs.get("campar_store"),
+        "job": json.dumps(attrs["job"]),
+        "job_hash": attrs.get("job_hash"),
+        "versions": json.dumps(attrs.get("versions", {})),
+        **run_attrs(job, {"date_created": created, "campar_version": version}, runs),
+    }
+
+
+def run_attrs(job: Job, attrs: dict, runs: list[dict]) -> dict:
+    """The attributes a new run log changes: ``runs`` and the CF ``history`` from it."""
+    created, version = attrs.get("date_created", "?"), attrs.get("campar_version", "?")
+    return {"runs": json.dumps(runs), "history": history(job, created, version, runs)}
+
+
+def decode_attrs(raw) -> dict:
+    """A store's attributes as Python values: JSON text parsed, numpy scalars unwrapped."""
+    attrs = {}
+    for key, value in raw.items():
+        if isinstance(value, bytes):
+            value = value.decode()
+        elif isinstance(value, np.generic):
+            value = value.item()
+        if key in JSON_ATTRS and isinstance(value, str):  # format 1 Zarr: already nested
+            value = json.loads(value)
+        attrs[key] = value
+    return attrs
+
+
+def check_readable(path, attrs: dict) -> None:
+    """Raise StoreError unless this campar can read the store's format."""
+    found = attrs.get("campar_store")
+    if found not in READABLE_FORMATS:
+        raise StoreError(
+            f"{path} has store format {found!r}, this campar reads formats "
+            f"{', '.join(map(str, READABLE_FORMATS))}: it was written by a newer campar; "
+            "upgrade campar to read it"
+        )
 
 
 def check_tile_arrays(job: Job, tile: Tile, arrays: dict[str, np.ndarray]) -> None:
@@ -161,11 +258,13 @@ def _show(value) -> str:
 
 
 def check_same_job(path, attrs: dict, job: Job) -> None:
-    """Raise StoreMismatch unless the store at ``path`` was made by ``job``."""
-    if attrs.get("campar_store") != FORMAT:
+    """Raise StoreMismatch unless the store at ``path`` was made by ``job`` in this format."""
+    found = attrs.get("campar_store")
+    if found != FORMAT:
         raise StoreMismatch(
-            f"{path} has store format {attrs.get('campar_store')!r}, this campar writes "
-            f"{FORMAT}; use --overwrite to recompute it, or another --store path"
+            f"{path} has store format {found!r}; this campar writes format {FORMAT} and "
+            "resumes only that: run the job into another --store path (this one is left as "
+            "it is), or use --overwrite to recompute it in place"
         )
     if attrs.get("job_hash") == job.digest():
         return

@@ -1,0 +1,161 @@
+"""The store in the ecosystem's own language: CF-1.10 attributes of every variable and the file.
+
+Numbers carry ``long_name``, ``units`` ("1": the model is dimensionless) and a
+``comment`` naming the scaling; codes carry ``flag_values``/``flag_masks`` and
+``flag_meanings`` taken from ``campar.core.codes`` (cf_xarray decodes them);
+uncomputed cells are ``_FillValue``. The global attributes name the model, its
+force law, how chains start and run, the job and the software (``Conventions``,
+``title``, ``source``, ``history``, ``comment``), besides campar's own ``job``,
+``job_hash``, ``versions``, ``runs`` and ``campar_store``.
+"""
+
+import numpy as np
+
+from ... import __version__
+from ...core.codes import KIND_NAMES, STATUS_MESSAGES, Flag, Status
+from ..arrays import ARRAY_DOCS
+from ..job import Job
+
+CONVENTIONS = "CF-1.10"
+
+# The model's parameters (docs/model.md): what each is, and its scaling.
+PARAMETER_DOCS = {
+    "omega": (
+        "cam angular speed",
+        "cam angular speed / natural frequency ωn; the cam angle is θ = ω t with t in "
+        "units of 1/ωn; the continuation axis of every chain",
+    ),
+    "f0": ("preload", "preload / (K1 h), the paper's pressure"),
+    "mu_kn": ("contact stiffness parameter", "contact stiffness k = μkn / (1 − μkn)"),
+    "mu_cn": ("contact damping parameter", "contact damping c = 2 ζ μcn / (1 − μcn)"),
+    "zeta": ("spring damping ratio", "ζ in y'' + 2 ζ y' + y = Pn − f0"),
+}
+
+SCALING = (
+    "dimensionless model (campar docs/model.md): y'' + 2 ζ y' + y = Pn − f0 with lengths in "
+    "units of the stroke h, time t in units of 1/ωn (ωn the natural frequency), forces in "
+    "units of K1 h; the cam angle is θ = ω t"
+)
+FORCE_LAWS = {
+    "clamp": "Hunt–Crossley Pn = max(0, k ε^1.5 (1 + c ε')): contact cannot pull",
+    "allow": "Hunt–Crossley Pn = k ε^1.5 (1 + c ε') for ε > 0, as printed in the paper",
+}
+
+
+def words(name: str) -> str:
+    """A CF flag meaning: one word of letters, digits, '_', '-', '.', '+', '@'."""
+    return name.lower().replace(" ", "_")
+
+
+def flag_attrs(name: str, dtype: np.dtype) -> dict:
+    """flag_values/flag_masks and flag_meanings of a code array (typed as the array)."""
+    if name == "kind":
+        codes = {int(k): words(text) for k, text in KIND_NAMES.items()}
+    elif name == "status":
+        codes = {int(s): words(s.name) for s in Status}
+    elif name == "flags":
+        masks = [f for f in Flag if f.value]
+        return {
+            "flag_masks": np.array([f.value for f in masks], dtype),
+            "flag_meanings": " ".join(words(f.name) for f in masks),
+        }
+    elif name == "done":
+        codes = {0: "pending", 1: "committed"}
+    else:
+        return {}
+    return {
+        "flag_values": np.array(list(codes), dtype),
+        "flag_meanings": " ".join(codes.values()),
+    }
+
+
+def cell_attrs(job: Job, name: str, dtype: np.dtype, fill) -> dict:
+    """CF attributes of a per-cell array (``_FillValue``: the value of uncomputed cells)."""
+    long_name, units, comment = ARRAY_DOCS[name]
+    attrs = {"long_name": long_name}
+    if units is not None:
+        attrs["units"] = units
+    attrs["comment"] = comment
+    if name == "status":
+        attrs["comment"] += "; " + "; ".join(
+            f"{words(s.name)}: {text}" for s, text in STATUS_MESSAGES.items() if s
+        )
+    attrs.update(flag_attrs(name, dtype))
+    attrs["_FillValue"] = fill
+    attrs["coordinates"] = " ".join(sorted(job.fixed))  # the fixed parameters, as scalars
+    return attrs
+
+
+def coordinate_attrs(job: Job, name: str) -> dict:
+    """CF attributes of a coordinate: a model parameter, or a label along a dimension."""
+    if name in PARAMETER_DOCS:
+        long_name, comment = PARAMETER_DOCS[name]
+        return {"long_name": long_name, "units": "1", "comment": comment}
+    rows = f"index along {job.second}, the second axis"
+    return {
+        "component": {"long_name": "state component", "comment": "y: displacement, ydot: velocity"},
+        "part": {"long_name": "part of a complex number"},
+        "multiplier": {"long_name": "Floquet multiplier", "comment": "by modulus, largest first"},
+        "section_point": {"long_name": "section point", "comment": "in revolution order"},
+        "tile": {
+            "long_name": "tile",
+            "comment": f"tiles.rows = {job.tiles.rows} consecutive chains: a unit of work, "
+            "of storage (one chunk of every array) and of commit (done)",
+        },
+        "tile_row_start": {"long_name": "first chain of the tile", "comment": rows},
+        "tile_row_stop": {"long_name": "one past the last chain of the tile", "comment": rows},
+    }[name]
+
+
+def done_attrs(dtype: np.dtype) -> dict:
+    return {
+        "long_name": "tile committed",
+        "comment": "set only after the tile's arrays are in the store (a resumed run "
+        "computes the pending tiles)",
+        **flag_attrs("done", dtype),
+        "coordinates": "tile_row_start tile_row_stop",
+    }
+
+
+def sweep_direction(job: Job) -> str:
+    """Which way every chain runs in ω (the job's order): down (decreasing) or up."""
+    axis = job.sweep["omega"]
+    return "down" if axis.start >= axis.stop else "up"
+
+
+def global_attrs(job: Job, created: str) -> dict:
+    """The file's CF and campar attributes, besides campar's own (job, runs, …)."""
+    start = job.initial
+    return {
+        "Conventions": CONVENTIONS,
+        "title": f"campar map {job.name}: steady motions over (omega, {job.second})",
+        "source": f"campar {__version__}: cam–follower impact oscillator, "
+        f"{job.integrator.method} integrator (rtol {job.integrator.rtol:g}, "
+        f"atol {job.integrator.atol:g}), {job.transient.mode} transient",
+        "history": history(job, created, __version__, []),
+        "comment": SCALING,
+        "model": "cam–follower impact oscillator: flat-faced follower on a cosine-acceleration "
+        "cam, one degree of freedom, nonlinear (Hunt–Crossley) contact",
+        "force_law": FORCE_LAWS[job.model.tensile],
+        "tensile": job.model.tensile,
+        "chain_start": "rest",
+        "chain_start_state": f"y = {start.y:g}, ydot = {start.v:g} at θ = 0",
+        "sweep_direction": sweep_direction(job),
+        "campar_version": __version__,
+        "date_created": created,
+    }
+
+
+def history_line(when: str, version: str, what: str) -> str:
+    return f"{when} campar {version}: {what}"
+
+
+def history(job: Job, created: str, version: str, runs: list[dict]) -> str:
+    """CF history: when and by which campar the store was created, then one line per run."""
+    lines = [history_line(created, version, f"created for job {job.name}")]
+    for run in runs:
+        what = f"run {run.get('outcome', '?')}, {run.get('tiles', '?')} tiles"
+        if "ranks" in run:
+            what += f" on {run['ranks']} rank" + ("s" if run["ranks"] != 1 else "")
+        lines.append(history_line(run.get("end", "?"), run.get("campar", "?"), what))
+    return "\n".join(lines)
