@@ -46,21 +46,57 @@ def main(argv=None) -> int:
 # (each block: one ``@subcommand`` function; keep the logic in its own module)
 
 
+# What the model parameters are, for help texts (their defaults: the paper's base values).
+PARAMETER_HELP = {
+    "f0": "preload",
+    "mu_kn": "contact stiffness ratio",
+    "mu_cn": "contact damping ratio",
+    "zeta": "spring damping ratio",
+}
+
+
+def add_model_arguments(p, *, several: bool = False) -> None:
+    """--f0 … --zeta (default: the paper's base values; ``several``: each takes a list),
+    --tensile, --transient and --revolutions, with the job model's defaults."""
+    from .sweep.job import DEFAULT_TRANSIENT, PAPER_VALUES, TransientSettings, field_choices
+
+    for name, value in PAPER_VALUES.items():
+        flag = f"--{name.replace('_', '-')}"
+        if several:
+            text = f"{PARAMETER_HELP[name]} ({value:g}; several values: a line each)"
+            p.add_argument(flag, type=float, nargs="+", default=[value], help=text)
+        else:
+            text = f"{PARAMETER_HELP[name]} ({value:g})"
+            p.add_argument(flag, type=float, default=value, help=text)
+    add_tensile_argument(p)
+    mode, budget = DEFAULT_TRANSIENT.mode, DEFAULT_TRANSIENT.max_revolutions
+    p.add_argument("--transient", choices=field_choices(TransientSettings, "mode"), default=mode,
+                   help=f"converged: until it settles; fixed: as the paper ({mode})")  # fmt: skip
+    p.add_argument("--revolutions", type=int, default=budget,
+                   help=f"transient budget / length ({budget})")  # fmt: skip
+
+
+def add_tensile_argument(p) -> None:
+    from .sweep.job import DEFAULT_MODEL, ModelSettings, field_choices
+
+    law = DEFAULT_MODEL.tensile
+    p.add_argument("--tensile", choices=field_choices(ModelSettings, "tensile"), default=law,
+                   help=f"clamp: no tensile force; allow: the paper's formula ({law})")  # fmt: skip
+
+
 @subcommand
 def add_point(sub):
+    from .sweep.job import DEFAULT_INITIAL, DEFAULT_INTEGRATOR, IntegratorSettings, field_choices
+
     p = sub.add_parser("point", help="simulate one cell and classify its steady motion")
     p.add_argument("--omega", type=float, required=True, help="cam speed / natural frequency")
-    p.add_argument("--f0", type=float, default=0.5, help="preload (default 0.5)")
-    p.add_argument("--mu-kn", type=float, default=0.8, help="contact stiffness ratio (0.8)")
-    p.add_argument("--mu-cn", type=float, default=0.8, help="contact damping ratio (0.8)")
-    p.add_argument("--zeta", type=float, default=0.2, help="spring damping ratio (0.2)")
-    p.add_argument("--tensile", choices=("clamp", "allow"), default="clamp")
-    p.add_argument("--y0", type=float, default=0.0, help="initial y at θ = 0")
-    p.add_argument("--v0", type=float, default=0.0, help="initial y' at θ = 0")
-    p.add_argument("--transient", choices=("converged", "fixed"), default="converged")
-    p.add_argument("--revolutions", type=int, default=500, help="transient budget / length")
-    p.add_argument("--rtol", type=float, default=1e-8)
-    p.add_argument("--method", choices=("dp54", "rk4"), default="dp54")
+    add_model_arguments(p)
+    p.add_argument("--y0", type=float, default=DEFAULT_INITIAL.y, help="initial y at θ = 0")
+    p.add_argument("--v0", type=float, default=DEFAULT_INITIAL.v, help="initial y' at θ = 0")
+    rtol, method = DEFAULT_INTEGRATOR.rtol, DEFAULT_INTEGRATOR.method
+    p.add_argument("--rtol", type=float, default=rtol, help=f"integrator rtol ({rtol:g})")
+    p.add_argument("--method", choices=field_choices(IntegratorSettings, "method"),
+                   default=method, help=f"integrator ({method})")  # fmt: skip
     p.add_argument("--multipliers", action="store_true", help="Floquet multipliers")
     p.add_argument("--lyapunov", action="store_true", help="largest Lyapunov exponent")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -195,6 +231,7 @@ def add_bench(sub):
 
 @subcommand
 def add_line(sub):
+    from .views.line import DEFAULT_SECTIONS  # cheap: numba loads only to compute
     from .views.plot import parse_range  # cheap: matplotlib loads only to draw
 
     p = sub.add_parser("line", help="bifurcation diagram: σn points y and detachments p "
@@ -207,22 +244,9 @@ def add_line(sub):
         help="ω range; computed from the larger value down (the paper's direction)",
     )
     p.add_argument("--points", type=int, default=2000, help="ω values (2000)")
-    p.add_argument("--f0", type=float, nargs="+", default=[0.5], help="preload (0.5)")
-    p.add_argument(
-        "--mu-kn",
-        type=float,
-        nargs="+",
-        default=[0.8],
-        help="contact stiffness ratio (0.8); several values draw several lines",
-    )
-    p.add_argument("--mu-cn", type=float, nargs="+", default=[0.8], help="contact damping (0.8)")
-    p.add_argument("--zeta", type=float, nargs="+", default=[0.2], help="damping ratio (0.2)")
-    p.add_argument("--tensile", choices=("clamp", "allow"), default="clamp")
-    p.add_argument(
-        "--sections", type=int, default=64, help="σn points kept per non-periodic cell (64)"
-    )
-    p.add_argument("--transient", choices=("converged", "fixed"), default="converged")
-    p.add_argument("--revolutions", type=int, default=500, help="transient budget / length")
+    add_model_arguments(p, several=True)
+    p.add_argument("--sections", type=int, default=DEFAULT_SECTIONS,
+                   help=f"σn points kept per non-periodic cell ({DEFAULT_SECTIONS})")  # fmt: skip
     p.add_argument(
         "-o",
         "--output",
@@ -269,7 +293,7 @@ def run_line(args) -> int:
 def add_gallery(sub):
     p = sub.add_parser("gallery", help="compute and draw the paper's whole figure set")
     p.add_argument("outdir", help="directory for the PNGs, their job files and index.md")
-    p.add_argument("--tensile", choices=("clamp", "allow"), default="clamp")
+    add_tensile_argument(p)
     add_plane_arguments(p)
     p.set_defaults(handler=run_gallery)
 

@@ -24,8 +24,9 @@ def campar_orbit(omega, f0, mu_kn, mu_cn, clamp, x0, revolutions, rtol, method="
                  rk4_steps=600):  # fmt: skip
     """Final state and events of campar's integration of whole revolutions from x0."""
     job = point_job(
-        omega, f0, mu_kn, mu_cn, 0.2, "clamp" if clamp else "allow", x0[0], x0[1],
-        "converged", 500, rtol, rtol * 1e-2, method, ["label"],
+        omega=omega, f0=f0, mu_kn=mu_kn, mu_cn=mu_cn, zeta=0.2,
+        tensile="clamp" if clamp else "allow", y0=x0[0], v0=x0[1], rtol=rtol,
+        atol=rtol * 1e-2, method=method, outputs=["label"],
     )  # fmt: skip
     settings = cell_settings(job)._replace(rk4_steps=rk4_steps)
     rec = make_trace(1, 1000, 1)  # one sample slot: recording on, so events are kept

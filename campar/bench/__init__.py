@@ -6,9 +6,10 @@ only when its benchmark runs, so building the ``campar`` parser stays cheap;
 it defines ``run(args) -> int``, prints a table and states the machine load.
 
 For developers — a new ``campar bench NAME``: write ``campar/bench/NAME.py``
-with ``run(args)`` and register its arguments below::
+with ``run(args)`` and register its arguments below (``needs``: packages beyond
+campar's own dependencies, checked before the benchmark starts)::
 
-    @benchmark("NAME", "one line of help")
+    @benchmark("NAME", "one line of help", needs=("scipy",))
     def _name_arguments(p):
         p.add_argument("--size", type=int, default=20)
 """
@@ -18,23 +19,33 @@ import importlib
 from collections.abc import Callable
 from typing import NamedTuple
 
+from ..errors import CamparError
+
+# The extra that installs what the benchmarks need besides campar (SciPy).
+BENCH_EXTRA = "pip install -e '.[bench]'"
+
+
+class MissingPackage(CamparError):
+    """A benchmark needs a package that is not installed."""
+
 
 class Benchmark(NamedTuple):
     name: str
     help: str
     module: str  # campar.bench.<module> defines run(args) -> int
     add_arguments: Callable[[argparse.ArgumentParser], None]
+    needs: tuple[str, ...]  # importable packages it needs beyond campar's dependencies
 
 
 # Registered benchmarks, in the order ``campar bench --help`` lists them.
 BENCHMARKS: dict[str, Benchmark] = {}
 
 
-def benchmark(name: str, help: str, module: str | None = None):
+def benchmark(name: str, help: str, module: str | None = None, needs: tuple[str, ...] = ()):
     """Register ``campar bench NAME``; decorates the function that adds its arguments."""
 
     def register(add_arguments):
-        BENCHMARKS[name] = Benchmark(name, help, module or name, add_arguments)
+        BENCHMARKS[name] = Benchmark(name, help, module or name, add_arguments, needs)
         return add_arguments
 
     return register
@@ -51,8 +62,21 @@ def add_parser(sub) -> None:
 
 
 def run_benchmark(args) -> int:
-    module = importlib.import_module(f"{__name__}.{BENCHMARKS[args.benchmark].module}")
+    bench = BENCHMARKS[args.benchmark]
+    check_packages(bench)
+    module = importlib.import_module(f"{__name__}.{bench.module}")
     return int(module.run(args) or 0)
+
+
+def check_packages(bench: Benchmark) -> None:
+    """MissingPackage, naming the extra to install, if a package the benchmark needs is absent."""
+    for package in bench.needs:
+        try:
+            importlib.import_module(package)
+        except ImportError:
+            raise MissingPackage(
+                f"benchmark {bench.name} needs {package}, which is not installed: {BENCH_EXTRA}"
+            ) from None
 
 
 def floats(text: str) -> list[float]:
@@ -71,7 +95,8 @@ def names(text: str) -> list[str]:
 # -- the benchmarks ----------------------------------------------------------
 
 
-@benchmark("precision", "wall time and steps against error: DP5(4) tolerances, RK4 steps")
+@benchmark("precision", "wall time and steps against error: DP5(4) tolerances, RK4 steps",
+           needs=("scipy",))  # fmt: skip
 def _precision_arguments(p):
     p.add_argument("--cells", type=names, help="comma-separated cell names (default: all)")
     p.add_argument("--rtols", type=floats, help="DP5(4) rtols (default 1e-4 … 1e-12)")
@@ -85,15 +110,23 @@ def _precision_arguments(p):
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
-@benchmark("peers", "campar against SciPy DOP853 and the paper's RK4 recipe at equal agreement")
+@benchmark("peers", "campar against SciPy DOP853 and the paper's RK4 recipe at equal agreement",
+           needs=("scipy",))  # fmt: skip
 def _peers_arguments(p):
+    from ..sweep.job import DEFAULT_CLASSIFY, DEFAULT_INTEGRATOR, DEFAULT_TRANSIENT
+
+    revolutions = DEFAULT_TRANSIENT.max_revolutions
+    window = DEFAULT_CLASSIFY.window_revolutions
+    rtol = DEFAULT_INTEGRATOR.rtol
     p.add_argument("--cells", type=names, help="comma-separated cell names (default: all)")
-    p.add_argument("--revolutions", type=int, default=500,
-                   help="transient of the paper's recipe and the SciPy script (500)")  # fmt: skip
-    p.add_argument("--window", type=int, default=64, help="read window, revolutions (64)")
+    p.add_argument("--revolutions", type=int, default=revolutions,
+                   help=f"transient of the RK4 recipe and of SciPy ({revolutions})")  # fmt: skip
+    p.add_argument("--window", type=int, default=window,
+                   help=f"read window, revolutions ({window})")  # fmt: skip
     p.add_argument("--scipy-cells", type=int, default=-1,
                    help="run SciPy on the first N cells only (default: all)")  # fmt: skip
-    p.add_argument("--scipy-rtol", type=float, default=1e-8, help="SciPy rtol (1e-8; atol /100)")
+    p.add_argument("--scipy-rtol", type=float, default=rtol,
+                   help=f"SciPy rtol (campar's, {rtol:g}; atol /100)")  # fmt: skip
     p.add_argument("--min-seconds", type=float, default=0.3,
                    help="repeat each campar timing at least this long")  # fmt: skip
     p.add_argument(
@@ -112,7 +145,8 @@ def _outputs_arguments(p):
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
-@benchmark("stress", "extreme parameters and states: no crash, no hang, valid or failed")
+@benchmark("stress", "extreme parameters and states: no crash, no hang, valid or failed",
+           needs=("scipy",))  # fmt: skip
 def _stress_arguments(p):
     p.add_argument("--budget", type=int, default=1_000_000, help="step budget per cell (1e6)")
     p.add_argument("--timeout", type=float, default=120.0,

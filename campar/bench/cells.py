@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from ..sweep.job import Job
+from ..sweep.job import PAPER_VALUES, Job
 from ..sweep.plan import plan_tiles
 from ..sweep.tile import run_tile
 from ..views.point import simulate_point
@@ -57,7 +57,6 @@ def row_job(mu_cn: float, points: int, rtol: float) -> Job:
                 "omega": {"from": 6.0, "to": 0.02, "points": points},
                 "mu_cn": {"from": mu_cn, "to": mu_cn, "points": 1},
             },
-            "fixed": {"zeta": 0.2, "mu_kn": 0.8, "f0": 0.5},
             "integrator": {"rtol": rtol},
             "outputs": ["label", "dc", "eps", "pn"],
         },
@@ -110,7 +109,8 @@ def run(args) -> int:
         settings.update(QUICK)
     print(machine_line())
     rtol = settings["rtol"]
-    print(f"\nOne cell (μcn 0.8, μkn 0.8, f0 0.5, ζ 0.2) at rtol {rtol:g}; CPU ms, fastest run;"
+    base = ", ".join(f"{name} {value:g}" for name, value in PAPER_VALUES.items())
+    print(f"\nOne cell ({base}) at rtol {rtol:g}; CPU ms, fastest run;"
           f" warm = from the steady state at ω + {DELTA_OMEGA:.4f}\n")  # fmt: skip
     cells = cell_costs(settings["omegas"], rtol, args.min_seconds)
     headers = ["ω", "label", "cold ms", "cold revs", "warm ms", "warm revs", "warm steps"]

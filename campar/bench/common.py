@@ -1,4 +1,4 @@
-"""What every benchmark shares: cells, timing, machine load, tables, fits, figures.
+"""What every benchmark shares: cells, timing, machine load, tables, fits.
 
 Every timing is taken twice: wall-clock seconds (``time.perf_counter``) and
 the CPU seconds of this process (``time.process_time``), which other
@@ -19,18 +19,21 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..sweep.job import DEFAULT_MODEL, PAPER_VALUES
+
 
 @dataclass(frozen=True)
 class Cell:
-    """One grid cell: the model parameters (MODEL.md) and a short name for tables."""
+    """One grid cell: the model parameters (docs/model.md) and a short name for tables;
+    those not given take the paper's base values."""
 
     name: str
     omega: float
-    f0: float = 0.5
-    mu_kn: float = 0.8
-    mu_cn: float = 0.8
-    zeta: float = 0.2
-    tensile: str = "clamp"
+    f0: float = PAPER_VALUES["f0"]
+    mu_kn: float = PAPER_VALUES["mu_kn"]
+    mu_cn: float = PAPER_VALUES["mu_cn"]
+    zeta: float = PAPER_VALUES["zeta"]
+    tensile: str = DEFAULT_MODEL.tensile
 
     @property
     def parameters(self) -> dict:
@@ -96,14 +99,15 @@ def machine_line() -> str:
 
 def format_table(headers: list[str], rows: list[list]) -> str:
     """A plain-text table with right-aligned columns (numbers) and a rule under the header."""
-    cells = [[str(h) for h in headers]] + [[fmt(v) for v in row] for row in rows]
+    cells = [[str(h) for h in headers]] + [[cell_text(v) for v in row] for row in rows]
     widths = [max(len(r[j]) for r in cells) for j in range(len(headers))]
     lines = ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in cells]
     lines.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(lines)
 
 
-def fmt(value) -> str:
+def cell_text(value) -> str:
+    """A table cell: floats to 4 significant digits (NaN "—"), anything else as str()."""
     if isinstance(value, float):
         if math.isnan(value):
             return "—"
@@ -121,14 +125,3 @@ def loglog_slope(x, y) -> float:
     if keep.sum() < 2:
         return math.nan
     return float(np.polyfit(np.log(x[keep]), np.log(y[keep]), 1)[0])
-
-
-def new_figure(nrows: int, ncols: int, width: float, height: float):
-    """A matplotlib Figure drawn by the Agg canvas (no pyplot, no display)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(width, height), layout="constrained")
-    FigureCanvasAgg(fig)
-    fig.subplots(nrows, ncols, squeeze=False)
-    return fig

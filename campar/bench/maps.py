@@ -267,7 +267,7 @@ def run_reference(job: Job, path: Path, ranks: int) -> None:
     subprocess.run(command, check=True)
 
 
-def bench_map(planes, size, candidates, directory: Path, ranks: int, long_runs: bool, out,
+def bench_map(planes, size, candidates, directory: Path, *, ranks: int, long_runs: bool, out,
               audit: bool = False):  # fmt: skip
     """Run every candidate on every plane; print one table row per (plane, candidate),
     and with ``audit`` the audit of its doubled-period cells (audit_doubled_periods)."""
@@ -331,8 +331,8 @@ def run(args) -> int:
     with tempfile.TemporaryDirectory(prefix="campar-bench-map-") as tmp:
         directory = Path(tmp) if args.quick else Path(args.references)
         results = bench_map(
-            args.planes, args.size, candidates, directory, args.ranks,
-            not args.no_adjudication, sys.stdout, args.audit,
+            args.planes, args.size, candidates, directory, ranks=args.ranks,
+            long_runs=not args.no_adjudication, out=sys.stdout, audit=args.audit,
         )  # fmt: skip
     if args.list:
         for (plane, name), (c, _, _) in results.items():

@@ -20,7 +20,7 @@ Floquet/Lyapunov bookkeeping — small against the integration itself.
 
 import numpy as np
 
-from ..sweep.job import OUTPUT_NAMES, Job
+from ..sweep.job import DEFAULT_CLASSIFY, DEFAULT_TRANSIENT, OUTPUT_NAMES, Job
 from ..sweep.plan import plan_tiles
 from ..sweep.tile import run_tile
 from .common import Timing, format_table, machine_line, timed
@@ -29,7 +29,9 @@ QUICK = {"rows": 2, "omegas": 6, "repeat": 1, "min_seconds": 0.0}
 LABEL_ARRAYS = ("n", "p", "kind", "status")
 
 
-def make_job(rows: int, omegas: int, transient: str, outputs, revolutions=500, window=64) -> Job:
+def make_job(rows: int, omegas: int, transient: str, outputs,
+             revolutions=DEFAULT_TRANSIENT.max_revolutions,
+             window=DEFAULT_CLASSIFY.window_revolutions) -> Job:  # fmt: skip
     return Job.from_dict(
         {
             "name": "bench_outputs",
@@ -37,7 +39,6 @@ def make_job(rows: int, omegas: int, transient: str, outputs, revolutions=500, w
                 "omega": {"from": 6.0, "to": 0.02, "points": omegas},
                 "mu_cn": {"from": 0.99, "to": 0.50, "points": rows},
             },
-            "fixed": {"zeta": 0.2, "mu_kn": 0.8, "f0": 0.5},
             "transient": {"mode": transient, "max_revolutions": revolutions},
             "classify": {"window_revolutions": window},
             "outputs": list(outputs),
@@ -96,7 +97,9 @@ def measure(rows=20, omegas=40, repeat=4, min_seconds=2.0) -> list[dict]:
     return results
 
 
-def variational_cost(rows=20, omegas=40, revolutions=500) -> tuple[float, float]:
+def variational_cost(
+    rows=20, omegas=40, revolutions=DEFAULT_TRANSIENT.max_revolutions
+) -> tuple[float, float]:
     """CPU seconds of the fixed transient with every revolution plain (2 equations)
     and with every revolution variational (6): what converged mode pays for its
     Newton jumps, since it integrates the variational equations throughout."""
@@ -140,7 +143,8 @@ def run(args) -> int:
                "wall ratio", "same labels", "verdict"]  # fmt: skip
     print(format_table(headers, rows))
     print(
-        f"\nvariational equations (6 instead of 2): 500 fixed revolutions per cell, all plain "
+        f"\nvariational equations (6 instead of 2): {DEFAULT_TRANSIENT.max_revolutions} fixed "
+        f"revolutions per cell, all plain "
         f"{plain:.2f} CPU s, all variational {variational:.2f} CPU s (× {variational / plain:.2f})"
         "; converged mode integrates them in every revolution, for labels only too (kernel."
         "transient_converged), fixed mode in its read window only (kernel.transient_fixed)"

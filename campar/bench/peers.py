@@ -37,7 +37,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..core.codes import Kind, cell_label
-from ..sweep.job import Job
+from ..sweep.job import DEFAULT_CLASSIFY, DEFAULT_INTEGRATOR, DEFAULT_TRANSIENT, Job
 from ..sweep.plan import Tile
 from ..sweep.tile import run_tile
 from ..views.point import point_job
@@ -54,10 +54,10 @@ CELLS = (
     Cell("chaos ω4.5 μcn.97", 4.5, mu_cn=0.97),
 )
 # The map row: the grid of jobs/mu_cn.yaml (ω 6.0 → 0.02 and μcn 0.99 → 0.50, 400
-# points each), chain 155 (μcn ≈ 0.80), ω points 299 … 314 (ω ≈ 1.52 … 1.29):
-# 1-1, then 1-2 from ω ≈ 1.504, then 1-1 again from ω ≈ 1.294.
+# points each; the other parameters at the paper's base values), chain 155 (μcn ≈ 0.80),
+# ω points 299 … 314 (ω ≈ 1.52 … 1.29): 1-1, then 1-2 from ω ≈ 1.504, then 1-1 again
+# from ω ≈ 1.294.
 ROW_GRID = {"omega": (6.0, 0.02, 400), "mu_cn": (0.99, 0.50, 400)}
-ROW_FIXED = {"zeta": 0.2, "mu_kn": 0.8, "f0": 0.5}
 ROW_CHAIN = 155
 ROW_OMEGA = (299, 315)
 QUICK = {"cells": ["1-0 ω0.3", "1-2 ω1.2 f0.01"], "revolutions": 20, "window": 8,
@@ -96,10 +96,8 @@ def campar_outcomes(job: Job, min_seconds: float) -> tuple[list[Outcome], Timing
 
 def campar_outcome(cell: Cell, method: str, transient: str, revolutions: int, window: int,
                    min_seconds: float) -> Outcome:  # fmt: skip
-    job = point_job(
-        cell.omega, cell.f0, cell.mu_kn, cell.mu_cn, cell.zeta, cell.tensile, 0.0, 0.0,
-        transient, revolutions, 1e-8, 1e-10, method, OUTPUTS,
-    )  # fmt: skip
+    job = point_job(omega=cell.omega, **cell.parameters, transient=transient,
+                    revolutions=revolutions, method=method, outputs=OUTPUTS)  # fmt: skip
     return campar_outcomes(with_window(job, window), min_seconds)[0][0]
 
 
@@ -123,8 +121,9 @@ class PeerRow(NamedTuple):
     agree: bool
 
 
-def measure(cells=None, revolutions=500, window=64, scipy_cells=None, scipy_rtol=1e-8,
-            min_seconds=0.3) -> list[PeerRow]:  # fmt: skip
+def measure(cells=None, revolutions=DEFAULT_TRANSIENT.max_revolutions,
+            window=DEFAULT_CLASSIFY.window_revolutions, scipy_cells=None,
+            scipy_rtol=DEFAULT_INTEGRATOR.rtol, min_seconds=0.3) -> list[PeerRow]:  # fmt: skip
     """Every peer on every chosen cell; SciPy only on the first scipy_cells (None: all)."""
     chosen = [c for c in CELLS if cells is None or c.name in cells]
     rows = []
@@ -154,8 +153,7 @@ def row_job(first: int, stop: int, method: str, transient: str, revolutions: int
             },
             "mu_cn": {"from": mu_cn, "to": mu_cn, "points": 1},
         },
-        "fixed": ROW_FIXED,
-        "integrator": {"method": method, "rtol": 1e-8, "atol": 1e-10},
+        "integrator": {"method": method},
         "transient": {"mode": transient, "max_revolutions": revolutions},
         "outputs": OUTPUTS,
         "tiles": {"rows": 1},
@@ -174,7 +172,8 @@ class RowResult(NamedTuple):
     agree: list[bool]
 
 
-def measure_row(row_omega=ROW_OMEGA, revolutions=500, window=64, scipy_rtol=1e-8,
+def measure_row(row_omega=ROW_OMEGA, revolutions=DEFAULT_TRANSIENT.max_revolutions,
+                window=DEFAULT_CLASSIFY.window_revolutions, scipy_rtol=DEFAULT_INTEGRATOR.rtol,
                 min_seconds=0.3) -> RowResult:  # fmt: skip
     """The map row by every peer, each cell warm-started from the one before."""
     first, stop = row_omega
@@ -186,8 +185,7 @@ def measure_row(row_omega=ROW_OMEGA, revolutions=500, window=64, scipy_rtol=1e-8
     scipy = []
     x = np.zeros(2)
     for omega in job.omega:
-        cell = Cell("", float(omega), f0=ROW_FIXED["f0"], mu_kn=ROW_FIXED["mu_kn"], mu_cn=mu_cn,
-                    zeta=ROW_FIXED["zeta"])  # fmt: skip
+        cell = Cell("", float(omega), mu_cn=mu_cn)
         took, r = timed(partial(scipy_cell, cell.scipy_model(), x, revolutions, window,
                                 rtol=scipy_rtol))  # fmt: skip
         scipy.append(Outcome(r.label, r.n > 0, r.dc, revolutions + window, took.cpu, took.wall))

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..core.kernel import trace_orbit
 from ..core.revolution import make_trace
+from ..sweep.job import DEFAULT_INTEGRATOR
 from ..sweep.tile import cell_settings, solver_options
 from ..views.point import EVENT_NAMES, point_job, simulate_point
 from .common import (
@@ -38,7 +39,6 @@ from .common import (
     format_table,
     loglog_slope,
     machine_line,
-    new_figure,
     timed,
 )
 from .scipy_model import integrate
@@ -105,10 +105,9 @@ def event_error(events, ref_events) -> float:
 
 def campar_call(cell: Cell, x0, revolutions: int, method: str, rtol: float, rk4_steps: int):
     """A function f(rec) running trace_orbit once; rec = make_trace(0, 0, 1) records nothing."""
-    job = point_job(
-        cell.omega, cell.f0, cell.mu_kn, cell.mu_cn, cell.zeta, cell.tensile, x0[0], x0[1],
-        "fixed", 1, rtol, rtol * 1e-2, method, ["label"],
-    )  # fmt: skip
+    job = point_job(omega=cell.omega, **cell.parameters, y0=x0[0], v0=x0[1], transient="fixed",
+                    revolutions=1, rtol=rtol, atol=rtol * 1e-2, method=method,
+                    outputs=["label"])  # fmt: skip
     settings = cell_settings(job)._replace(rk4_steps=rk4_steps, max_steps=10**9)
     solver = solver_options(job)
     x = np.asarray(x0, float)
@@ -122,8 +121,10 @@ def campar_call(cell: Cell, x0, revolutions: int, method: str, rtol: float, rk4_
     return call
 
 
-def campar_run(cell, x0, revolutions, ref: Reference, method, setting, min_seconds) -> Run:
-    rtol, n = (setting, 600) if method == "dp54" else (1e-8, int(setting))
+def campar_run(cell, x0, revolutions, ref: Reference, *, method, setting, min_seconds) -> Run:
+    """One campar run: DP5(4) at rtol ``setting``, or RK4 at ``setting`` steps per revolution."""
+    default = DEFAULT_INTEGRATOR
+    rtol, n = (setting, default.rk4_steps) if method == "dp54" else (default.rtol, int(setting))
     call = campar_call(cell, x0, revolutions, method, rtol, n)
     # one sample row per revolution start and per accepted step: steps = rows − revolutions
     rec = make_trace(MAX_SAMPLES, 100_000, 1)
@@ -158,9 +159,11 @@ def measure(cells=None, rtols=RTOLS, rk4_steps=RK4_STEPS, scipy_rtols=SCIPY_RTOL
         x0 = start_state(cell)
         ref = refs[cell.name] = reference(cell, x0, revolutions, reference_rtol)
         for rtol in rtols:
-            runs.append(campar_run(cell, x0, revolutions, ref, "dp54", rtol, min_seconds))
+            runs.append(campar_run(cell, x0, revolutions, ref, method="dp54", setting=rtol,
+                                   min_seconds=min_seconds))  # fmt: skip
         for n in rk4_steps:
-            runs.append(campar_run(cell, x0, revolutions, ref, "rk4", n, min_seconds))
+            runs.append(campar_run(cell, x0, revolutions, ref, method="rk4", setting=n,
+                                   min_seconds=min_seconds))  # fmt: skip
         for rtol in scipy_rtols:
             runs.append(scipy_run(cell, x0, revolutions, ref, rtol))
     return runs, refs
@@ -235,9 +238,12 @@ def format_fits(fit_list: list[Fit]) -> str:
 def plot(runs: list[Run], refs: dict, fit_list: list[Fit], path: str) -> None:
     from matplotlib.ticker import NullFormatter
 
+    from ..views.plot.style import new_figure
+
     names = list(refs)
     slope = {(f.cell, f.what): f.slope for f in fit_list}
-    fig = new_figure(2, len(names), 4.2 * len(names), 7.5)
+    fig = new_figure(4.2 * len(names), 7.5)
+    fig.subplots(2, len(names), squeeze=False)
     axes = fig.axes
     styles = {"dp54": ("C0", "o-", "DP5(4)"), "rk4": ("C1", "s-", "RK4 fixed step"),
               "scipy": ("C2", "^", "SciPy DOP853")}  # fmt: skip

@@ -1,6 +1,6 @@
 """An independent implementation of the model with SciPy: the peer of tests and benchmarks.
 
-Written from MODEL.md without campar's code, and it must stay so (never import
+Written from docs/model.md without campar's code, and it must stay so (never import
 campar's model, integrator or kernel, or it stops being a check): solve_ivp
 (DOP853) integrates piecewise between cam phase boundaries and exact contact
 events (terminal events, restarted in the new contact mode), as the reference
@@ -95,7 +95,7 @@ def cam_in_phase(theta, theta_mid):
     return 0.0, 0.0, 0.0
 
 
-def integrate(model, x0, revolutions, rtol=1e-12, atol=1e-14, with_divergence=False,
+def integrate(model, x0, revolutions, *, rtol=1e-12, atol=1e-14, with_divergence=False,
               max_step=np.inf):  # fmt: skip
     """Integrate from (y, y') at θ = 0 over whole revolutions.
 

@@ -6,7 +6,7 @@ cam phase boundaries, exact contact events). The window gives the period n
 (smallest n ≤ n_max whose last n section points repeat the n before within
 period_tol, ∞-norm), the detachments p in the last n revolutions and the duty
 cycle DC (fraction of time with ε < 0) over them — the definitions of
-MODEL.md, computed without any of campar's code.
+docs/model.md, computed without any of campar's code.
 """
 
 import math
@@ -57,7 +57,7 @@ def period_of(sections: np.ndarray, n_max: int, tol: float) -> int:
     return 0
 
 
-def scipy_cell(model, x0, transient: int, window: int, rtol: float = 1e-8,
+def scipy_cell(model, x0, transient: int, window: int, *, rtol: float = 1e-8,
                atol: float | None = None, n_max: int = 32,
                period_tol: float = 1e-6) -> ScipyCell:  # fmt: skip
     """Classify one cell from (y, y') = x0 at θ = 0 (see the module docstring)."""

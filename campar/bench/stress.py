@@ -75,7 +75,7 @@ def grid_cells():
     ):
         name = (f"ω{omega:g} f0={f0:g} μkn={kn} μcn={cn} ζ={zeta:g} {tensile} "
                 f"y0,v0={start[0]:g},{start[1]:g}")  # fmt: skip
-        yield Cell(name, omega, f0, kn, cn, zeta, tensile), start
+        yield Cell(name, omega, f0=f0, mu_kn=kn, mu_cn=cn, zeta=zeta, tensile=tensile), start
 
 
 class Result(NamedTuple):
@@ -89,10 +89,8 @@ class Result(NamedTuple):
 
 def compute_cell(cell: Cell, start, rtol: float, budget: int) -> dict:
     """One cell through run_tile with a step budget: the outputs of the cell."""
-    job = point_job(
-        cell.omega, cell.f0, cell.mu_kn, cell.mu_cn, cell.zeta, cell.tensile, start[0], start[1],
-        "converged", 500, rtol, rtol * 1e-2, "dp54", ["label", "dc", "eps", "pn"],
-    )  # fmt: skip
+    job = point_job(omega=cell.omega, **cell.parameters, y0=start[0], v0=start[1], rtol=rtol,
+                    atol=rtol * 1e-2, outputs=["label", "dc", "eps", "pn"])  # fmt: skip
     job = job.model_copy(
         update={"integrator": job.integrator.model_copy(update={"max_steps": budget})}
     )

@@ -118,15 +118,15 @@ def newton_fixed_point(x_now0, x_now1, x_then0, x_then1, m):
 
 
 @hot
-def assess_revolution(xs, jac, est, k, base, n_max, conv_tol, window_tol, jump_r_max, jump_cap,
-                      agree):  # fmt: skip
+def assess_revolution(xs, jac, est, k, base, n_max, conv_tol, window_tol, jump_residual,
+                      jump_cap, agree):  # fmt: skip
     """Decide, after revolution k, whether the motion has converged to a cycle.
 
     Only revolutions after ``base`` (the last restart) are used. Returns
     (period, jump_period, z0, z1): period > 0 when the cycle of that period has
     converged; otherwise jump_period > 0 proposes a Newton jump to (z0, z1).
 
-    A jump is proposed where |x_k − x_{k−n}| ≤ jump_r_max and the estimate is
+    A jump is proposed where |x_k − x_{k−n}| ≤ jump_residual and the estimate is
     within jump_cap, or (agree > 0) where the estimate agrees with the one made
     n revolutions earlier to within ``agree`` times its distance and lies
     within TRUSTED_JUMP_MAX: then the section map is linear enough around the
@@ -145,7 +145,7 @@ def assess_revolution(xs, jac, est, k, base, n_max, conv_tol, window_tol, jump_r
         if n > 1:
             m = mat2_mul(m, jacobian_at(jac, k - n))
         r = max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1]))
-        near = r <= jump_r_max
+        near = r <= jump_residual
         if not (near or (agree > 0.0 and r <= TRUSTED_JUMP_MAX)):
             continue
         if not spectral_radius(m) < 1.0:

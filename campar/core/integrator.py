@@ -66,6 +66,7 @@ SAFETY = 0.9  # aim below the tolerance so the next step is likely accepted
 MIN_FACTOR = 0.2  # never shrink by more than 5× at once
 MAX_FACTOR = 10.0  # never grow by more than 10× at once
 PI_BETA = 0.04  # weight of the previous error; damps oscillation at the stability limit
+ERR_FLOOR = 1e-4  # the previous error the controller remembers: at least this (and at a start)
 ERROR_EXPONENT = 0.2 - 0.75 * PI_BETA
 MAX_REJECTS = 60  # consecutive rejections before the step is declared underflowed
 # A step that would leave less than this fraction of itself before t_end is stretched.
@@ -77,6 +78,15 @@ HERMITE_BOUND = 4.0 / 27.0
 DIP_MARGIN = 0.5
 GOLDEN = 0.6180339887498949
 DIP_ITER = 24
+
+# Slots of StepWork.ctrl, the step-control state one step hands to the next.
+CTRL_H = 0  # proposed size of the next step
+CTRL_ERR = 1  # error norm of the last accepted step (the PI controller's memory)
+CTRL_G1_T = 2  # time of the event values in g1, dg1 the next step may reuse (NaN: none)
+CTRL_G1_MODE0 = 3  # the mode (mode[0], mode[1]) they belong to
+CTRL_G1_MODE1 = 4
+CTRL_G1_M = 5  # how many event functions they hold
+N_CTRL = 6
 
 
 class SolverOptions(NamedTuple):
@@ -103,28 +113,66 @@ class StepWork(NamedTuple):
     dg1: np.ndarray
     g_tmp: np.ndarray
     dg_tmp: np.ndarray
-    ctrl: np.ndarray  # [proposed h, previous error norm, t, mode (2), count of g1]
+    ctrl: np.ndarray  # (N_CTRL,) step-control state, slots CTRL_*
     counts: np.ndarray  # [accepted steps, rejected steps, field evaluations]
 
 
 @compiled
 def make_work(n, max_events, h0):
     """Buffers for an n-dimensional state with up to max_events event functions."""
-    counts = np.zeros(3, dtype=np.int64)
-    ctrl = np.array([h0, 1e-4, np.nan, -1.0, -1.0, 0.0])
-    return StepWork(
-        np.zeros((N_STAGES, n)),
-        np.zeros(n),
-        np.zeros(n),
-        np.zeros(max_events),
-        np.zeros(max_events),
-        np.zeros(max_events),
-        np.zeros(max_events),
-        np.zeros(max_events),
-        np.zeros(max_events),
-        ctrl,
-        counts,
+    w = StepWork(
+        K=np.zeros((N_STAGES, n)),
+        y_new=np.zeros(n),
+        y_stage=np.zeros(n),
+        g0=np.zeros(max_events),
+        dg0=np.zeros(max_events),
+        g1=np.zeros(max_events),
+        dg1=np.zeros(max_events),
+        g_tmp=np.zeros(max_events),
+        dg_tmp=np.zeros(max_events),
+        ctrl=np.empty(N_CTRL),
+        counts=np.zeros(3, dtype=np.int64),
     )
+    restart_control(w, h0)
+    return w
+
+
+@hot
+def restart_control(w, h0):
+    """Step control as at a start: next step h0, no error history, no reusable events."""
+    w.ctrl[CTRL_H] = h0
+    w.ctrl[CTRL_ERR] = ERR_FLOOR
+    w.ctrl[CTRL_G1_T] = np.nan
+    w.ctrl[CTRL_G1_MODE0] = -1.0
+    w.ctrl[CTRL_G1_MODE1] = -1.0
+    w.ctrl[CTRL_G1_M] = 0.0
+
+
+class TrialStep(NamedTuple):
+    """The step just tried, whose dense output the event search reads.
+
+    w holds its stages and end state; the event functions see (t, y) and the
+    field's parameters p and mode exactly as the step did.
+    """
+
+    method: int  # DP54 or RK4
+    t: float  # start time
+    y: np.ndarray  # (n,) state at the start
+    h: float  # step size
+    p: object  # the field's parameters, opaque to the integrator
+    mode: np.ndarray  # the discrete state the step was taken in
+    w: StepWork
+    n_err: int  # components of the dense output the event functions read
+    theta_tol: float  # tolerance of an event time, as a fraction of h
+
+
+class Bracket(NamedTuple):
+    """A sign change of an event function over a trial step, in fractions θ of it."""
+
+    a: float
+    fa: float  # g(a) > 0
+    b: float  # a < b
+    fb: float  # g(b) ≤ 0
 
 
 @hot
@@ -213,29 +261,31 @@ def dense_eval(method, K, y, y_new, h, theta, n, out):
 
 
 @hot
-def event_value(events, method, t, y, h, theta, p, mode, w, which, n_err):
-    """Event function ``which`` on the dense output of the last trial step."""
-    dense_eval(method, w.K, y, w.y_new, h, theta, n_err, w.y_stage)
-    events(t + theta * h, w.y_stage, w.K[0], p, mode, w.g_tmp, w.dg_tmp)
+def event_value(events, step, which, theta):
+    """Event function ``which`` at θ on the dense output of the trial step."""
+    w = step.w
+    dense_eval(step.method, w.K, step.y, w.y_new, step.h, theta, step.n_err, w.y_stage)
+    events(step.t + theta * step.h, w.y_stage, w.K[0], step.p, step.mode, w.g_tmp, w.dg_tmp)
     return w.g_tmp[which]
 
 
 @hot
-def locate_event(events, method, t, y, h, p, mode, w, which, a, fa, b, fb, theta_tol, n_err):
-    """Root of event ``which`` in [a, b] (fractions of the step) with fa > 0 ≥ fb.
+def locate_event(events, step, which, bracket):
+    """Root of event ``which`` inside the bracket, to step.theta_tol.
 
     Illinois variant of regula falsi on the dense output. Returns the final
     bracket (lo, hi); a step ended at hi has g ≤ 0, so the next mode's own event
     function starts at ≥ 0.
     """
+    a, fa, b, fb = bracket
     side = 0
     for _ in range(LOCATE_MAX_ITER):
-        if b - a <= theta_tol:
+        if b - a <= step.theta_tol:
             break
         m = (a * fb - b * fa) / (fb - fa)
         if not (a < m < b):
             m = 0.5 * (a + b)
-        fm = event_value(events, method, t, y, h, m, p, mode, w, which, n_err)
+        fm = event_value(events, step, which, m)
         if fm > 0.0:
             a, fa = m, fm
             if side == -1:
@@ -250,7 +300,7 @@ def locate_event(events, method, t, y, h, p, mode, w, which, a, fa, b, fb, theta
 
 
 @hot
-def dense_minimum(events, method, t, y, h, p, mode, w, which, n_err, guess):
+def dense_minimum(events, step, which, guess):
     """Minimum of event ``which`` over the step on the dense output (golden section).
 
     Searches the half of the step around the cubic model's minimum ``guess``;
@@ -260,32 +310,35 @@ def dense_minimum(events, method, t, y, h, p, mode, w, which, n_err, guess):
     b = min(1.0, guess + 0.25)
     c = b - GOLDEN * (b - a)
     d = a + GOLDEN * (b - a)
-    fc = event_value(events, method, t, y, h, c, p, mode, w, which, n_err)
-    fd = event_value(events, method, t, y, h, d, p, mode, w, which, n_err)
+    fc = event_value(events, step, which, c)
+    fd = event_value(events, step, which, d)
     for _ in range(DIP_ITER):
         if fc <= 0.0 or fd <= 0.0:
             break
         if fc < fd:
             b, d, fd = d, c, fc
             c = b - GOLDEN * (b - a)
-            fc = event_value(events, method, t, y, h, c, p, mode, w, which, n_err)
+            fc = event_value(events, step, which, c)
         else:
             a, c, fc = c, d, fd
             d = a + GOLDEN * (b - a)
-            fd = event_value(events, method, t, y, h, d, p, mode, w, which, n_err)
+            fd = event_value(events, step, which, d)
     if fc <= fd:
         return c, fc
     return d, fd
 
 
 @hot
-def first_crossing(events, method, t, y, h, p, mode, w, m, theta_tol, n_err):
+def first_crossing(events, step, m):
     """Earliest event root in the trial step, from g and g' at both step ends.
 
-    Returns (event index or -1, θ of the root). A g that is ≤ 0 at the start by
-    rounding just after a mode switch counts as positive when its rate points
-    into the mode.
+    Reads the first m event functions' values and rates at the start (w.g0,
+    w.dg0) and at the end (w.g1, w.dg1). Returns (event index or -1, θ of the
+    root). A g that is ≤ 0 at the start by rounding just after a mode switch
+    counts as positive when its rate points into the mode.
     """
+    w = step.w
+    h = step.h
     first = -1
     first_theta = 2.0
     for i in range(m):
@@ -304,7 +357,7 @@ def first_crossing(events, method, t, y, h, p, mode, w, m, theta_tol, n_err):
                 # the mode holds only inside the step, if at all: bracket from its peak
                 th, _ = hermite_extremum(g0, d0, g1, d1, False)
                 if th > 0.0:
-                    gm = event_value(events, method, t, y, h, th, p, mode, w, i, n_err)
+                    gm = event_value(events, step, i, th)
                     if gm > 0.0:
                         a = th
                         fa = gm
@@ -323,7 +376,7 @@ def first_crossing(events, method, t, y, h, p, mode, w, m, theta_tol, n_err):
                 continue
             # a shallow dip (a grazing contact or detachment) can reach zero between
             # the cubic's values: find the minimum on the dense output itself
-            th, gm = dense_minimum(events, method, t, y, h, p, mode, w, i, n_err, th)
+            th, gm = dense_minimum(events, step, i, th)
             if gm > 0.0:
                 continue
             b = th
@@ -332,9 +385,7 @@ def first_crossing(events, method, t, y, h, p, mode, w, m, theta_tol, n_err):
                 continue
         if a >= first_theta:
             continue
-        lo, hi = locate_event(
-            events, method, t, y, h, p, mode, w, i, a, fa, b, fb, theta_tol, n_err
-        )
+        _, hi = locate_event(events, step, i, Bracket(a, fa, b, fb))
         if hi < first_theta:
             first = i
             first_theta = hi
@@ -370,19 +421,20 @@ def advance(rhs, events, t, t_end, y, f, p, mode, opt, w):
     not change y or f between two such calls.
     """
     n = y.shape[0]
-    if t == w.ctrl[2] and mode[0] == w.ctrl[3] and mode[1] == w.ctrl[4]:
-        m = int(w.ctrl[5])
+    ctrl = w.ctrl
+    if t == ctrl[CTRL_G1_T] and mode[0] == ctrl[CTRL_G1_MODE0] and mode[1] == ctrl[CTRL_G1_MODE1]:
+        m = int(ctrl[CTRL_G1_M])
         for i in range(m):
             w.g0[i] = w.g1[i]
             w.dg0[i] = w.dg1[i]
     else:
         m = events(t, y, f, p, mode, w.g0, w.dg0)
-    w.ctrl[2] = np.nan
+    ctrl[CTRL_G1_T] = np.nan
     rejects = 0
     adaptive = opt.method == DP54
     while True:
         remaining = t_end - t
-        h = w.ctrl[0] if adaptive else opt.h_fixed
+        h = ctrl[CTRL_H] if adaptive else opt.h_fixed
         if h >= remaining * (1.0 - STRETCH):
             h = remaining
         if h < opt.h_min and h < remaining:
@@ -399,15 +451,17 @@ def advance(rhs, events, t, t_end, y, f, p, mode, opt, w):
                         return NONFINITE, t, -1
                     return STEP_UNDERFLOW, t, -1
                 fac = SAFETY * err**-0.2 if np.isfinite(err) else MIN_FACTOR
-                w.ctrl[0] = h * max(MIN_FACTOR, min(1.0, fac))
+                ctrl[CTRL_H] = h * max(MIN_FACTOR, min(1.0, fac))
                 continue
         elif not all_finite(w.y_new):
             return NONFINITE, t, -1
         t_new = t_end if h == remaining else t + h
         events(t_new, w.y_new, w.K[6], p, mode, w.g1, w.dg1)
-        which, theta = first_crossing(
-            events, opt.method, t, y, h, p, mode, w, m, opt.event_tol / h, opt.n_err
-        )
+        step = TrialStep(
+            method=opt.method, t=t, y=y, h=h, p=p, mode=mode, w=w, n_err=opt.n_err,
+            theta_tol=opt.event_tol / h,
+        )  # fmt: skip
+        which, theta = first_crossing(events, step, m)
         if which >= 0 and theta < 1.0:
             if theta * h <= opt.event_tol:
                 return OK, t, which
@@ -419,22 +473,22 @@ def advance(rhs, events, t, t_end, y, f, p, mode, opt, w):
                 if not err_event <= 1.0:
                     rejects += 1
                     w.counts[1] += 1
-                    w.ctrl[0] = h_event * 0.5
+                    ctrl[CTRL_H] = h_event * 0.5
                     continue
             t_new = t + h_event
         else:
             if adaptive:
                 # PI control of the next step from this accepted step's error
                 err = max(err, 1e-10)
-                fac = err**ERROR_EXPONENT / w.ctrl[1] ** PI_BETA / SAFETY
+                fac = err**ERROR_EXPONENT / ctrl[CTRL_ERR] ** PI_BETA / SAFETY
                 fac = max(1.0 / MAX_FACTOR, min(1.0 / MIN_FACTOR, fac))
-                w.ctrl[0] = h / fac
-                w.ctrl[1] = max(err, 1e-4)
+                ctrl[CTRL_H] = h / fac
+                ctrl[CTRL_ERR] = max(err, ERR_FLOOR)
             if which < 0:  # g1 holds the event values at t_new: reusable next step
-                w.ctrl[2] = t_new
-                w.ctrl[3] = mode[0]
-                w.ctrl[4] = mode[1]
-                w.ctrl[5] = m
+                ctrl[CTRL_G1_T] = t_new
+                ctrl[CTRL_G1_MODE0] = mode[0]
+                ctrl[CTRL_G1_MODE1] = mode[1]
+                ctrl[CTRL_G1_M] = m
         for i in range(n):
             y[i] = w.y_new[i]
             f[i] = w.K[6, i]

@@ -44,7 +44,7 @@ from .codes import (
     OK,
     PERIODIC,
 )
-from .integrator import StepWork, initial_step, make_work
+from .integrator import CTRL_ERR, CTRL_H, StepWork, initial_step, make_work, restart_control
 from .jit import compiled, hot
 from .model import (
     MAX_EVENTS,
@@ -56,7 +56,7 @@ from .model import (
     gap,
     make_params,
 )
-from .revolution import Trace, make_trace, run_revolution, solver_options
+from .revolution import Trace, make_trace, run_revolution, scale_solver_options
 
 # Transient policies.
 CONVERGED = 0  # stop once the section has converged to a cycle (Newton-accelerated)
@@ -75,17 +75,22 @@ EXTRAPOLATE_MAX = 0.05  # extrapolate the warm start only between close fixed po
 
 
 class CellSettings(NamedTuple):
-    """How one cell is run and classified (see campar.sweep.job for the meaning of each)."""
+    """How one cell is run and classified; built by campar.sweep.tile.cell_settings.
+
+    Each field is the job setting of the same name (campar.sweep.job:
+    transient.*, classify.*, integrator.*), but for ``transient`` (the job's
+    transient.mode) and ``output_bits`` (the job's outputs).
+    """
 
     transient: int  # CONVERGED or FIXED
     max_revolutions: int  # CONVERGED: budget of revolutions; FIXED: transient length
-    window: int  # revolutions read for a non-periodic verdict (FIXED: after the transient)
+    window_revolutions: int  # read for a non-periodic verdict (FIXED: after the transient)
     n_max: int
     conv_tol: float
     window_tol: float
     period_tol: float
     newton: bool
-    jump_r_max: float
+    jump_residual: float
     jump_cap: float
     max_jumps: int
     jump_agree: float  # trust a far estimate agreeing to this fraction with the one n revs before
@@ -96,7 +101,7 @@ class CellSettings(NamedTuple):
     chaos_after: int  # earliest revolution of a chaotic verdict (0: only at the budget)
     chaos_lyapunov: float  # … for a Lyapunov exponent per revolution above this
     quasiperiodic_after: int  # earliest quasi-periodic verdict (0: only at the budget)
-    outputs: int
+    output_bits: int  # OUT_* bits of the optional outputs to compute
 
 
 class CellOutputs(NamedTuple):
@@ -139,21 +144,21 @@ class ChainWork(NamedTuple):
 
 @compiled
 def make_chain_work(cs):
-    rows = cs.max_revolutions + cs.window + 2
+    rows = cs.max_revolutions + cs.window_revolutions + 2
     return ChainWork(
-        make_work(N_STATE, MAX_EVENTS, 0.0),
-        make_work(N_STATE_VARIATIONAL, MAX_EVENTS, 0.0),
-        np.zeros(N_STATE),
-        np.zeros(N_STATE),
-        np.zeros(N_STATE_VARIATIONAL),
-        np.zeros(N_STATE_VARIATIONAL),
-        np.zeros(2, dtype=np.int64),
-        np.zeros((rows + 1, 2)),
-        np.zeros((rows, 4)),
-        np.full((cs.n_max, cs.n_max, 3), -1.0),
-        np.zeros((rows, N_REV_STATS)),
-        np.array([1.0, 0.0]),
-        make_trace(0, 0, 1),
+        w2=make_work(N_STATE, MAX_EVENTS, 0.0),
+        w6=make_work(N_STATE_VARIATIONAL, MAX_EVENTS, 0.0),
+        x2=np.zeros(N_STATE),
+        f2=np.zeros(N_STATE),
+        x6=np.zeros(N_STATE_VARIATIONAL),
+        f6=np.zeros(N_STATE_VARIATIONAL),
+        mode=np.zeros(2, dtype=np.int64),
+        xs=np.zeros((rows + 1, 2)),
+        jac=np.zeros((rows, 4)),
+        est=np.full((cs.n_max, cs.n_max, 3), -1.0),
+        revs=np.zeros((rows, N_REV_STATS)),
+        u=np.array([1.0, 0.0]),
+        no_trace=make_trace(0, 0, 1),
     )
 
 
@@ -188,8 +193,8 @@ def spend(cw):
 
 @hot
 def share_step_size(src, dst):
-    dst.ctrl[0] = src.ctrl[0]
-    dst.ctrl[1] = src.ctrl[1]
+    dst.ctrl[CTRL_H] = src.ctrl[CTRL_H]
+    dst.ctrl[CTRL_ERR] = src.ctrl[CTRL_ERR]
 
 
 @hot
@@ -216,11 +221,11 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
         k += 1
         period, jump_n, z0, z1 = assess_revolution(
             cw.xs, cw.jac, cw.est, k, base, cs.n_max, cs.conv_tol, cs.window_tol,
-            cs.jump_r_max, cs.jump_cap, cs.jump_agree,
+            cs.jump_residual, cs.jump_cap, cs.jump_agree,
         )  # fmt: skip
         if period > 0:
             return OK, k, period, base, jumps
-        if k - base >= cs.window and nonperiodic_verdict(cw, k, cs):
+        if k - base >= cs.window_revolutions and nonperiodic_verdict(cw, k, cs):
             return OK, k, 0, base, jumps
         if jump_n > 0 and cs.newton and jumps < cs.max_jumps:
             cw.xs[k, 0] = z0
@@ -237,7 +242,7 @@ def nonperiodic_verdict(cw, k, cs):
     qp_due = 0 < cs.quasiperiodic_after <= k
     if not (chaos_due or qp_due):
         return False
-    stretch = window_stats(cw.revs, k - cs.window, cs.window)[5]
+    stretch = window_stats(cw.revs, k - cs.window_revolutions, cs.window_revolutions)[5]
     return (chaos_due and stretch > cs.chaos_lyapunov) or (qp_due and abs(stretch) <= cs.lyap_tol)
 
 
@@ -248,7 +253,7 @@ def transient_fixed(cw, p, opt, cs, want_stats, step_budget):
     Returns (status, k, period) with the period from the plain repeat test.
     """
     k = 0
-    total = cs.max_revolutions + cs.window
+    total = cs.max_revolutions + cs.window_revolutions
     while k < total:
         variational = k >= cs.max_revolutions
         if k == cs.max_revolutions:
@@ -309,7 +314,7 @@ def record_sections(out, i, cw, last, count):
 def run_cell(x_start, p, opt, cs, cw, out, i):
     """Compute cell i from x_start; returns (status, index of the final state in xs)."""
     period_time = TWO_PI / p.omega
-    want_stats = (cs.outputs & OUT_STATS) != 0
+    want_stats = (cs.output_bits & OUT_STATS) != 0
     c2 = cw.w2.counts
     c6 = cw.w6.counts
     steps0 = c2[0] + c6[0]
@@ -364,7 +369,7 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
                 best = d
                 final = j
     else:
-        count = min(cs.window, k - max(base, variational_from))
+        count = min(cs.window_revolutions, k - max(base, variational_from))
         count = max(count, 1)
         stretch, _ = record_window(out, i, cw, k - count, count, period_time)
         out.n[i] = 0
@@ -395,8 +400,9 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
     Cell i has parameters (omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i]). Cell 0
     starts from x_init, every later cell from the final state of the one before
     (extrapolated through the cycles of the cells before: extrapolation_order),
-    and the cell after a failure from x_init again. Releases the GIL, so a
-    thread can compute while another one talks MPI.
+    and the cell after a failure from x_init again, its step control restarted
+    as for cell 0. Releases the GIL, so a thread can compute while another one
+    talks MPI.
     """
     cw = make_chain_work(cs)
     x_start = np.empty(2)
@@ -406,7 +412,7 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
     h_started = False
     for i in range(omega.shape[0]):
         p = make_params(omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i], clamp)
-        opt = solver_options(solver, p, cs)
+        opt = scale_solver_options(solver, omega[i], cs.rk4_steps)
         flags = 0
         order = min(extrapolation_order(prev, streak), cs.extrapolate)
         if streak == 0:
@@ -431,13 +437,14 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
             h0 = initial_step(
                 model.rhs, 0.0, cw.x2, cw.f2, p, cw.mode, solver.rtol, solver.atol, 2, 0.1
             )
-            cw.w2.ctrl[0] = h0
-            cw.w6.ctrl[0] = h0
+            restart_control(cw.w2, h0)
+            restart_control(cw.w6, h0)
             h_started = True
         status, final = run_cell(x_start, p, opt, cs, cw, out, i)
         out.flags[i] |= flags
         if status != OK:
             streak = 0
+            h_started = False  # a failure can leave the step size below its floor
             continue
         periodic = out.kind[i] == PERIODIC
         same_period = periodic and streak > 0 and out.n[i] == prev_n
@@ -476,7 +483,7 @@ def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, clamp, x0, solver, cs, revolution
     from a cell's final state and trace its period.
     """
     p = make_params(omega, zeta, f0, mu_kn, mu_cn, clamp)
-    opt = solver_options(solver, p, cs)
+    opt = scale_solver_options(solver, omega, cs.rk4_steps)
     w = make_work(N_STATE, MAX_EVENTS, 0.0)
     x = x0.copy()
     f = np.zeros(N_STATE)
@@ -484,7 +491,7 @@ def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, clamp, x0, solver, cs, revolution
     eps, deps = gap(0.0, x, p, RISE)
     mode[1] = contact_mode(eps, deps, p)
     model.rhs(0.0, x, p, mode, f)
-    w.ctrl[0] = initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol, 2, 0.1)
+    w.ctrl[CTRL_H] = initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol, 2, 0.1)
     row = np.zeros(N_REV_STATS)
     for _ in range(revolutions):
         status = run_revolution(x, f, p, opt, w, mode, row, False, cs.max_steps, rec)

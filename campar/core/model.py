@@ -1,6 +1,6 @@
 """The cam with flat-bottomed follower: cam law, Hunt–Crossley contact, vector field.
 
-Dimensionless equation of motion (MODEL.md, paper eq. 11):
+Dimensionless equation of motion (docs/model.md, paper eq. 11):
 
     y'' + 2 ζ y' + y = Pn − f0,    Pn = k ε^{3/2} (1 + c ε')  for ε = yc − y > 0
 
@@ -107,7 +107,7 @@ def cam_at(theta):
 
 @hot
 def contact_force(eps, deps, p):
-    """Hunt–Crossley force Pn for penetration ε and its rate ε' (MODEL.md eq. 12)."""
+    """Hunt–Crossley force Pn for penetration ε and its rate ε' (docs/model.md, paper eq. 12)."""
     if eps <= 0.0:
         return 0.0
     force = p.k * eps * math.sqrt(eps) * (1.0 + p.c * deps)

@@ -176,15 +176,16 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
 
 
 @hot
-def solver_options(base, p, cs):
-    """Per-cell integrator options: RK4's step and the floors scale with the period."""
-    period = TWO_PI / p.omega
+def scale_solver_options(base, omega, rk4_steps):
+    """The job's integrator options for a cell of cam speed ω: RK4's step (rk4_steps
+    a revolution), the step floor and the event tolerance scale with the period 2π/ω."""
+    period = TWO_PI / omega
     return SolverOptions(
-        base.method,
-        base.rtol,
-        base.atol,
-        period / cs.rk4_steps,
-        1e-12 * max(1.0, period),
-        base.event_tol * max(1.0, period),
-        N_STATE,
+        method=base.method,
+        rtol=base.rtol,
+        atol=base.atol,
+        h_fixed=period / rk4_steps,
+        h_min=1e-12 * max(1.0, period),
+        event_tol=base.event_tol * max(1.0, period),
+        n_err=N_STATE,
     )

@@ -18,11 +18,12 @@ from pathlib import Path
 
 import yaml
 
+from ..sweep.job import PAPER_VALUES
 from ..views.point import point_job
 from . import setups
 
 MAP_FIGURES = {"omega_f0": "fig2", "mu_kn": "fig4", "mu_cn": "fig7"}
-MAP_VIEWS = {"labels": "n-p labels", "dc": "duty cycle DC"}
+PLANE_MAPS = {"labels": "n-p labels", "dc": "duty cycle DC"}  # views drawn per plane, captions
 PNG_DPI = 200
 PLANE_SYMBOLS = {"omega": "ω", "f0": "f0", "mu_kn": "μkn", "mu_cn": "μcn", "zeta": "ζ"}
 
@@ -39,7 +40,7 @@ class Gallery:
     log: object = print
 
     def name(self, stem: str) -> str:
-        return stem if self.tensile == "clamp" else f"{stem}-{self.tensile}"
+        return stem if self.tensile == setups.LAW else f"{stem}-{self.tensile}"
 
     def save(self, figure, stem: str, caption: str, recipe: dict | None = None) -> Path:
         from ..views.plot import save_figure
@@ -61,7 +62,7 @@ def default_stores(size: str) -> Path:
     return Path("results") / f"paper-{size}"
 
 
-def make_gallery(outdir, size: str = "small", tensile: str = "clamp", stores=None,
+def make_gallery(outdir, size: str = "small", tensile: str = setups.LAW, stores=None,
                  log=print) -> list[Path]:  # fmt: skip
     """Compute and draw every figure into ``outdir``; returns the PNG paths."""
     if size not in setups.SIZES:
@@ -74,7 +75,7 @@ def make_gallery(outdir, size: str = "small", tensile: str = "clamp", stores=Non
         draw_plane(g, plane)
     draw_lines(g)
     draw_phase_portraits(g)
-    draw_gaps(g)
+    draw_penetration(g)
     draw_forces(g)
     draw_orbit_example(g)
     write_index(g, time.perf_counter() - start)
@@ -94,7 +95,7 @@ def draw_plane(g: Gallery, plane: str) -> None:
     data["store"] = str(store)
     write_yaml(g.outdir / f"{job.name}.yaml", data)
     rows, cols = job.shape
-    for what, text in MAP_VIEWS.items():
+    for what, text in PLANE_MAPS.items():
         figure = plot_map(job, arrays, what)
         axes = ", ".join(PLANE_SYMBOLS[name] for name in job.sweep)
         caption = (f"{text} on the ({axes}) plane, {rows} × {cols} cells, "
@@ -135,7 +136,7 @@ def continuation_recipe(omega: float, tensile: str, params: dict) -> dict:
 def draw_phase_portraits(g: Gallery) -> None:
     from ..views.plot.figures import plot_phase_grid
 
-    params = {**setups.BASE, "mu_kn": setups.FIG6_MU_KN}
+    params = {**PAPER_VALUES, "mu_kn": setups.FIG6_MU_KN}
     panels, recipes = [], []
     for omega, claim in setups.FIG6_CLAIMS:
         found = setups.continued_point(omega, g.tensile, **params)
@@ -155,15 +156,13 @@ def draw_phase_portraits(g: Gallery) -> None:
 
 
 def point_recipe(omega: float, tensile: str, params: dict) -> dict:
-    job = point_job(omega, params["f0"], params["mu_kn"], params["mu_cn"], params["zeta"],
-                    tensile, 0.0, 0.0, "converged", 500, 1e-8, None, "dp54",
-                    ["label", "dc", "eps", "pn", "sections"])  # fmt: skip
+    job = point_job(omega=omega, tensile=tensile, **params)
     flags = " ".join(f"--{k.replace('_', '-')} {v:g}" for k, v in params.items())
     return {"command": f"campar point --omega {omega:g} {flags} --tensile {tensile}",
             "job": job.to_dict()}  # fmt: skip
 
 
-def draw_gaps(g: Gallery) -> None:
+def draw_penetration(g: Gallery) -> None:
     from ..views.plot.figures import plot_gap_family
 
     for stem, f0, varied, caption in (
@@ -180,7 +179,7 @@ def draw_gaps(g: Gallery) -> None:
             for omega in setups.SPEEDS:
                 results = []
                 for value in values:
-                    params = {**setups.BASE, **({"f0": f0} if f0 is not None else {}), name: value}
+                    params = {**PAPER_VALUES, **({"f0": f0} if f0 is not None else {}), name: value}
                     results.append(setups.steady_point(omega, g.tensile, **params))
                     recipes.append(point_recipe(omega, g.tensile, params))
                 by_speed.append(results)
@@ -198,7 +197,7 @@ def draw_gaps(g: Gallery) -> None:
 def draw_forces(g: Gallery) -> None:
     from ..views.plot.figures import plot_force_row
 
-    params = {**setups.BASE, "f0": setups.FIG9_F0}
+    params = {**PAPER_VALUES, "f0": setups.FIG9_F0}
     results = [setups.steady_point(omega, g.tensile, **params) for omega in setups.SPEEDS]
     recipe = {"figure": "the paper's Fig. 9", "start": "rest, (y, y') = (0, 0) at θ = 0",
               "points": [point_recipe(w, g.tensile, params) for w in setups.SPEEDS]}  # fmt: skip
@@ -210,7 +209,7 @@ def draw_forces(g: Gallery) -> None:
 def draw_orbit_example(g: Gallery) -> None:
     from ..views.plot import plot_orbit
 
-    params = {**setups.BASE, "mu_kn": setups.FIG6_MU_KN}
+    params = {**PAPER_VALUES, "mu_kn": setups.FIG6_MU_KN}
     result = setups.steady_point(3.0, g.tensile, **params)
     caption = ("one point's orbit as `campar point --plot` draws it: phase portrait, ε(t), "
                "Pn(t) with yc(t); ω = 3, μkn = 0.91, from rest")  # fmt: skip

@@ -27,8 +27,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import JobError
-from ..sweep.job import Job, load_job
+from ..sweep.job import DEFAULT_MODEL, Job, ModelSettings, field_choices, load_job
 from ..views.line import (
+    PAPER_START,
     BifurcationLine,
     bifurcation_line,
     compute_line,
@@ -38,7 +39,8 @@ from ..views.line import (
 )
 
 PLANES = ("omega_f0", "mu_kn", "mu_cn")
-TENSILE = ("clamp", "allow")
+TENSILE = field_choices(ModelSettings, "tensile")  # both force laws: clamp, allow
+LAW = DEFAULT_MODEL.tensile  # the default force law; its figures and planes get plain names
 
 
 @dataclass(frozen=True)
@@ -53,7 +55,7 @@ SIZES = {"small": Size(plane=48, line=1000), "full": Size(plane=None, line=4000)
 
 # Fig. 5: bifurcation lines at four contact stiffness ratios (f0 = 0.5, μcn = 0.8).
 FIG5_MU_KN = (0.94, 0.90, 0.91, 0.922)
-LINE_OMEGA = (6.0, 0.02)  # the planes' ω range; the paper's Fig. 5 does not state its own
+LINE_OMEGA = (PAPER_START, 0.02)  # the planes' ω range; the paper's Fig. 5 does not state its own
 
 # Fig. 6: the paper's labels along μkn = 0.91 (f0 = 0.5, μcn = 0.8, ζ = 0.2).
 FIG6_MU_KN = 0.91
@@ -76,9 +78,6 @@ FIG8_F0 = 2.5
 FIG8_RATIOS = (0.7, 0.8, 0.9)
 FIG9_F0 = 0.5
 
-# The paper's base values (MODEL.md): μkn = μcn = 0.8, ζ = 0.2, f0 = 0.5.
-BASE = {"f0": 0.5, "mu_kn": 0.8, "mu_cn": 0.8, "zeta": 0.2}
-
 # Floquet multipliers the paper quotes (its Fig. 5b1, μkn = 0.90) and what it concludes.
 QUOTED_MULTIPLIERS = (
     (1.1620, (complex(-0.354351, 0.263715), complex(-0.354351, -0.263715)), "period doubling"),
@@ -92,7 +91,7 @@ def jobs_dir() -> Path:
     return Path(__file__).resolve().parents[2] / "jobs"
 
 
-def plane_job(name: str, size: str = "full", tensile: str = "clamp",
+def plane_job(name: str, size: str = "full", tensile: str = LAW,
               jobs: Path | None = None) -> Job:  # fmt: skip
     """The job of a plane at a size: ``jobs/<name>.yaml``, its grid coarsened for "small",
     its force law set to ``tensile``; named "<name>" or "<name>-allow", store unset."""
@@ -105,7 +104,7 @@ def plane_job(name: str, size: str = "full", tensile: str = "clamp",
         for axis in data["sweep"].values():
             axis["points"] = points
     data["model"]["tensile"] = tensile
-    data["name"] = name if tensile == "clamp" else f"{name}-{tensile}"
+    data["name"] = name if tensile == LAW else f"{name}-{tensile}"
     data["store"] = None
     return Job.from_dict(data, source=f"{path} at size {size}")
 
@@ -126,25 +125,24 @@ def run_plane(job: Job, stores: Path) -> Path:
     return path
 
 
-def paper_lines(size: str = "full", tensile: str = "clamp") -> list[BifurcationLine]:
+def paper_lines(size: str = "full", tensile: str = LAW) -> list[BifurcationLine]:
     """The Fig. 5 lines, one per μkn of FIG5_MU_KN, computed side by side."""
     return compute_lines([paper_line_job(mu, size, tensile) for mu in FIG5_MU_KN])
 
 
-FINE_LINE = (6.0, 2.0, 4001)  # ω from, to, points: steps of 0.001 through Fig. 6's range
+FINE_LINE = (PAPER_START, 2.0, 4001)  # ω from, to, points: steps of 0.001 through Fig. 6's range
 
 
-def fine_line(mu_kn: float, tensile: str = "clamp") -> BifurcationLine:
+def fine_line(mu_kn: float, tensile: str = LAW) -> BifurcationLine:
     """The line at μkn through the paper's Fig. 6 range in steps of 0.001 (any size)."""
     hi, lo, points = FINE_LINE
-    return bifurcation_line((hi, lo), points, tensile=tensile, **{**BASE, "mu_kn": mu_kn})
+    return bifurcation_line((hi, lo), points, tensile=tensile, mu_kn=mu_kn)
 
 
-def paper_line_job(mu_kn: float, size: str = "full", tensile: str = "clamp") -> Job:
+def paper_line_job(mu_kn: float, size: str = "full", tensile: str = LAW) -> Job:
     """A Fig. 5 line: ω from 6.0 down to 0.02 at μkn, the other parameters at base values."""
-    params = {**BASE, "mu_kn": mu_kn}
-    return line_job(LINE_OMEGA, SIZES[size].line, tensile=tensile, name=f"line_mu_kn_{mu_kn:g}",
-                    **params)  # fmt: skip
+    return line_job(LINE_OMEGA, SIZES[size].line, tensile=tensile, mu_kn=mu_kn,
+                    name=f"line_mu_kn_{mu_kn:g}")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -157,11 +155,10 @@ class ContinuedPoint:
     cloud: object  # (m, 2) σn points: the orbit's n points, or a long run's cloud
 
 
-def continued_point(omega: float, tensile: str = "clamp", **params) -> ContinuedPoint:
+def continued_point(omega: float, tensile: str = LAW, **params) -> ContinuedPoint:
     """Reach ``omega`` by continuation from 6.0 and trace the attractor found there."""
     from ..views.point import simulate_point
 
-    params = {**BASE, **params}
     line, state = continued_state(omega, tensile=tensile, **params)
     result = simulate_point(omega, y0=state[0], v0=state[1], tensile=tensile, multipliers=True,
                             lyapunov=True, trace=True, **params)  # fmt: skip
@@ -179,8 +176,8 @@ def section_cloud(omega: float, state, revolutions: int = CLOUD_REVOLUTIONS, **o
     return points[np.isfinite(points[:, 0])]
 
 
-def steady_point(omega: float, tensile: str = "clamp", **params):
+def steady_point(omega: float, tensile: str = LAW, **params):
     """``simulate_point`` from rest at θ = 0 with trace (Figs. 3, 8, 9)."""
     from ..views.point import simulate_point
 
-    return simulate_point(omega, tensile=tensile, trace=True, **{**BASE, **params})
+    return simulate_point(omega, tensile=tensile, trace=True, **params)

@@ -22,11 +22,24 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from ..errors import JobError
 
 PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
-# The paper's base values (MODEL.md) for parameters a job does not sweep or fix.
+# The paper's base values (docs/model.md, sweeps) for parameters a job does not sweep or
+# fix. Points, lines, the CLI, the benchmarks and the paper's set-ups take them from here.
 PAPER_VALUES = {"f0": 0.5, "mu_kn": 0.8, "mu_cn": 0.8, "zeta": 0.2}
 
 OUTPUT_NAMES = ("label", "dc", "eps", "pn", "sections", "multipliers", "lyapunov")
 DEFAULT_OUTPUTS = ("label", "dc", "eps", "pn")
+
+
+def with_paper_values(parameters: dict[str, float]) -> dict[str, float]:
+    """f0, mu_kn, mu_cn, zeta (PAPER_VALUES order): those given, the paper's base values for
+    the rest. JobError for a name that is none of them."""
+    unknown = [name for name in parameters if name not in PAPER_VALUES]
+    if unknown:
+        raise JobError(
+            f"unknown parameter {unknown[0]!r}; the model's parameters besides omega: "
+            f"{', '.join(PAPER_VALUES)}"
+        )
+    return {name: parameters.get(name, value) for name, value in PAPER_VALUES.items()}
 
 
 def check_parameter(name: str, value: float) -> float:
@@ -131,7 +144,7 @@ class ClassifySettings(Settings):
     """σn points stored per cell (default n_max)."""
 
     @model_validator(mode="after")
-    def window_sees_longest_period_twice(self):
+    def window_at_least_two_revolutions(self):
         if self.window_revolutions < 2:
             raise ValueError("window_revolutions must be ≥ 2")
         return self
@@ -142,17 +155,49 @@ class TileSettings(Settings):
     """Continuation chains (values of the second parameter) per tile."""
 
 
+class ChainSettings(Settings):
+    """Where each continuation chain (one row of the grid, along ω) starts, and which way."""
+
+    start: Literal["rest", "continue"] = "rest"
+    """rest: the first cell of every chain starts from ``initial``; continue: from the
+    attractor found at the first cell of the previous chain, from the plane's starting
+    corner on (the paper's 2-D continuation: the first column is one chain along the
+    second axis, from ``initial`` at its first value)."""
+    direction: Literal["down", "up"] = "down"
+    """down: every chain runs ω decreasing (the paper's direction); up: increasing. The
+    store keeps the job's ω order either way."""
+
+
+# Every default of a job, as the settings a job without that section gets: code that
+# builds jobs by keyword (points, lines, the CLI, benchmarks) reads its defaults here,
+# e.g. DEFAULT_INTEGRATOR.rtol, so each default is the field default above and nowhere else.
+DEFAULT_MODEL = ModelSettings()
+DEFAULT_INITIAL = InitialState()
+DEFAULT_INTEGRATOR = IntegratorSettings()
+DEFAULT_TRANSIENT = TransientSettings()
+DEFAULT_CLASSIFY = ClassifySettings()
+DEFAULT_TILES = TileSettings()
+DEFAULT_CHAINS = ChainSettings()
+
+
+def field_choices(settings: type[Settings], name: str) -> tuple[str, ...]:
+    """The values a Literal field allows: ``field_choices(ModelSettings, "tensile")`` is
+    ("clamp", "allow"); the CLI offers these as choices."""
+    return typing.get_args(settings.model_fields[name].annotation)
+
+
 class Job(Settings):
     name: Annotated[str, Field(min_length=1, max_length=200, pattern=r"^[A-Za-z0-9_.\-]+$")]
     sweep: dict[str, Axis]
     fixed: dict[str, float] = {}
-    model: ModelSettings = ModelSettings()
-    initial: InitialState = InitialState()
-    integrator: IntegratorSettings = IntegratorSettings()
-    transient: TransientSettings = TransientSettings()
-    classify: ClassifySettings = ClassifySettings()
+    model: ModelSettings = DEFAULT_MODEL
+    initial: InitialState = DEFAULT_INITIAL
+    integrator: IntegratorSettings = DEFAULT_INTEGRATOR
+    transient: TransientSettings = DEFAULT_TRANSIENT
+    classify: ClassifySettings = DEFAULT_CLASSIFY
     outputs: tuple[str, ...] = DEFAULT_OUTPUTS
-    tiles: TileSettings = TileSettings()
+    tiles: TileSettings = DEFAULT_TILES
+    chains: ChainSettings = DEFAULT_CHAINS
     store: str | None = None
     """Path of the result store; '.h5'/'.hdf5' selects HDF5, anything else Zarr."""
 

@@ -1,11 +1,12 @@
 """Tiles and chains of a job's grid.
 
 A chain is one row of the grid: one value of the second parameter, every ω in
-the job's order (the continuation direction, ω decreasing in the paper's
-planes). A tile is ``tiles.rows`` consecutive chains. Tiles are fixed by the
-job alone, so the numbers never depend on how many ranks ran it or where it
-was interrupted; a tile is the unit of work, of storage (one chunk) and of the
-``done`` commit flag.
+the order of ``chains.direction`` (ω decreasing in the paper's planes); with
+``chains.start: continue`` the first cells of the rows are themselves one chain
+along the second axis, the plane's first column. A tile is ``tiles.rows``
+consecutive chains. Tiles are fixed by the job alone, so the numbers never
+depend on how many ranks ran it or where it was interrupted; a tile is the unit
+of work, of storage (one chunk) and of the ``done`` commit flag.
 """
 
 from dataclasses import dataclass
@@ -47,12 +48,32 @@ def pending_tiles(job: Job, done: np.ndarray) -> list[Tile]:
     return [tile for tile in tiles if not done[tile.index]]
 
 
-def chain_parameters(job: Job, row: int) -> dict[str, np.ndarray]:
-    """Per-cell parameter arrays (length = ω points) of chain ``row``."""
+def chain_order(job: Job) -> np.ndarray:
+    """Indices into the job's ω axis in the order every chain runs (``chains.direction``):
+    down, ω decreasing, or up, increasing; equal values keep the axis order."""
     omega = job.omega
+    return np.argsort(-omega if job.chains.direction == "down" else omega, kind="stable")
+
+
+def chain_parameters(job: Job, row: int) -> dict[str, np.ndarray]:
+    """Per-cell parameter arrays of chain ``row``, in the order the chain runs."""
+    omega = job.omega[chain_order(job)]
     values = {"omega": omega}
     second_value = job.second_values[row]
     for name in ("f0", "mu_kn", "mu_cn", "zeta"):
         value = second_value if name == job.second else job.parameter(name)
         values[name] = np.full(omega.shape, value)
+    return values
+
+
+def first_column_parameters(job: Job) -> dict[str, np.ndarray]:
+    """Per-cell parameter arrays of the chain along the second axis (from ``from`` to
+    ``to``) at the ω where every row's chain starts: the seed of ``chains.start: continue``."""
+    n_rows, _ = job.shape
+    omega = job.omega[chain_order(job)[0]]
+    values = {"omega": np.full(n_rows, omega)}
+    for name in ("f0", "mu_kn", "mu_cn", "zeta"):
+        values[name] = (
+            job.second_values if name == job.second else np.full(n_rows, job.parameter(name))
+        )
     return values

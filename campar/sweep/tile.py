@@ -1,7 +1,9 @@
 """From a validated job to kernel calls: settings, output buffers, ``run_tile``.
 
 ``run_tile(job, tile)`` is the worker task of every runner (serial and MPI):
-a plain function of plain data with no MPI and no files inside.
+a plain function of plain data with no MPI and no files inside. Where each
+chain starts (``chain_starts``) depends on the job alone, so the numbers do not
+depend on the number of ranks or on interruptions.
 """
 
 import numpy as np
@@ -22,7 +24,7 @@ from ..core.kernel import (
 from ..core.model import N_STATE
 from .arrays import array_names, array_spec
 from .job import Job
-from .plan import Tile, chain_parameters
+from .plan import Tile, chain_order, chain_parameters, first_column_parameters
 
 
 def output_bits(job: Job) -> int:
@@ -39,35 +41,47 @@ def output_bits(job: Job) -> int:
 
 
 def solver_options(job: Job) -> SolverOptions:
+    """The job's integrator options; the kernel scales h_fixed, h_min and event_tol
+    to each cell's period (core.revolution.scale_solver_options)."""
     integ = job.integrator
-    method = DP54 if integ.method == "dp54" else RK4
-    return SolverOptions(method, integ.rtol, integ.atol, 0.0, 0.0, integ.event_tol, N_STATE)
+    return SolverOptions(
+        method=DP54 if integ.method == "dp54" else RK4,
+        rtol=integ.rtol,
+        atol=integ.atol,
+        h_fixed=0.0,
+        h_min=0.0,
+        event_tol=integ.event_tol,
+        n_err=N_STATE,
+    )
 
 
 def cell_settings(job: Job) -> CellSettings:
+    """The kernel's settings for every cell of the job (field names as the job's, see
+    CellSettings)."""
     tr = job.transient
     cl = job.classify
+    integ = job.integrator
     return CellSettings(
-        CONVERGED if tr.mode == "converged" else FIXED,
-        tr.max_revolutions,
-        cl.window_revolutions,
-        cl.n_max,
-        tr.conv_tol,
-        tr.window_tol,
-        cl.period_tol,
-        tr.newton,
-        tr.jump_residual,
-        tr.jump_cap,
-        tr.max_jumps,
-        tr.jump_agree,
-        cl.lyap_tol,
-        job.integrator.max_steps,
-        tr.extrapolate,
-        job.integrator.rk4_steps,
-        tr.chaos_after,
-        tr.chaos_lyapunov,
-        tr.quasiperiodic_after,
-        output_bits(job),
+        transient=CONVERGED if tr.mode == "converged" else FIXED,
+        max_revolutions=tr.max_revolutions,
+        window_revolutions=cl.window_revolutions,
+        n_max=cl.n_max,
+        conv_tol=tr.conv_tol,
+        window_tol=tr.window_tol,
+        period_tol=cl.period_tol,
+        newton=tr.newton,
+        jump_residual=tr.jump_residual,
+        jump_cap=tr.jump_cap,
+        max_jumps=tr.max_jumps,
+        jump_agree=tr.jump_agree,
+        lyap_tol=cl.lyap_tol,
+        max_steps=integ.max_steps,
+        extrapolate=tr.extrapolate,
+        rk4_steps=integ.rk4_steps,
+        chaos_after=tr.chaos_after,
+        chaos_lyapunov=tr.chaos_lyapunov,
+        quasiperiodic_after=tr.quasiperiodic_after,
+        output_bits=output_bits(job),
     )
 
 
@@ -78,26 +92,27 @@ def allocate_outputs(n_cells: int, bits: int, n_sections: int) -> CellOutputs:
         return n_cells if wanted else 0
 
     return CellOutputs(
-        np.zeros(n_cells, np.int32),
-        np.zeros(n_cells, np.int32),
-        np.zeros(n_cells, np.int8),
-        np.zeros(n_cells, np.int8),
-        np.zeros(n_cells, np.int16),
-        np.full(n_cells, np.nan),
-        np.full(n_cells, np.nan),
-        np.full(n_cells, np.nan),
-        np.full(n_cells, np.nan),
-        np.zeros((n_cells, N_STATE)),
-        np.zeros(n_cells, np.int32),
-        np.zeros(n_cells, np.int64),
-        np.full(cells(bool(bits & OUT_LYAPUNOV)), np.nan),
-        np.full((cells(bool(bits & OUT_MULTIPLIERS)), 2, 2), np.nan),
-        np.full((cells(bool(bits & OUT_SECTIONS)), n_sections, 2), np.nan),
+        n=np.zeros(n_cells, np.int32),
+        p=np.zeros(n_cells, np.int32),
+        kind=np.zeros(n_cells, np.int8),
+        status=np.zeros(n_cells, np.int8),
+        flags=np.zeros(n_cells, np.int16),
+        dc=np.full(n_cells, np.nan),
+        eps_min=np.full(n_cells, np.nan),
+        eps_max=np.full(n_cells, np.nan),
+        pn_max=np.full(n_cells, np.nan),
+        state=np.zeros((n_cells, N_STATE)),
+        revolutions=np.zeros(n_cells, np.int32),
+        steps=np.zeros(n_cells, np.int64),
+        lyapunov=np.full(cells(bool(bits & OUT_LYAPUNOV)), np.nan),
+        multipliers=np.full((cells(bool(bits & OUT_MULTIPLIERS)), 2, 2), np.nan),
+        sections=np.full((cells(bool(bits & OUT_SECTIONS)), n_sections, 2), np.nan),
     )
 
 
 def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
-    """Compute every chain of a tile; arrays shaped (tile rows, ω points, …)."""
+    """Compute every chain of a tile; arrays shaped (tile rows, ω points, …) in the job's
+    ω order, whichever way the chains ran."""
     ensure_fresh_cache()
     _, n_omega = job.shape
     names = array_names(job)
@@ -107,15 +122,46 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
         result[name] = np.zeros((tile.n_rows, n_omega, *tail), dtype)
     solver = solver_options(job)
     settings = cell_settings(job)
-    x_init = np.array([job.initial.y, job.initial.v])
+    starts = chain_starts(job)
+    order = chain_order(job)
     clamp = job.model.tensile == "clamp"
     for r, row in enumerate(range(tile.row_start, tile.row_stop)):
         par = chain_parameters(job, row)
-        out = allocate_outputs(n_omega, settings.outputs, job.n_sections)
+        out = allocate_outputs(n_omega, settings.output_bits, job.n_sections)
         run_chain(
             par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-            clamp, x_init, solver, settings, out,
+            clamp, starts[row], solver, settings, out,
         )  # fmt: skip
         for name in names:
-            result[name][r] = getattr(out, name)
+            result[name][r][order] = getattr(out, name)
     return result
+
+
+# Seeds of ``chains.start: continue`` by job digest: every rank computes the same first
+# column once (tens of milliseconds warm), so neither the runner nor the store knows of it.
+_FIRST_COLUMN_STARTS: dict[str, np.ndarray] = {}
+
+
+def chain_starts(job: Job) -> np.ndarray:
+    """(rows, 2): the state (y, y') at θ = 0 from which each row's chain starts.
+
+    rest: the job's initial state for every row. continue: the final state of the
+    row's first cell computed by the chain along the second axis (from the job's
+    initial state at its first value), or the initial state where that cell failed.
+    """
+    n_rows, _ = job.shape
+    x_init = np.array([job.initial.y, job.initial.v])
+    if job.chains.start == "rest":
+        return np.tile(x_init, (n_rows, 1))
+    key = job.digest()
+    if key not in _FIRST_COLUMN_STARTS:
+        settings = cell_settings(job)._replace(output_bits=0)  # states only
+        par = first_column_parameters(job)
+        out = allocate_outputs(n_rows, 0, job.n_sections)
+        run_chain(
+            par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
+            job.model.tensile == "clamp", x_init, solver_options(job), settings, out,
+        )  # fmt: skip
+        ok = np.all(np.isfinite(out.state), axis=1)[:, None]
+        _FIRST_COLUMN_STARTS[key] = np.where(ok, out.state, x_init)
+    return _FIRST_COLUMN_STARTS[key]

@@ -18,16 +18,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.codes import KIND_NAMES, Kind, cell_label
+from ..core.codes import Kind, cell_label
 from ..errors import JobError
-from ..sweep.job import Job
+from ..sweep.job import (
+    DEFAULT_CLASSIFY,
+    DEFAULT_INITIAL,
+    DEFAULT_INTEGRATOR,
+    DEFAULT_MODEL,
+    DEFAULT_TRANSIENT,
+    Job,
+    with_paper_values,
+)
 from ..sweep.plan import Tile
-from ..sweep.tile import run_tile
 
 # Second parameter of the one-row job (any swept parameter would do; its one value
 # is the line's μkn).
 ROW_PARAMETER = "mu_kn"
-PAPER_START = 6.0  # ω where the paper's continuations start (MODEL.md, planes)
+PAPER_START = 6.0  # ω where the paper's continuations start (docs/model.md, sweeps)
 CONTINUATION_STEP = 0.005  # ω step of ``continued_state``: a third of the paper's map step
 DEFAULT_SECTIONS = 64  # σn points kept per non-periodic cell (periodic ones keep n)
 
@@ -47,8 +54,8 @@ class BifurcationLine:
     dc: np.ndarray  # (N,) duty cycle
     state: np.ndarray  # (N, 2) final (y, y') at θ = 0 of each cell
     parameters: dict  # f0, mu_kn, mu_cn, zeta (floats) and tensile
-    chatter_p: int = 7
-    window: int = 64  # revolutions of the read window (p of non-periodic cells)
+    chatter_p: int = DEFAULT_CLASSIFY.chatter_p
+    window: int = DEFAULT_CLASSIFY.window_revolutions  # read window (p of non-periodic cells)
 
     @property
     def labels(self) -> list[str]:
@@ -68,9 +75,6 @@ class BifurcationLine:
                 out.append((label, float(w), float(w)))
         return out
 
-    def kind_names(self) -> list[str]:
-        return [KIND_NAMES[Kind(int(k))] for k in self.kind]
-
     def to_npz(self, path) -> None:
         """Save every array (and the parameters as 0-d entries) in one .npz file."""
         np.savez_compressed(
@@ -84,32 +88,32 @@ def line_job(
     omega: tuple[float, float],
     points: int,
     *,
-    f0: float = 0.5,
-    mu_kn: float = 0.8,
-    mu_cn: float = 0.8,
-    zeta: float = 0.2,
-    tensile: str = "clamp",
+    tensile: str = DEFAULT_MODEL.tensile,
     sections: int = DEFAULT_SECTIONS,
-    transient: str = "converged",
-    revolutions: int = 500,
-    initial: tuple[float, float] = (0.0, 0.0),
-    rtol: float = 1e-8,
+    transient: str = DEFAULT_TRANSIENT.mode,
+    revolutions: int = DEFAULT_TRANSIENT.max_revolutions,
+    initial: tuple[float, float] = (DEFAULT_INITIAL.y, DEFAULT_INITIAL.v),
+    rtol: float = DEFAULT_INTEGRATOR.rtol,
     name: str = "line",
+    **parameters: float,
 ) -> Job:
     """The one-row job of a line: ``points`` ω values from max(omega) down to min(omega).
 
+    ``parameters``: f0, mu_kn, mu_cn, zeta; those not given take the paper's base values.
     ``sections`` σn points are stored per non-periodic cell (chaos, quasi-periodic
     clouds); ``transient`` and ``revolutions`` as in a job's ``transient``.
-    Raises JobError for parameters out of range.
+    Raises JobError for a parameter unknown or out of range.
     """
     hi, lo = max(omega), min(omega)
+    values = with_paper_values(parameters)
+    row = values.pop(ROW_PARAMETER)
     data = {
         "name": name,
         "sweep": {
             "omega": {"from": hi, "to": lo, "points": points},
-            ROW_PARAMETER: {"from": mu_kn, "to": mu_kn, "points": 1},
+            ROW_PARAMETER: {"from": row, "to": row, "points": 1},
         },
-        "fixed": {"f0": f0, "mu_cn": mu_cn, "zeta": zeta},
+        "fixed": values,
         "model": {"tensile": tensile},
         "initial": {"y": initial[0], "v": initial[1]},
         "integrator": {"rtol": rtol},
@@ -125,6 +129,8 @@ def compute_line(job: Job) -> BifurcationLine:
     """Run the chain of a one-row job (``line_job``) and collect its cells."""
     if job.shape[0] != 1 or not job.wants("sections"):
         raise ValueError("compute_line needs a one-row job with the 'sections' output")
+    from ..sweep.tile import run_tile  # numba loads here: the CLI reads this module's defaults
+
     cells = {name: values[0] for name, values in run_tile(job, Tile(0, 0, 1)).items()}
     parameters = {name: float(job.parameter(name)) for name in ("f0", "mu_cn", "zeta")}
     parameters[ROW_PARAMETER] = float(job.second_values[0])

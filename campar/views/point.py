@@ -8,18 +8,38 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core import model
 from ..core.codes import KIND_NAMES, Flag, Kind, cell_label, status_message
 from ..core.kernel import trace_orbit
 from ..core.revolution import make_trace
 from ..errors import JobError
-from ..sweep.job import Job, check_parameter
+from ..sweep.job import (
+    DEFAULT_INITIAL,
+    DEFAULT_INTEGRATOR,
+    DEFAULT_MODEL,
+    DEFAULT_TRANSIENT,
+    PARAMETERS,
+    Job,
+    check_parameter,
+    with_paper_values,
+)
 from ..sweep.plan import Tile
 from ..sweep.tile import cell_settings, run_tile, solver_options
 
-# Event codes of a trace: 2·(contact mode before) + (event index), see kernel.Trace.
+# Event codes of a trace: 2·(contact mode before) + (event index), see core.revolution.Trace.
 EVENT_NAMES = {0: "impact", 2: "detachment", 3: "force zero", 4: "detachment", 5: "force resumes"}
 SAMPLES_PER_STEP = 4
 MAX_TRACE_REVOLUTIONS = 64
+POINT_OUTPUTS = ("label", "dc", "eps", "pn", "sections")
+
+# The cam phases of one revolution as the model defines them: (name, start θ, end θ).
+# Handed to the plots on every OrbitTrace, which draw them without importing the model.
+_PHASE_NAMES = {model.RISE: "rise", model.FAR_DWELL: "far dwell", model.FALL: "fall",
+                model.NEAR_DWELL: "near dwell"}  # fmt: skip
+CAM_PHASES = tuple(
+    (_PHASE_NAMES[i], float(model.PHASE_BOUNDS[i]), float(model.PHASE_BOUNDS[i + 1]))
+    for i in range(model.N_PHASES)
+)
 
 
 @dataclass(frozen=True)
@@ -35,6 +55,7 @@ class OrbitTrace:
     contact: np.ndarray  # contact mode (0 separated, 1 pushing, 2 in contact without force)
     events: np.ndarray  # (M, 4): t, y, y', code
     period: float  # one cam revolution, 2π/ω
+    cam_phases: tuple[tuple[str, float, float], ...]  # (name, start θ, end θ), CAM_PHASES
 
     def events_named(self, name: str) -> np.ndarray:
         """Rows (t, y, y') of the events called ``name`` ("impact", "detachment", …)."""
@@ -94,85 +115,85 @@ class PointResult:
 
 
 def point_job(
-    omega, f0, mu_kn, mu_cn, zeta, tensile, y0, v0, transient, revolutions, rtol, atol, method,
-    outputs,
-) -> Job:  # fmt: skip
-    """A one-cell job (validated like any job) for the given parameters."""
-    for name, value in (("omega", omega), ("f0", f0), ("mu_kn", mu_kn), ("mu_cn", mu_cn),
-                        ("zeta", zeta)):  # fmt: skip
+    *,
+    omega: float,
+    tensile: str = DEFAULT_MODEL.tensile,
+    y0: float = DEFAULT_INITIAL.y,
+    v0: float = DEFAULT_INITIAL.v,
+    transient: str = DEFAULT_TRANSIENT.mode,
+    revolutions: int = DEFAULT_TRANSIENT.max_revolutions,
+    rtol: float = DEFAULT_INTEGRATOR.rtol,
+    atol: float = DEFAULT_INTEGRATOR.atol,
+    method: str = DEFAULT_INTEGRATOR.method,
+    outputs=POINT_OUTPUTS,
+    **parameters: float,
+) -> Job:
+    """A one-cell job (validated like any job) from (y0, v0) at θ = 0.
+
+    ``parameters``: f0, mu_kn, mu_cn, zeta; those not given take the paper's base values.
+    Every setting defaults to the job model's (``campar.sweep.job``): the force law, the
+    transient (``revolutions`` is its budget when converged, its length when fixed) and
+    the integrator. Raises JobError for a parameter unknown or out of range.
+    """
+    values = with_paper_values(parameters)
+    for name, value in {"omega": omega, **values}.items():
         try:
             check_parameter(name, float(value))
         except ValueError as exc:
             raise JobError(str(exc)) from None
-    integrator = {"method": method, "rtol": rtol}
-    if atol is not None:
-        integrator["atol"] = atol
+    f0 = values.pop("f0")  # swept (one value): a job sweeps ω and one more parameter
     data = {
         "name": "point",
         "sweep": {
             "omega": {"from": omega, "to": omega, "points": 1},
             "f0": {"from": f0, "to": f0, "points": 1},
         },
-        "fixed": {"mu_kn": mu_kn, "mu_cn": mu_cn, "zeta": zeta},
+        "fixed": values,
         "model": {"tensile": tensile},
         "initial": {"y": y0, "v": v0},
-        "integrator": integrator,
+        "integrator": {"method": method, "rtol": rtol, "atol": atol},
         "transient": {"mode": transient, "max_revolutions": revolutions},
-        "outputs": outputs,
+        "outputs": list(outputs),
         "tiles": {"rows": 1},
     }
     return Job.from_dict(data, source="point")
 
 
+def point_parameters(job: Job) -> dict:
+    """The model parameters of a one-cell job (ω first, as PARAMETERS) and its force law."""
+    values = {"omega": float(job.omega[0]), job.second: float(job.second_values[0]), **job.fixed}
+    return {**{name: values[name] for name in PARAMETERS}, "tensile": job.model.tensile}
+
+
 def simulate_point(
     omega: float,
     *,
-    f0: float = 0.5,
-    mu_kn: float = 0.8,
-    mu_cn: float = 0.8,
-    zeta: float = 0.2,
-    tensile: str = "clamp",
-    y0: float = 0.0,
-    v0: float = 0.0,
-    transient: str = "converged",
-    revolutions: int = 500,
-    rtol: float = 1e-8,
-    atol: float | None = None,
-    method: str = "dp54",
     multipliers: bool = False,
     lyapunov: bool = False,
     trace: bool = False,
+    **settings,
 ) -> PointResult:
     """Simulate one cell from (y0, v0) at θ = 0 and classify its steady motion.
 
-    ``revolutions`` is the transient budget (converged) or length (fixed). With
-    ``trace``, the steady orbit (its period, or up to 64 revolutions when not
-    periodic) is integrated once more from the final state and recorded.
-    Raises JobError for parameters out of range.
+    ``settings`` are the keywords of ``point_job`` (f0, mu_kn, mu_cn, zeta, tensile, y0,
+    v0, transient, revolutions, rtol, atol, method), each defaulting to the paper's base
+    value or the job model's default. With ``trace``, the steady orbit (its period, or up
+    to 64 revolutions when not periodic) is integrated once more from the final state and
+    recorded. Raises JobError for a parameter unknown or out of range.
     """
-    outputs = ["label", "dc", "eps", "pn", "sections"]
+    outputs = [*POINT_OUTPUTS]
     if multipliers:
         outputs.append("multipliers")
     if lyapunov:
         outputs.append("lyapunov")
-    job = point_job(
-        omega, f0, mu_kn, mu_cn, zeta, tensile, y0, v0, transient, revolutions, rtol, atol,
-        method, outputs,
-    )  # fmt: skip
+    job = point_job(omega=omega, outputs=outputs, **settings)
     cell = {name: arr[0, 0] for name, arr in run_tile(job, Tile(0, 0, 1)).items()}
     kind = Kind(int(cell["kind"]))
     n = int(cell["n"])
     sections = cell["sections"][: n if n else job.n_sections]
     sections = sections[~np.isnan(sections[:, 0])]
     result = PointResult(
-        parameters={
-            "omega": omega,
-            "f0": f0,
-            "mu_kn": mu_kn,
-            "mu_cn": mu_cn,
-            "zeta": zeta,
-            "tensile": tensile,
-        },  # fmt: skip
+        parameters=point_parameters(job),
         label=cell_label(kind, n, int(cell["p"]), job.classify.chatter_p),
         n=n,
         p=int(cell["p"]),
@@ -218,6 +239,7 @@ def _with_trace(result: PointResult, job: Job, n_revs: int) -> PointResult:
         contact=samples[:, 6].astype(np.int8),
         events=rec.events[: rec.count[1]].copy(),
         period=2 * math.pi / par["omega"],
+        cam_phases=CAM_PHASES,
     )
     if status != 0:
         return result

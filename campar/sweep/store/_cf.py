@@ -117,12 +117,6 @@ def done_attrs(dtype: np.dtype) -> dict:
     }
 
 
-def sweep_direction(job: Job) -> str:
-    """Which way every chain runs in ω (the job's order): down (decreasing) or up."""
-    axis = job.sweep["omega"]
-    return "down" if axis.start >= axis.stop else "up"
-
-
 def global_attrs(job: Job, created: str) -> dict:
     """The file's CF and campar attributes, besides campar's own (job, runs, …)."""
     start = job.initial
@@ -138,9 +132,14 @@ def global_attrs(job: Job, created: str) -> dict:
         "cam, one degree of freedom, nonlinear (Hunt–Crossley) contact",
         "force_law": FORCE_LAWS[job.model.tensile],
         "tensile": job.model.tensile,
-        "chain_start": "rest",
-        "chain_start_state": f"y = {start.y:g}, ydot = {start.v:g} at θ = 0",
-        "sweep_direction": sweep_direction(job),
+        "chain_start": job.chains.start,
+        "chain_start_state": f"y = {start.y:g}, ydot = {start.v:g} at θ = 0"
+        + (
+            f", {job.second} = {job.second_values[0]:g} (first column)"
+            if job.chains.start == "continue"
+            else ""
+        ),
+        "sweep_direction": job.chains.direction,
         "campar_version": __version__,
         "date_created": created,
     }

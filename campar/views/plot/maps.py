@@ -202,7 +202,8 @@ def plot_map(
         else:
             if ax is None:
                 ax = new_figure(4.9, 3.4).add_subplot()
-            gaps_legend = draw_quantity(ax, xe, ye, arrays, what, legend, log, vmin, vmax)
+            gaps_legend = draw_quantity(ax, xe, ye, arrays, what, legend=legend, log=log,
+                                        vmin=vmin, vmax=vmax)  # fmt: skip
         ax.set_xlim(xe.min(), xe.max())
         ax.set_ylim(ye.min(), ye.max())
         ax.set_xlabel(axis_label("omega"))
@@ -251,7 +252,7 @@ def draw_legend(ax, shown, hidden, title: str, columns: int) -> None:
               ncols=columns, alignment="left")  # fmt: skip
 
 
-def draw_quantity(ax, xe, ye, arrays, what: str, legend: bool, log, vmin, vmax) -> bool:
+def draw_quantity(ax, xe, ye, arrays, what: str, *, legend: bool, log, vmin, vmax) -> bool:
     """A per-cell quantity with a colour bar; failed (NaN) and not computed cells as gaps,
     explained in a one-line legend just above the map. True if that legend was drawn."""
     quantity = QUANTITIES[what]

@@ -3,8 +3,8 @@
 The data is a ``PointResult`` of ``simulate_point(..., trace=True)`` (or any
 object with its attributes): ``trace`` holds dense samples t, y, y', yc, ε, Pn
 over the steady orbit (its period, n revolutions, or 64 revolutions when not
-periodic), with t = 0 at cam angle θ = 0, and its events (impacts,
-detachments). Nothing is recomputed here.
+periodic), with t = 0 at cam angle θ = 0, its events (impacts,
+detachments) and the cam phases of a revolution. Nothing is recomputed here.
 
 Marks follow the paper (its Figs. 6 and 9): σn points (the stroboscopic section
 at θ = 0) blue, detachment points (the section σp, ε crossing 0 downwards)
@@ -29,13 +29,9 @@ CAM_COLOUR = "#1f5fbf"  # yc(t): blue, right axis
 ORBIT_COLOUR = "0.15"
 PHASE_SHADE = "0.93"  # background of the cam's rise and fall (the dwells stay white)
 
-# Cam phases of the cosine-acceleration law (MODEL.md): name, start and end angle θ.
-CAM_PHASES = (
-    ("rise", 0.0, math.pi / 3),
-    ("far dwell", math.pi / 3, math.pi),
-    ("fall", math.pi, 4 * math.pi / 3),
-    ("near dwell", 4 * math.pi / 3, 2 * math.pi),
-)
+# The cam phases come with the trace (``trace.cam_phases``: name, start and end angle θ,
+# as the model defines them); these are drawn on PHASE_SHADE.
+SHADED_PHASES = ("rise", "fall")
 PHASE_ABBREVIATIONS = {"rise": "R", "far dwell": "FD", "fall": "F", "near dwell": "ND"}
 
 MAX_NAMED_REVOLUTIONS = 3  # more revolutions on one axis leave no room for phase names
@@ -78,10 +74,10 @@ def shade_cam_phases(ax, trace, *, names: bool = False) -> None:
     scale = period / (2 * math.pi)
     start = trace.t[0]  # at θ = 0
     for k in range(revolutions):
-        for name, a, b in CAM_PHASES:
+        for name, a, b in trace.cam_phases:
             t0 = start + (2 * math.pi * k + a) * scale
             t1 = start + (2 * math.pi * k + b) * scale
-            if name in ("rise", "fall"):
+            if name in SHADED_PHASES:
                 ax.axvspan(t0, t1, color=PHASE_SHADE, lw=0, zorder=0)
             if names and k == 0 and revolutions <= MAX_NAMED_REVOLUTIONS:
                 text = name if revolutions == 1 else PHASE_ABBREVIATIONS[name]
@@ -249,10 +245,11 @@ def recent(trace, revolutions: int | None):
 
 
 class _Span:
-    """A trace's period and time span, stretched to ``revolutions`` for shading."""
+    """A trace's period, cam phases and time span, stretched to ``revolutions`` for shading."""
 
     def __init__(self, trace, revolutions):
         self.period = trace.period
+        self.cam_phases = trace.cam_phases
         self.t = np.array([trace.t[0], trace.t[0] + revolutions * trace.period])
 
 

@@ -42,7 +42,7 @@ STYLE = {
 }
 DPI = 300  # PNG resolution; vector formats keep maps as embedded images (rasterized)
 
-# The field's notation for the model parameters (MODEL.md), and what each one is.
+# The field's notation for the model parameters (docs/model.md), and what each one is.
 SYMBOLS = {
     "omega": r"$\omega$",
     "f0": r"$f_0$",
