@@ -101,6 +101,9 @@ def add_point(sub):
     p.add_argument("--lyapunov", action="store_true", help="largest Lyapunov exponent")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE.png", help="phase portrait, ε(t), Pn(t) and yc(t)")
+    p.add_argument("--attractors", type=int, metavar="K",
+                   help="run K starts (rest, --y0/--v0, a spread over a box of (y, y')) "
+                   "and list the distinct attractors with basin fractions")  # fmt: skip
     p.set_defaults(handler=run_point)
 
 
@@ -111,19 +114,16 @@ def run_point(args) -> int:
 
     if args.revolutions < 1:
         raise JobError(f"--revolutions must be ≥ 1, got {args.revolutions}")
+    settings = dict(f0=args.f0, mu_kn=args.mu_kn, mu_cn=args.mu_cn, zeta=args.zeta,
+                    tensile=args.tensile, transient=args.transient,
+                    revolutions=args.revolutions, rtol=args.rtol, method=args.method)  # fmt: skip
+    if args.attractors is not None:
+        return run_attractors(args, settings)
     result = simulate_point(
         args.omega,
-        f0=args.f0,
-        mu_kn=args.mu_kn,
-        mu_cn=args.mu_cn,
-        zeta=args.zeta,
-        tensile=args.tensile,
         y0=args.y0,
         v0=args.v0,
-        transient=args.transient,
-        revolutions=args.revolutions,
-        rtol=args.rtol,
-        method=args.method,
+        **settings,
         multipliers=args.multipliers,
         lyapunov=args.lyapunov,
         trace=bool(args.plot),
@@ -136,6 +136,24 @@ def run_point(args) -> int:
         from .views.plot import plot_orbit
 
         plot_orbit(result).savefig(args.plot, dpi=150)
+    return 0
+
+
+def run_attractors(args, settings) -> int:
+    import json
+
+    from .views.attractors import describe_attractors, find_attractors
+
+    given = [(args.y0, args.v0)] if (args.y0, args.v0) != (0.0, 0.0) else []
+    if args.attractors < len(given) + 1:
+        raise JobError(f"--attractors must be ≥ {len(given) + 1} (rest and --y0/--v0), "
+                       f"got {args.attractors}")  # fmt: skip
+    if args.plot:
+        raise JobError("--plot draws one orbit: use it without --attractors, from an "
+                       "attractor's state (--y0 --v0)")  # fmt: skip
+    census = find_attractors(args.omega, count=args.attractors, given=given,
+                             lyapunov=args.lyapunov, **settings)  # fmt: skip
+    print(json.dumps(census.to_dict()) if args.json else describe_attractors(census))
     return 0
 
 
@@ -255,6 +273,8 @@ def add_line(sub):
         help="figure; format from the suffix (default line.png)",
     )
     p.add_argument("--npz", metavar="FILE", help="also save the arrays (FILE, or FILE-1.npz, …)")
+    p.add_argument("--json", action="store_true", help="print one JSON object: each line's "
+                   "runs of labels and its transitions (ω, type, multiplier evidence)")  # fmt: skip
     p.set_defaults(handler=run_line)  # fmt: skip
 
 
@@ -263,6 +283,7 @@ def run_line(args) -> int:
     from pathlib import Path
 
     from .views.line import compute_lines, describe_line, line_job, varied_parameters
+    from .views.transitions import describe_transitions
 
     if args.points < 2:
         raise JobError(f"--points must be ≥ 2, got {args.points}")
@@ -274,9 +295,12 @@ def run_line(args) -> int:
     start = time.perf_counter()
     lines = compute_lines(jobs)
     seconds = time.perf_counter() - start
-    for line in lines:
-        print(describe_line(line))
-    print(f"{sum(len(line.omega) for line in lines)} cells in {seconds:.2f} s")
+    if not args.json:
+        for line in lines:
+            print(describe_line(line))
+            print(f"  transitions (ω decreasing):\n{describe_transitions(line.transitions)}"
+                  if line.transitions else "  no transitions")  # fmt: skip
+        print(f"{sum(len(line.omega) for line in lines)} cells in {seconds:.2f} s")
     if args.npz:
         for i, line in enumerate(lines):
             path = Path(args.npz)
@@ -285,7 +309,15 @@ def run_line(args) -> int:
     from .views.plot.bifurcation import plot_line, plot_lines
 
     figure = plot_line(lines[0]) if len(lines) == 1 else plot_lines(lines)
-    print(f"wrote {save_figure(figure, args.output)}")
+    written = save_figure(figure, args.output)
+    if args.json:
+        import json
+
+        data = {"lines": [line.to_dict() for line in lines], "seconds": seconds,
+                "figure": str(written)}  # fmt: skip
+        print(json.dumps(data))
+    else:
+        print(f"wrote {written}")
     return 0
 
 

@@ -1,6 +1,8 @@
-"""Shared fixtures: small job files, serial reference maps, the campar and mpirun commands."""
+"""Shared fixtures: small job files, serial reference maps, the campar and mpirun commands,
+the shared reference cells."""
 
 import contextlib
+import json
 import os
 import signal
 import subprocess
@@ -18,6 +20,29 @@ from campar.sweep.tile import run_tile
 
 CAMPAR = [sys.executable, "-m", "campar.cli"]
 MPIRUN = Path(sys.executable).parent / "mpirun"
+
+# Cells computed with SciPy DOP853 at rtol 1e-10 outside campar (../shared in the
+# workplace; the copy in tests/data in a checkout outside it).
+REFERENCE_CASES = Path(__file__).resolve().parents[2] / "shared" / "reference_cases.json"
+if not REFERENCE_CASES.exists():
+    REFERENCE_CASES = Path(__file__).resolve().parent / "data" / "reference_cases.json"
+
+
+def reference_case(case_id: int) -> dict:
+    """The shared reference cell with this id (its parameters, start and expected result)."""
+    (case,) = [c for c in json.loads(REFERENCE_CASES.read_text())["cases"] if c["id"] == case_id]
+    return case
+
+
+def case_arguments(case: dict) -> list[str]:
+    """`campar point` options that set every parameter and the start of a reference cell."""
+    return [
+        "--omega", str(case["omega"]), "--f0", str(case["f0"]), "--mu-kn", str(case["mu_kn"]),
+        "--mu-cn", str(case["mu_cn"]), "--zeta", str(case["zeta"]),
+        "--tensile", "clamp" if case["clamp"] else "allow",
+        "--y0", str(case["initial_state"]["y"]), "--v0", str(case["initial_state"]["yd"]),
+    ]  # fmt: skip
+
 
 # 6 × 12 cells, one chain a tile; "slow" fixes a long transient so a tile takes
 # a noticeable fraction of a second (time to signal or kill a run mid-way).

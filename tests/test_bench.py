@@ -7,6 +7,7 @@ import pytest
 
 from campar.bench import BENCHMARKS, peers, precision
 from campar.cli import main
+from campar.core.codes import Flag, Kind
 from campar.sweep.job import load_job
 
 HEADERS = {
@@ -30,7 +31,15 @@ def test_every_benchmark_is_registered_and_listed(capsys):
         assert name in listing
 
 
-@pytest.mark.parametrize("name", list(HEADERS))
+# The tiny runs of these take 5–30 s each (SciPy references, whole sub-planes, a pool of
+# child processes); their modules have quick tests of their own below and in test_stress.py.
+SLOW_BENCHMARKS = {"precision", "outputs", "stress", "map"}
+
+
+@pytest.mark.parametrize(
+    "name",
+    [pytest.param(n, marks=pytest.mark.slow) if n in SLOW_BENCHMARKS else n for n in HEADERS],
+)
 def test_benchmark_runs_tiny_and_prints_its_table(name, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(REPO)  # map and scaling read the planes from jobs/
     extra = {"precision": ["--plot", str(tmp_path / "precision.png")], "map": ["--audit"]}
@@ -70,9 +79,9 @@ def test_event_sequences_match_the_reference(precision_runs):
     assert all(r.events_match for r in runs if r.method == "dp54" and r.setting <= 1e-6)
 
 
-def test_peers_map_row_is_a_piece_of_the_mu_cn_plane():
-    """The row the peers compute is chain ROW_CHAIN of jobs/mu_cn.yaml, as that job runs it."""
-    plane = load_job(REPO / "jobs" / "mu_cn.yaml")
+def test_peers_map_row_is_a_piece_of_the_wide_mu_cn_plane():
+    """The row the peers compute is chain ROW_CHAIN of jobs/mu_cn_wide.yaml, as it runs it."""
+    plane = load_job(REPO / "jobs" / "mu_cn_wide.yaml")
     first, stop = peers.ROW_OMEGA
     row = peers.row_job(first, stop, "dp54", "converged", 500, 64)
     np.testing.assert_allclose(row.omega, plane.omega[first:stop], rtol=0, atol=1e-12)
@@ -81,3 +90,46 @@ def test_peers_map_row_is_a_piece_of_the_mu_cn_plane():
     assert row.fixed == plane.fixed
     for section in ("model", "initial", "integrator", "transient", "classify"):
         assert getattr(row, section) == getattr(plane, section), section
+
+
+def test_map_comparison_counts_cells_by_hand():
+    """bench map's score on two 2 × 3 maps that differ in two cells, one of them settled
+    for the candidate by a long run: 4/6 agree, 5/6 after adjudication."""
+    from campar.bench import maps
+
+    per, chaos = int(Kind.PERIODIC), int(Kind.CHAOTIC)
+    ref = {
+        "kind": np.array([[per, per, per], [per, chaos, per]]),
+        "n": np.array([[1, 2, 1], [1, 0, 1]]),
+        "p": np.array([[0, 2, 1], [1, 0, 1]]),
+        "dc": np.array([[0.0, 0.5, 0.1], [0.2, np.nan, 0.3]]),
+        "flags": np.zeros((2, 3), int),
+    }
+    cand = {name: values.copy() for name, values in ref.items()}
+    cand["n"][0, 1], cand["p"][0, 1] = 1, 1  # 2-2 → 1-1
+    cand["kind"][1, 1], cand["n"][1, 1], cand["p"][1, 1] = per, 3, 3  # chaos → 3-3
+    cand["flags"][1, 1] = int(Flag.GRAZING)
+    cand["dc"][0, 2] += 1e-3
+    c = maps.compare(cand, ref, {"0,1": "1-1"})
+    assert (c.cells, c.agree, c.adjudicated) == (6, 4 / 6, 5 / 6)
+    # |ΔDC| over the four periodic cells that agree: 0, 1e-3, 0, 0
+    assert c.dc_error_mean == pytest.approx(2.5e-4) and c.dc_error_max == pytest.approx(1e-3)
+    assert [d[:5] for d in c.disagreements] == [
+        (0, 1, "2-2", "1-1", "1-1"),
+        (1, 1, "chaos", "3-3", None),
+    ]
+    assert c.flagged(Flag.GRAZING) == 1 and c.flagged(Flag.SLOW) == 0
+
+
+def test_asking_for_every_output_changes_no_label():
+    """bench outputs' premise on a 2 × 6 piece of its sub-plane (with a chaotic cell):
+    outputs may change the cost, never n, p, kind or status, in either transient mode."""
+    from campar.bench import outputs
+    from campar.sweep.job import OUTPUT_NAMES
+
+    for transient in ("converged", "fixed"):
+        _, labels = outputs.run_map(outputs.make_job(2, 6, transient, ["label"], revolutions=100))
+        _, every = outputs.run_map(outputs.make_job(2, 6, transient, OUTPUT_NAMES, revolutions=100))
+        assert (labels["kind"] != int(Kind.PERIODIC)).any()  # not only easy cells
+        for name in outputs.LABEL_ARRAYS:
+            np.testing.assert_array_equal(every[name], labels[name], err_msg=(transient, name))

@@ -1,10 +1,14 @@
-"""`campar point`: output formats and clear refusals of bad input."""
+"""`campar point`: output formats and clear refusals of bad input; the numbers it prints
+are those of the shared reference cells (SciPy DOP853, rtol 1e-10, outside campar)."""
 
 import json
+import math
+import re
 import subprocess
 import sys
 
 import pytest
+from conftest import case_arguments, reference_case
 
 CAMPAR = [sys.executable, "-m", "campar.cli"]
 
@@ -13,21 +17,34 @@ def campar(*args):
     return subprocess.run([*CAMPAR, *args], capture_output=True, text=True, timeout=300)
 
 
-def test_point_json_has_the_documented_keys():
-    out = campar("point", "--omega", "3.15", "--mu-kn", "0.91", "--json", "--multipliers",
-                 "--lyapunov")  # fmt: skip
+def test_point_json_has_the_documented_keys_and_the_reference_cells_values():
+    case = reference_case(112)  # ω = 3.15, μkn = 0.91: a 2-2 with the clamp active
+    expected = case["expected"]
+    out = campar("point", *case_arguments(case), "--json", "--multipliers", "--lyapunov")
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     for key in ("label", "n", "p", "kind", "dc", "eps_min", "eps_max", "pn_max",
                 "revolutions", "steps", "multipliers", "lyapunov"):  # fmt: skip
         assert key in data
-    assert data["label"] == "2-2" and len(data["multipliers"]) == 2
+    assert (data["label"], data["n"], data["p"]) == (expected["label"], expected["n"],
+                                                     expected["p"])  # fmt: skip
+    assert data["dc"] == pytest.approx(expected["DC"], abs=0.0025)
+    assert data["eps_min"] == pytest.approx(expected["eps_min"], abs=0.0025)
+    assert data["eps_max"] == pytest.approx(expected["eps_max"], abs=0.0025)
+    assert data["pn_max"] == pytest.approx(expected["Pn_max"], rel=0.01)
+    # Liouville: |λ1 λ2| = exp(∮ div f dt) ≤ exp(−2ζ n 2π/ω), since div f ≤ −2ζ
+    (re1, im1), (re2, im2) = data["multipliers"]
+    bound = math.exp(-2 * case["zeta"] * data["n"] * 2 * math.pi / case["omega"])
+    assert 0 < abs(complex(re1, im1) * complex(re2, im2)) <= bound
 
 
 def test_point_summary_is_human_readable():
-    out = campar("point", "--omega", "1.0")
-    assert out.returncode == 0
-    assert out.stdout.startswith("1-1") and "duty cycle" in out.stdout
+    case = reference_case(102)  # ω = 1, the paper's base values: 1-1
+    out = campar("point", *case_arguments(case))
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith(case["expected"]["label"] + " ")
+    dc = re.search(r"duty cycle (\S+)", out.stdout)
+    assert dc and float(dc.group(1)) == pytest.approx(case["expected"]["DC"], abs=0.0025)
 
 
 @pytest.mark.parametrize(

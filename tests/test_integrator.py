@@ -37,9 +37,11 @@ def ramp(t, y, p, mode, dy):
 
 @njit
 def dip(t, y, f, p, mode, g, dg):
-    # (y - 1)² − 1e-4: positive but for a dip of width 0.02 around y = 1
-    g[0] = (y[0] - 1.0) ** 2 - 1e-4
-    dg[0] = 2.0 * (y[0] - 1.0) * f[0]
+    # (y - 1)² − 1e-4, positive but for a dip of width 0.02 around y = 1 (mode 0), and
+    # its negative inside the dip (mode 1): roots at y = 1 ∓ 0.01
+    sign = 1.0 if mode[0] == 0 else -1.0
+    g[0] = sign * ((y[0] - 1.0) ** 2 - 1e-4)
+    dg[0] = sign * 2.0 * (y[0] - 1.0) * f[0]
     return 1
 
 
@@ -112,11 +114,11 @@ def test_rk4_fixed_step_error_is_fourth_order():
 
 
 def test_two_roots_inside_one_step_are_found():
-    # RK4 steps of 0.8 jump over the whole dip of g between y = 0.99 and 1.01
+    # RK4 steps of 0.8 jump over the whole dip of g between y = 0.99 and 1.01: the step
+    # (0.8, 1.6] has g > 0 at both ends; on y = t the roots are t = 1 ∓ 0.01 exactly
     p = Omega(0.0)
     _, times, _ = run(ramp, dip, np.array([0.0, 0.0]), 1.6, p, options(I.RK4, h_fixed=0.8), 100)
-    assert len(times) >= 1
-    assert times[0] == pytest.approx(0.99, abs=1e-9)
+    np.testing.assert_allclose(times, [0.99, 1.01], rtol=0, atol=1e-9)
 
 
 def test_hermite_extremum_of_a_known_cubic():

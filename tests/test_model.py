@@ -29,7 +29,12 @@ def test_cam_law_values():
 
 
 params = st.builds(
-    lambda kn, cn, zeta, clamp: M.make_params(1.0, zeta, 0.5, kn, cn, clamp),
+    # the model's parameters, and its k and c as MODEL.md defines them from μkn, μcn, ζ
+    lambda kn, cn, zeta, clamp: (
+        M.make_params(1.0, zeta, 0.5, kn, cn, clamp),
+        kn / (1 - kn),
+        2 * zeta * cn / (1 - cn),
+    ),
     st.floats(0.01, 0.999),
     st.floats(0.01, 0.999),
     st.floats(0.0, 2.0),
@@ -39,15 +44,16 @@ params = st.builds(
 
 @given(params, st.floats(-2, 2), st.floats(-50, 50))
 @settings(max_examples=300, deadline=None)
-def test_contact_force_laws(p, eps, deps):
+def test_contact_force_laws(model, eps, deps):
+    p, k, c = model
     force = M.contact_force(eps, deps, p)
     if eps <= 0:
         assert force == 0.0  # no force while separated
     elif p.clamp:
         assert force >= 0.0  # contact cannot pull
-        assert force == pytest.approx(max(0.0, p.k * eps**1.5 * (1 + p.c * deps)))
+        assert force == pytest.approx(max(0.0, k * eps**1.5 * (1 + c * deps)))
     else:
-        assert force == pytest.approx(p.k * eps**1.5 * (1 + p.c * deps))
+        assert force == pytest.approx(k * eps**1.5 * (1 + c * deps))
 
 
 @pytest.mark.parametrize("contact", [M.FREE, M.PUSH])

@@ -28,6 +28,9 @@ pytestmark = [
     pytest.mark.mpi,
     pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}"),
 ]
+# Each test starts mpirun (2–5 s): the quick tier keeps one real 2-rank run of a map,
+# the faults, signals and refusals under MPI run in the full tier.
+slow = pytest.mark.slow
 
 
 def mpirun(ranks: int) -> list[str]:
@@ -50,7 +53,7 @@ def last_run(store) -> dict:
         return reader.attrs["runs"][-1]
 
 
-@pytest.mark.parametrize("ranks", [2, 3])
+@pytest.mark.parametrize("ranks", [2, pytest.param(3, marks=slow)])
 def test_mpi_map_equals_the_serial_one_and_every_rank_computes(write_job, ranks):
     path, job = write_job(slow=True)
     result = run_mpi(ranks, "run", path)
@@ -65,6 +68,7 @@ def test_mpi_map_equals_the_serial_one_and_every_rank_computes(write_job, ranks)
     assert len(entry["peak_rss_mb"]) == ranks and all(0 < mb < 2000 for mb in entry["peak_rss_mb"])
 
 
+@slow
 def test_mpi_run_killed_with_sigkill_resumes_to_the_same_map(write_job):
     path, job = write_job(slow=True)
     proc = start_campar("run", path, launcher=mpirun(2))
@@ -82,6 +86,7 @@ def test_mpi_run_killed_with_sigkill_resumes_to_the_same_map(write_job):
     assert last_run(job.store)["tiles"] == 6 - done
 
 
+@slow
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGUSR1])
 def test_a_signal_to_mpirun_exits_75_and_a_serial_run_resumes(write_job, signum):
     path, job = write_job(slow=True)
@@ -118,6 +123,7 @@ def run_with_faults(ranks, job_path, fault) -> subprocess.CompletedProcess:
     return run_mpi(ranks, "-c", script, command=[sys.executable])
 
 
+@slow
 def test_a_worker_that_fails_every_tile_does_not_stop_the_run(write_job):
     path, job = write_job(slow=True)  # rank 0 cannot finish alone before rank 1 asks
     result = run_with_faults(2, path, "rank == 1")
@@ -128,6 +134,7 @@ def test_a_worker_that_fails_every_tile_does_not_stop_the_run(write_job):
         assert_same_map(reader, job)
 
 
+@slow
 def test_a_tile_that_fails_on_two_ranks_ends_the_run_with_where(write_job):
     path, job = write_job()
     result = run_with_faults(3, path, "tile.index == 4")
@@ -141,6 +148,7 @@ def test_a_tile_that_fails_on_two_ranks_ends_the_run_with_where(write_job):
     assert last_run(job.store)["outcome"] == "failed"
 
 
+@slow
 def test_refusals_under_mpi_end_every_rank(write_job):
     path, job = write_job()
     assert run_campar("run", path).returncode == 0
@@ -150,6 +158,7 @@ def test_refusals_under_mpi_end_every_rank(write_job):
     assert refused.stderr.count("integrator.rtol: 1e-08 in the store") == 1  # rank 0 says it
 
 
+@slow
 def test_every_rank_of_an_spmd_caller_sees_the_masters_error(write_job):
     """Library callers run the same code on every rank: a refusal must reach them all."""
     path, job = write_job()
@@ -178,6 +187,7 @@ def test_every_rank_of_an_spmd_caller_sees_the_masters_error(write_job):
         assert_same_map(reader, changed)
 
 
+@slow
 def test_no_rank_spins_while_waiting(write_job):
     """Tiles that sleep (no CPU) on both ranks: CPU time stays far below wall time on each."""
     path, job = write_job()

@@ -25,7 +25,8 @@ import numpy as np
 import pytest
 import yaml
 
-pytestmark = pytest.mark.slurm
+# Installs and starts SLURM (apt-get, as root) and runs the smoke job through it: ~70 s.
+pytestmark = [pytest.mark.slurm, pytest.mark.slow]
 
 REPO = Path(__file__).resolve().parents[1]
 CLUSTER = REPO / "slurm" / "local-cluster.sh"

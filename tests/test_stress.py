@@ -30,7 +30,12 @@ def test_work_per_cell_is_bounded(rows):
 
 
 def test_labels_disagree_with_scipy_only_where_flagged_grazing(rows):
-    for row in rows:
+    compared = [row for row in rows if "SciPy agrees" in row.scipy or "DISAGREES" in row.scipy]
+    # not vacuous: the quick cells include periodic ones SciPy can afford (q5 agrees; the
+    # grazing rest on ε = 0 at ω = 0.01 disagrees on p), so a verdict exists to check
+    assert len(compared) >= 2, [(row.cell.name, row.scipy) for row in rows]
+    assert any("SciPy agrees" in row.scipy for row in compared)
+    for row in compared:
         if "DISAGREES" in row.scipy:
             assert "grazing" in stress.flags(row.results[-1]), (row.cell, row.scipy)
 

@@ -169,6 +169,21 @@ def _scaling_arguments(p):
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
+@benchmark("master", "the single writer's capacity: tiles/s, latency to disk, idle ranks")
+def _master_arguments(p):
+    p.add_argument("--ranks", type=ints, default=[16, 64, 128],
+                   help="launches, oversubscribed beyond the cores (16,64,128)")  # fmt: skip
+    p.add_argument("--rows", type=int, default=400, help="values of the second parameter (400)")
+    p.add_argument("--omegas", type=int, default=400, help="ω values per chain (400)")
+    p.add_argument("--tile-rows", type=int, default=4, help="chains per tile (4)")
+    p.add_argument("--tile-seconds", type=float, default=0.15,
+                   help="stand-in tile time (0.15 s: 4 chains of the μcn plane)")  # fmt: skip
+    p.add_argument("--suffix", default=".zarr", help="store type: .zarr (default) or .h5")
+    p.add_argument("--tmp", help="directory for the stores (default: the system's)")
+    p.add_argument("--keep-stores", action="store_true", help="keep the stores")
+    p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
+
+
 @benchmark("map", "map agreement with a 500-revolution rtol 1e-11 reference against run time",
            module="maps")  # fmt: skip
 def _map_arguments(p):

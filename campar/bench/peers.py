@@ -22,7 +22,7 @@ what SciPy would cost with campar's transient policy, i.e. the compiled
 kernel's share of the speed-up.
 
 A second comparison computes a piece of a map the way each peer computes a
-map: consecutive cells of the (ω, μcn) plane's 400 × 400 grid (jobs/mu_cn.yaml)
+map: consecutive cells of the (ω, μcn) plane's 400 × 400 grid (jobs/mu_cn_wide.yaml)
 along ω, each cell started from the previous cell's final state (the first
 from rest), by campar (one ``run_tile`` of the row), by the SciPy script
 (500 + 64 revolutions per cell, warm-started the same way) and by the paper's
@@ -53,7 +53,7 @@ CELLS = (
     Cell("2-2 ω3.5 μcn.5", 3.5, mu_cn=0.5),
     Cell("chaos ω4.5 μcn.97", 4.5, mu_cn=0.97),
 )
-# The map row: the grid of jobs/mu_cn.yaml (ω 6.0 → 0.02 and μcn 0.99 → 0.50, 400
+# The map row: the grid of jobs/mu_cn_wide.yaml (ω 6.0 → 0.02 and μcn 0.99 → 0.50, 400
 # points each; the other parameters at the paper's base values), chain 155 (μcn ≈ 0.80),
 # ω points 299 … 314 (ω ≈ 1.52 … 1.29): 1-1, then 1-2 from ω ≈ 1.504, then 1-1 again
 # from ω ≈ 1.294.

@@ -2,7 +2,11 @@
 
 - ``point``: ``simulate_point`` — one cell from Python (``campar point``), with
   an optional dense trace of its steady orbit;
+- ``attractors``: ``find_attractors`` — the coexisting attractors of one cell from many
+  starts, with basin fractions (``campar point --attractors K``);
 - ``line``: single-parameter bifurcation lines along ω by continuation (``campar line``);
+- ``transitions``: ``find_transitions`` — each boundary between labels of a line typed
+  (PD, SN, NS, G, chaos, jump) from its multipliers and extrema of ε;
 - ``dataset``: ``open`` — a result store as a labelled, CF-annotated xarray
   Dataset, either backend, with the n-p labels as strings (``campar.open``);
 - ``plot``: figures of computed results (maps of a store, orbits, bifurcation

@@ -7,6 +7,12 @@ as one row of a two-parameter map (the paper's Fig. 5 is such a row, drawn as
 as a one-row job with the ``sections`` output through ``run_tile``, so a line
 and the map row with the same parameters give the same cells.
 
+Every line also computes the Floquet multipliers of its periodic cells (the
+kernel integrates the variational equations in the transient anyway, so they
+cost one 2×2 eigenvalue problem a cell) and ε's extremes, from which
+``campar.views.transitions`` types each boundary between labels (PD, SN, NS,
+G, chaos, jump); ``compute_line`` attaches them as ``transitions``.
+
 ``continued_state`` uses a line to reach one ω the way the paper's maps reach
 it (continuation from ω = 6.0), which is what the paper's point claims and
 phase portraits refer to; ``simulate_point`` started from that state then
@@ -14,7 +20,7 @@ traces the same attractor.
 """
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -37,6 +43,7 @@ ROW_PARAMETER = "mu_kn"
 PAPER_START = 6.0  # ω where the paper's continuations start (docs/model.md, sweeps)
 CONTINUATION_STEP = 0.005  # ω step of ``continued_state``: a third of the paper's map step
 DEFAULT_SECTIONS = 64  # σn points kept per non-periodic cell (periodic ones keep n)
+LINE_OUTPUTS = ("label", "dc", "eps", "sections", "multipliers")
 
 
 @dataclass(frozen=True)
@@ -56,6 +63,12 @@ class BifurcationLine:
     parameters: dict  # f0, mu_kn, mu_cn, zeta (floats) and tensile
     chatter_p: int = DEFAULT_CLASSIFY.chatter_p
     window: int = DEFAULT_CLASSIFY.window_revolutions  # read window (p of non-periodic cells)
+    multipliers: np.ndarray | None = None  # (N, 2, 2) (re, im) of both; NaN if not periodic
+    flags: np.ndarray | None = None  # (N,) campar.core.codes.Flag bits
+    eps_min: np.ndarray | None = None  # (N,) min ε over the steady window (< 0: detached)
+    eps_max: np.ndarray | None = None  # (N,) max ε (intrusion depth)
+    transitions: tuple = ()  # campar.views.transitions.Transition per label boundary
+    job: Job | None = field(default=None, repr=False, compare=False)  # the line's job
 
     @property
     def labels(self) -> list[str]:
@@ -77,11 +90,23 @@ class BifurcationLine:
 
     def to_npz(self, path) -> None:
         """Save every array (and the parameters as 0-d entries) in one .npz file."""
+        optional = {name: getattr(self, name) for name in ("multipliers", "flags", "eps_min",
+                    "eps_max") if getattr(self, name) is not None}  # fmt: skip
         np.savez_compressed(
             path, omega=self.omega, sections=self.sections, n=self.n, p=self.p,
-            kind=self.kind, dc=self.dc, state=self.state,
+            kind=self.kind, dc=self.dc, state=self.state, **optional,
             **{k: np.array(v) for k, v in self.parameters.items()},
         )  # fmt: skip
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary: parameters, ω range, runs of labels and transitions."""
+        return {
+            "parameters": self.parameters,
+            "cells": len(self.omega),
+            "omega": [float(self.omega[0]), float(self.omega[-1])],
+            "runs": [{"label": label, "from": a, "to": b} for label, a, b in self.runs()],
+            "transitions": [t.to_dict() for t in self.transitions],
+        }
 
 
 def line_job(
@@ -119,23 +144,25 @@ def line_job(
         "integrator": {"rtol": rtol},
         "transient": {"mode": transient, "max_revolutions": revolutions},
         "classify": {"sections": sections},
-        "outputs": ["label", "dc", "sections"],
+        "outputs": list(LINE_OUTPUTS),
         "tiles": {"rows": 1},
     }
     return Job.from_dict(data, source=f"line {name}")
 
 
-def compute_line(job: Job) -> BifurcationLine:
-    """Run the chain of a one-row job (``line_job``) and collect its cells."""
+def compute_line(job: Job, *, transitions: bool = True) -> BifurcationLine:
+    """Run the chain of a one-row job (``line_job``) and collect its cells; with
+    ``transitions``, type its label boundaries (``campar.views.transitions``)."""
     if job.shape[0] != 1 or not job.wants("sections"):
         raise ValueError("compute_line needs a one-row job with the 'sections' output")
     from ..sweep.tile import run_tile  # numba loads here: the CLI reads this module's defaults
+    from .transitions import find_transitions
 
     cells = {name: values[0] for name, values in run_tile(job, Tile(0, 0, 1)).items()}
     parameters = {name: float(job.parameter(name)) for name in ("f0", "mu_cn", "zeta")}
     parameters[ROW_PARAMETER] = float(job.second_values[0])
     parameters["tensile"] = job.model.tensile
-    return BifurcationLine(
+    line = BifurcationLine(
         omega=job.omega,
         sections=cells["sections"],
         n=cells["n"],
@@ -146,7 +173,13 @@ def compute_line(job: Job) -> BifurcationLine:
         parameters=parameters,
         chatter_p=job.classify.chatter_p,
         window=job.classify.window_revolutions,
+        multipliers=cells.get("multipliers"),
+        flags=cells["flags"],
+        eps_min=cells.get("eps_min"),
+        eps_max=cells.get("eps_max"),
+        job=job,
     )
+    return replace(line, transitions=find_transitions(line)) if transitions else line
 
 
 def bifurcation_line(omega: tuple[float, float], points: int, **options) -> BifurcationLine:

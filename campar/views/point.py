@@ -14,6 +14,7 @@ from ..core.kernel import trace_orbit
 from ..core.revolution import make_trace
 from ..errors import JobError
 from ..sweep.job import (
+    DEFAULT_CLASSIFY,
     DEFAULT_INITIAL,
     DEFAULT_INTEGRATOR,
     DEFAULT_MODEL,
@@ -122,9 +123,11 @@ def point_job(
     v0: float = DEFAULT_INITIAL.v,
     transient: str = DEFAULT_TRANSIENT.mode,
     revolutions: int = DEFAULT_TRANSIENT.max_revolutions,
+    chaos_after: int = DEFAULT_TRANSIENT.chaos_after,
     rtol: float = DEFAULT_INTEGRATOR.rtol,
     atol: float = DEFAULT_INTEGRATOR.atol,
     method: str = DEFAULT_INTEGRATOR.method,
+    sections: int | None = DEFAULT_CLASSIFY.sections,
     outputs=POINT_OUTPUTS,
     **parameters: float,
 ) -> Job:
@@ -132,8 +135,10 @@ def point_job(
 
     ``parameters``: f0, mu_kn, mu_cn, zeta; those not given take the paper's base values.
     Every setting defaults to the job model's (``campar.sweep.job``): the force law, the
-    transient (``revolutions`` is its budget when converged, its length when fixed) and
-    the integrator. Raises JobError for a parameter unknown or out of range.
+    transient (``revolutions`` is its budget when converged, its length when fixed;
+    ``chaos_after`` the earliest chaotic verdict, 0: only at the budget), the integrator
+    and the σn points kept of a non-periodic cell (``sections``, None: n_max).
+    Raises JobError for a parameter unknown or out of range.
     """
     values = with_paper_values(parameters)
     for name, value in {"omega": omega, **values}.items():
@@ -152,7 +157,12 @@ def point_job(
         "model": {"tensile": tensile},
         "initial": {"y": y0, "v": v0},
         "integrator": {"method": method, "rtol": rtol, "atol": atol},
-        "transient": {"mode": transient, "max_revolutions": revolutions},
+        "transient": {
+            "mode": transient,
+            "max_revolutions": revolutions,
+            "chaos_after": chaos_after,
+        },
+        "classify": {"sections": sections},
         "outputs": list(outputs),
         "tiles": {"rows": 1},
     }
@@ -176,10 +186,10 @@ def simulate_point(
     """Simulate one cell from (y0, v0) at θ = 0 and classify its steady motion.
 
     ``settings`` are the keywords of ``point_job`` (f0, mu_kn, mu_cn, zeta, tensile, y0,
-    v0, transient, revolutions, rtol, atol, method), each defaulting to the paper's base
-    value or the job model's default. With ``trace``, the steady orbit (its period, or up
-    to 64 revolutions when not periodic) is integrated once more from the final state and
-    recorded. Raises JobError for a parameter unknown or out of range.
+    v0, transient, revolutions, chaos_after, rtol, atol, method, sections), each defaulting to the
+    paper's base value or the job model's default. With ``trace``, the steady orbit (its
+    period, or up to 64 revolutions when not periodic) is integrated once more from the
+    final state and recorded. Raises JobError for a parameter unknown or out of range.
     """
     outputs = [*POINT_OUTPUTS]
     if multipliers:
@@ -188,11 +198,23 @@ def simulate_point(
         outputs.append("lyapunov")
     job = point_job(omega=omega, outputs=outputs, **settings)
     cell = {name: arr[0, 0] for name, arr in run_tile(job, Tile(0, 0, 1)).items()}
+    result = point_result(job, cell)
+    if trace and result.kind != KIND_NAMES[Kind.FAILED]:
+        n_revs = result.n or min(job.classify.window_revolutions, MAX_TRACE_REVOLUTIONS)
+        orbit = trace_steady(job, result.parameters, result.state, n_revs, result.steps)
+        if orbit is not None:
+            result = PointResult(**{**result.__dict__, "trace": orbit})
+    return result
+
+
+def point_result(job: Job, cell: dict) -> PointResult:
+    """The PointResult of one cell of ``job``: ``cell`` maps each array name of run_tile
+    to that cell's value (multipliers and Lyapunov exponent where the job computed them)."""
     kind = Kind(int(cell["kind"]))
     n = int(cell["n"])
     sections = cell["sections"][: n if n else job.n_sections]
     sections = sections[~np.isnan(sections[:, 0])]
-    result = PointResult(
+    return PointResult(
         parameters=point_parameters(job),
         label=cell_label(kind, n, int(cell["p"]), job.classify.chatter_p),
         n=n,
@@ -209,27 +231,31 @@ def simulate_point(
         state=(float(cell["state"][0]), float(cell["state"][1])),
         sections=sections,
         multipliers=(
-            tuple(complex(re, im) for re, im in cell["multipliers"]) if multipliers else None
+            tuple(complex(re, im) for re, im in cell["multipliers"])
+            if "multipliers" in cell
+            else None
         ),
-        lyapunov=float(cell["lyapunov"]) if lyapunov else None,
+        lyapunov=float(cell["lyapunov"]) if "lyapunov" in cell else None,
     )
-    if trace and kind != Kind.FAILED:
-        n_revs = n if n else min(job.classify.window_revolutions, MAX_TRACE_REVOLUTIONS)
-        result = _with_trace(result, job, n_revs)
-    return result
 
 
-def _with_trace(result: PointResult, job: Job, n_revs: int) -> PointResult:
-    par = result.parameters
-    max_samples = SAMPLES_PER_STEP * max(result.steps, 1000) * 4 + 16
-    rec = make_trace(max_samples, 64 * n_revs + 64, SAMPLES_PER_STEP)
+def trace_steady(job: Job, parameters: dict, state, revolutions: int,
+                 steps: int = 0) -> OrbitTrace | None:  # fmt: skip
+    """``revolutions`` revolutions from ``state`` (y, y') at θ = 0, sampled densely with the
+    integrator settings of ``job``; ``parameters`` as ``point_parameters`` gives them and
+    ``steps`` the cell's step count (sizes the buffer). None when the integration fails."""
+    par = parameters
+    max_samples = SAMPLES_PER_STEP * max(steps, 1000) * 4 + 16
+    rec = make_trace(max_samples, 64 * revolutions + 64, SAMPLES_PER_STEP)
     status, _, _ = trace_orbit(
         par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-        par["tensile"] == "clamp", np.array(result.state), solver_options(job),
-        cell_settings(job), n_revs, rec,
+        par["tensile"] == "clamp", np.array(state, dtype=float), solver_options(job),
+        cell_settings(job), revolutions, rec,
     )  # fmt: skip
+    if status != 0:
+        return None
     samples = rec.samples[: rec.count[0]]
-    orbit = OrbitTrace(
+    return OrbitTrace(
         t=samples[:, 0],
         y=samples[:, 1],
         v=samples[:, 2],
@@ -241,6 +267,3 @@ def _with_trace(result: PointResult, job: Job, n_revs: int) -> PointResult:
         period=2 * math.pi / par["omega"],
         cam_phases=CAM_PHASES,
     )
-    if status != 0:
-        return result
-    return PointResult(**{**result.__dict__, "trace": orbit})

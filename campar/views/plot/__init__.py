@@ -9,6 +9,7 @@ Figures are headless (Agg) and returned, so a caller can adjust or save them.
 - ``style``: fonts, the field's notation, ``save_figure``.
 - ``orbit``: one steady orbit (``plot_orbit``; ``plot_phase``, ``plot_gap``, ``plot_force``).
 - ``bifurcation``: σn points and detachments along ω (``plot_line``, ``plot_lines``).
+- ``transitions``: a line's typed boundaries drawn on its diagram (``mark_transitions``).
 - ``figures``: the paper's composite figures (phase-portrait grid, ε(t) families, Pn rows).
 
 For developers: a new view (bifurcation diagram, phase portrait, time series) is
@@ -52,6 +53,7 @@ _EXPORTS = {
     "plot_force": "orbit",
     "plot_line": "bifurcation",
     "plot_lines": "bifurcation",
+    "mark_transitions": "transitions",
 }
 
 __all__ = ["MAP_VIEWS", "PlotError", "parse_range", *_EXPORTS]

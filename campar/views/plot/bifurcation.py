@@ -10,6 +10,10 @@ the map row it belongs to.
 
 Non-periodic cells (quasi-periodic, chaos) draw their last stored σn points
 (a cloud) and no p, since their p counts a read window, not a period.
+
+A line that carries ``transitions`` (``campar.views.transitions``) has each boundary
+marked in the σn panel with its type (PD, SN, NS, G, jump), as in the paper's
+Figs 2c–e and 5 (``transitions.mark_transitions``).
 """
 
 import numpy as np
@@ -20,6 +24,7 @@ from matplotlib.ticker import MaxNLocator
 from .labels import PERIODIC, category_of, label_colour, legend_text, order_key
 from .maps import EDGE, cell_edges
 from .style import axis_label, figure_style, new_figure, parameter_text
+from .transitions import mark_transitions
 
 POINT_SIZE = 0.6  # marker area (pt²) of a σn point; thousands of cells stay legible
 LINE_PARAMETERS = ("f0", "mu_kn", "mu_cn", "zeta")
@@ -77,6 +82,7 @@ def plot_line(line, axes=None, *, title: str | None = None, legend: bool = True,
         edges = cell_edges(line.omega)
         for ax in axes:
             ax.set_xlim(edges.min(), edges.max())
+        mark_transitions(top, getattr(line, "transitions", ()))
         top.tick_params(labelbottom=False)
         strip.tick_params(labelbottom=False, bottom=False)
         bottom.set_xlabel(axis_label("omega"))
