@@ -12,6 +12,9 @@ capacity test of the master, not of the kernel). Reported per R:
 - latency from a tile's end on its rank to its arrays on disk (median, p95),
   and the store write itself (median): the stand-in stamps its end time
   (``CLOCK_MONOTONIC``, shared by the processes of one host) into the tile;
+- the master's CPU time per tile (rank 0's process: its own compute lane only
+  sleeps), and its inverse, the tiles/s one core can write — the capacity that
+  oversubscription on a small machine hides behind the ranks' own polling;
 - peak RSS of rank 0 and of the largest worker (without numba: the stand-in
   replaces the kernel's module, so add the kernel's ~70 MB for a real run).
 
@@ -137,11 +140,13 @@ def run(args) -> int:
             sustained = entry["tiles"] / entry["seconds"]
             idle = 1 - entry["compute_seconds"] / (entry["seconds"] * ranks)
             rss = [mb for mb in entry["peak_rss_mb"] if mb is not None]
+            master_cpu = entry["cpu_seconds"][0] / entry["tiles"]  # its compute lane sleeps
             rows.append([
                 f"{ranks}", f"{sustained:.1f}", f"{ideal:.1f}", f"{100 * idle:.1f} %",
                 f"{1e3 * statistics.median(latency):.1f}",
                 f"{1e3 * latency[int(0.95 * (len(latency) - 1))]:.1f}",
                 f"{1e3 * statistics.median(result['write']):.2f}",
+                f"{1e3 * master_cpu:.1f}", f"{1 / master_cpu:.0f}",
                 f"{rss[0]:.0f} / {max(rss[1:], default=0):.0f}",
                 f"{store_bytes(store) / 2**20:.1f}",
             ])  # fmt: skip
@@ -152,6 +157,7 @@ def run(args) -> int:
           "(ranks beyond them oversubscribed: they sleep)\n")  # fmt: skip
     print(format_table(
         ["ranks", "tiles/s", "ideal", "idle", "result→disk ms (median)", "p95 ms",
-         "write ms", "RSS MB rank 0 / worker max", "store MiB"], rows,
+         "write ms", "master CPU ms/tile", "capacity tiles/s", "RSS MB rank 0 / worker max",
+         "store MiB"], rows,
     ))  # fmt: skip
     return 0
