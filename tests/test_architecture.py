@@ -102,26 +102,13 @@ def test_only_the_runner_imports_mpi4py():
     assert users <= {"campar.sweep.runner"}, users
 
 
-def test_plotting_never_imports_the_integration():
+@pytest.mark.parametrize("package", ["campar.views.plot", "campar.sweep.store"])
+def test_plotting_and_the_store_know_nothing_of_integration(package):
+    """Of the core they may use its codes only (no numba, no kernel)."""
     for name, path in MODULES.items():
-        if name.startswith("campar.views.plot"):
-            bad = {
-                m
-                for m in imports_of(path)
-                if m.startswith("campar.core.") and not m.endswith(".codes")
-            }
-            assert not bad, (name, bad)
-
-
-def test_the_store_knows_nothing_of_integration():
-    for name, path in MODULES.items():
-        if name.startswith("campar.sweep.store"):
-            bad = {
-                m
-                for m in imports_of(path)
-                if m.startswith("campar.core.") and not m.endswith(".codes")
-            }
-            assert not bad, (name, bad)
+        if name.startswith(package):
+            core = {m for m in imports_of(path) if m.startswith("campar.core.")}
+            assert core <= {"campar.core.codes"}, (name, core)
 
 
 def test_modules_stay_small():
