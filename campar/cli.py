@@ -6,10 +6,11 @@ so every behaviour is reachable from Python without the CLI.
 """
 
 import argparse
+import os
 import sys
 
 from . import __version__
-from .errors import CamparError, JobError
+from .errors import CamparError, Interrupted, JobError
 
 # Registered subcommands, in the order ``campar --help`` lists them.
 SUBCOMMANDS = []
@@ -33,13 +34,39 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """The program (``argv`` None: a stop signal after the work is done is ignored), or a
+    command from Python (``argv`` a list: the caller's signal handlers are restored)."""
+    from .sweep.signals import finished, guard_start, restore_signals
+
+    saved = guard_start()  # a stop signal from here on: one line, never a traceback
+    command = "campar"
     try:
+        args = build_parser().parse_args(argv)
+        command = f"campar {args.command}"
         return int(args.handler(args) or 0)
     except CamparError as exc:
-        print(f"campar {args.command}: {exc}", file=sys.stderr)
+        if not repeated_by_other_rank(exc):
+            print(f"{command}: {exc}", file=sys.stderr)
         return exc.exit_code
+    except BrokenPipeError:  # `campar status S | head`: the reader left
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+    finally:
+        if argv is not None:
+            restore_signals(saved)
+        else:  # the program: its work is over, its exit code decided
+            finished()
+
+
+def repeated_by_other_rank(exc: CamparError) -> bool:
+    """Under mpirun, an error every rank meets alike (the job, a signal before the start) or
+    one the master reports: printed by rank 0 only."""
+    rank = next((os.environ[v] for v in MPI_RANK_ENV if v in os.environ), "0")
+    alike = isinstance(exc, (JobError, Interrupted)) or getattr(exc, "rank", 0)
+    return rank.isdigit() and int(rank) > 0 and bool(alike)
+
+
+MPI_RANK_ENV = ("PMI_RANK", "OMPI_COMM_WORLD_RANK", "PMIX_RANK")
 
 
 # -- subcommands -------------------------------------------------------------
@@ -107,6 +134,30 @@ def add_point(sub):
     p.set_defaults(handler=run_point)
 
 
+# Keys of the one-cell job ``campar point`` builds, and the flags that set them.
+POINT_FLAGS = {
+    "integrator.rtol": "--rtol", "integrator.method": "--method", "initial.y": "--y0",
+    "initial.v": "--v0", "transient.mode": "--transient",
+    "transient.max_revolutions": "--revolutions", "model.tensile": "--tensile",
+}  # fmt: skip
+
+
+def naming_flags(handler):
+    """A handler whose JobErrors name the command's flags instead of the job's keys."""
+
+    def run(args) -> int:
+        try:
+            return handler(args)
+        except JobError as exc:
+            text = str(exc)
+            for key, flag in POINT_FLAGS.items():
+                text = text.replace(f"point: {key}:", f"{flag}:")
+            raise JobError(text) from None
+
+    return run
+
+
+@naming_flags
 def run_point(args) -> int:
     import json
 
@@ -119,6 +170,10 @@ def run_point(args) -> int:
                     revolutions=args.revolutions, rtol=args.rtol, method=args.method)  # fmt: skip
     if args.attractors is not None:
         return run_attractors(args, settings)
+    if args.plot:
+        from .views.output import figure_file
+
+        figure_file(args.plot)  # before computing
     result = simulate_point(
         args.omega,
         y0=args.y0,
@@ -205,6 +260,13 @@ def add_run(sub):
     p.add_argument("--overwrite", action="store_true", help="replace a store of another job")
     p.add_argument("--grace", type=float, default=30.0, metavar="SECONDS",
                    help="after a signal, wait so long for tiles in flight (30)")  # fmt: skip
+    from .sweep.budget import DEFAULT_MAX_MEMORY, DEFAULT_MAX_STORE, format_size, parse_size
+
+    store, memory = format_size(DEFAULT_MAX_STORE), format_size(DEFAULT_MAX_MEMORY)
+    p.add_argument("--max-store", type=parse_size, metavar="SIZE",
+                   help=f"refuse a job whose store exceeds SIZE unpacked ({store})")  # fmt: skip
+    p.add_argument("--max-memory", type=parse_size, metavar="SIZE",
+                   help=f"refuse a job whose ranks each need over SIZE ({memory})")  # fmt: skip
     p.set_defaults(handler=run_run)
 
 
@@ -213,14 +275,12 @@ def run_run(args) -> int:
 
     job = load_job(args.job)  # before anything touches the disk
     from .sweep.runner import run_job, setup_logging
+    from .sweep.signals import finished
 
     setup_logging()
-    try:
-        run_job(job, args.store, overwrite=args.overwrite, grace=args.grace)
-    except CamparError as exc:
-        if getattr(exc, "rank", 0):
-            return exc.exit_code  # a worker rank: the master prints the message
-        raise
+    limits = dict(max_store=args.max_store, max_memory=args.max_memory)
+    run_job(job, args.store, overwrite=args.overwrite, grace=args.grace, **limits)
+    finished()  # the map is complete: a signal now changes nothing
     return 0
 
 
@@ -238,6 +298,23 @@ def run_status(args) -> int:
     with read_store(args.store) as reader:
         print(describe(reader))
     return 0
+
+
+@subcommand
+def add_verify(sub):
+    p = sub.add_parser("verify", help="read every committed tile back and check its checksum; "
+                       "lists damaged tiles (exit 65 if any)")  # fmt: skip
+    p.add_argument("store", help="result store (Zarr directory or HDF5 file)")
+    p.set_defaults(handler=run_verify)
+
+
+def run_verify(args) -> int:
+    from .errors import StoreDamaged
+    from .sweep.progress import verify_report
+
+    text, intact = verify_report(args.store)
+    print(text)
+    return 0 if intact else StoreDamaged.exit_code
 
 
 @subcommand
@@ -287,6 +364,11 @@ def run_line(args) -> int:
 
     if args.points < 2:
         raise JobError(f"--points must be ≥ 2, got {args.points}")
+    from .views.output import figure_file, writable_file
+
+    figure_file(args.output)  # before computing
+    if args.npz:
+        writable_file(args.npz, "arrays")
     sets = varied_parameters({"f0": args.f0, "mu_kn": args.mu_kn, "mu_cn": args.mu_cn,
                               "zeta": args.zeta})  # fmt: skip
     jobs = [line_job(args.omega, args.points, tensile=args.tensile, sections=args.sections,

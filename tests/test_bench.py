@@ -8,7 +8,7 @@ import pytest
 from campar.bench import BENCHMARKS, peers, precision
 from campar.cli import main
 from campar.core.codes import Flag, Kind
-from campar.sweep.job import load_job
+from campar.sweep.job import DEFAULT_INTEGRATOR, load_job
 
 HEADERS = {
     "precision": ["state err", "event-time err", "Observed slopes", "DP5 state err vs rtol"],
@@ -83,7 +83,7 @@ def test_peers_map_row_is_a_piece_of_the_wide_mu_cn_plane():
     """The row the peers compute is chain ROW_CHAIN of jobs/mu_cn_wide.yaml, as it runs it."""
     plane = load_job(REPO / "jobs" / "mu_cn_wide.yaml")
     first, stop = peers.ROW_OMEGA
-    row = peers.row_job(first, stop, "dp54", "converged", 500, 64)
+    row = peers.row_job(first, stop, DEFAULT_INTEGRATOR.method, "converged", 500, 64)
     np.testing.assert_allclose(row.omega, plane.omega[first:stop], rtol=0, atol=1e-12)
     assert row.second == plane.second
     assert row.second_values[0] == plane.second_values[peers.ROW_CHAIN]

@@ -45,14 +45,18 @@ def dip(t, y, f, p, mode, g, dg):
     return 1
 
 
-@njit
 def run(rhs, events, y0, t_end, p, opt, max_steps):
     """Step to t_end; returns the final state and the times of events (stopping at each)."""
-    y = y0.copy()
+    return run_compiled(rhs, events, y0.copy(), t_end, p, opt, max_steps,
+                        I.make_work(y0.shape[0], 2, 1e-3))  # fmt: skip
+
+
+@njit
+def run_compiled(rhs, events, y, t_end, p, opt, max_steps, w):
+    """``run`` with the buffers the core's callers allocate in Python (``make_work``)."""
     f = np.zeros(y.shape[0])
     mode = np.zeros(2, dtype=np.int64)
     rhs(0.0, y, p, mode, f)
-    w = I.make_work(y.shape[0], 2, 1e-3)
     times = np.full(16, np.nan)
     n_events = 0
     t = 0.0

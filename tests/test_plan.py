@@ -24,6 +24,13 @@ BASE = {"f0": 0.5, "mu_kn": 0.8, "mu_cn": 0.8, "zeta": 0.2}  # MODEL.md's base v
 RANGES = {"f0": (0.0, 3.0), "mu_kn": (0.05, 0.95), "mu_cn": (0.05, 0.95), "zeta": (0.0, 1.0)}
 
 
+def drawn_axis(draw, ends, most: int) -> dict:
+    """An axis of 1 … most points; with more than one point its ends differ (a job with
+    equal ends and several points is refused)."""
+    start, stop, points = draw(ends), draw(ends), draw(st.integers(1, most))
+    return {"from": start, "to": stop, "points": points if start != stop else 1}
+
+
 @st.composite
 def jobs(draw):
     """A job with 1–60 chains of 1–30 cells, 1–12 chains a tile, any second parameter,
@@ -32,10 +39,9 @@ def jobs(draw):
     lo, hi = RANGES[second]
     ends = st.floats(lo, hi, allow_nan=False)
     sweep = {
-        "omega": {"from": draw(st.floats(0.1, 6.0)), "to": draw(st.floats(0.1, 6.0)),
-                  "points": draw(st.integers(1, 30))},
-        second: {"from": draw(ends), "to": draw(ends), "points": draw(st.integers(1, 60))},
-    }  # fmt: skip
+        "omega": drawn_axis(draw, st.floats(0.1, 6.0), 30),
+        second: drawn_axis(draw, ends, 60),
+    }
     chains = {"direction": draw(st.sampled_from(["down", "up"])),
               "start": draw(st.sampled_from(["rest", "continue"]))}  # fmt: skip
     rows = draw(st.integers(1, 12))

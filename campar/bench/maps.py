@@ -199,6 +199,15 @@ def audit_doubled_periods(candidate: Job, ref_job: Job, ref: dict, comparison: C
 
 # -- the benchmark ---------------------------------------------------------------------------
 
+
+def integration(method: str, rtol: float, chaos_after: int) -> dict:
+    """Overrides of a candidate that states its integrator and chaotic verdict in full."""
+    return {
+        "integrator": {"method": method, "rtol": rtol},
+        "transient": {"chaos_after": chaos_after},
+    }
+
+
 CANDIDATES = {
     # name: job overrides; "default" is the job file's own settings
     "default": {},
@@ -206,6 +215,22 @@ CANDIDATES = {
     "rtol 1e-7": {"integrator": {"rtol": 1e-7}},
     "rtol 1e-9": {"integrator": {"rtol": 1e-9}},
     "rtol 1e-10": {"integrator": {"rtol": 1e-10}},
+    # the defaults before DOP853 (benchmarks/RESULTS.md, issue 15), and the steps to the new
+    # ones (integrator.method, integrator.rtol and transient.chaos_after, all three stated)
+    "previous default": integration("dp54", 1e-8, 64),
+    **{
+        f"{method} rtol {rtol:g} chaos after {after}": integration(method, rtol, after)
+        for method, rtol, after in [
+            ("dp54", 1e-8, 96),
+            ("dop853", 1e-9, 64),
+            ("dop853", 1e-8, 64),
+            ("dop853", 1e-7, 64),
+            ("dop853", 1e-8, 96),
+            ("dop853", 3e-8, 96),
+            ("dop853", 1e-7, 80),
+            ("dop853", 1e-8, 128),
+        ]
+    },  # fmt: skip
     "no Newton": {"transient": {"newton": False}},
     "QP at 150 no agree jumps": {  # the defaults before jumps on agreeing estimates
         "transient": {"jump_agree": 0.0, "quasiperiodic_after": 150}

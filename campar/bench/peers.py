@@ -128,7 +128,8 @@ def measure(cells=None, revolutions=DEFAULT_TRANSIENT.max_revolutions,
     chosen = [c for c in CELLS if cells is None or c.name in cells]
     rows = []
     for i, cell in enumerate(chosen):
-        a = campar_outcome(cell, "dp54", "converged", revolutions, window, min_seconds)
+        a = campar_outcome(cell, DEFAULT_INTEGRATOR.method, "converged", revolutions, window,
+                           min_seconds)  # fmt: skip
         c = campar_outcome(cell, "rk4", "fixed", revolutions, window, min_seconds)
         b = None
         if scipy_cells is None or i < scipy_cells:
@@ -177,7 +178,7 @@ def measure_row(row_omega=ROW_OMEGA, revolutions=DEFAULT_TRANSIENT.max_revolutio
                 min_seconds=0.3) -> RowResult:  # fmt: skip
     """The map row by every peer, each cell warm-started from the one before."""
     first, stop = row_omega
-    job = row_job(first, stop, "dp54", "converged", revolutions, window)
+    job = row_job(first, stop, DEFAULT_INTEGRATOR.method, "converged", revolutions, window)
     campar, campar_time = campar_outcomes(job, min_seconds)
     paper_job = row_job(first, stop, "rk4", "fixed", revolutions, window)
     paper, paper_time = campar_outcomes(paper_job, min_seconds)

@@ -15,7 +15,8 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_MODULES = (
-    "jit", "codes", "hermite", "model", "integrator", "analysis", "revolution", "kernel"
+    "jit", "codes", "hermite", "dop853", "model", "integrator", "analysis", "revolution",
+    "kernel",
 )  # fmt: skip
 STAMP = "campar-core.digest"
 

@@ -4,8 +4,10 @@
 order (ω decreasing along the chain in a map), each warm-started from the
 previous cell's final state at θ = 0, and fills preallocated output arrays.
 No Python objects, no allocation per step; failures are status codes.
-Entry points take only arrays, numbers and named tuples, so numba's on-disk
-cache serves every new process. The field and event functions are handed to
+``run_chain`` and ``trace_orbit`` allocate their buffers in Python and call
+the compiled entry points ``chain_compiled`` and ``trace_compiled``, which
+take only arrays, numbers and named tuples, so numba's on-disk cache serves
+every new process. The field and event functions are handed to
 the integrator as ``model.rhs`` (a module attribute): a dispatcher imported by
 name and passed as an argument makes numba refuse to cache the caller
 ("dynamic globals"), measured with numba 0.68.
@@ -45,7 +47,7 @@ from .codes import (
     PERIODIC,
 )
 from .integrator import CTRL_ERR, CTRL_H, StepWork, initial_step, make_work, restart_control
-from .jit import compiled, hot
+from .jit import hot, inlined
 from .model import (
     MAX_EVENTS,
     N_STATE,
@@ -140,10 +142,13 @@ class ChainWork(NamedTuple):
     revs: np.ndarray  # (R, N_REV_STATS)
     u: np.ndarray  # tangent vector for the Lyapunov exponent
     no_trace: Trace
+    x_start: np.ndarray  # (2,) the start of the current cell
+    prev: np.ndarray  # (3, 2) final states of the last three cells, newest first
 
 
-@compiled
-def make_chain_work(cs):
+def make_chain_work(cs) -> ChainWork:
+    """The buffers of a chain, allocated in Python: compiled allocation would cost
+    numba ~2 s of compile time per process with an empty cache (measured)."""
     rows = cs.max_revolutions + cs.window_revolutions + 2
     return ChainWork(
         w2=make_work(N_STATE, MAX_EVENTS, 0.0),
@@ -159,10 +164,12 @@ def make_chain_work(cs):
         revs=np.zeros((rows, N_REV_STATS)),
         u=np.array([1.0, 0.0]),
         no_trace=make_trace(0, 0, 1),
+        x_start=np.empty(2),
+        prev=np.empty((3, 2)),
     )
 
 
-@hot
+@inlined
 def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
     """Revolution k+1 from xs[k]: fills xs[k+1], jac[k] (if variational), revs[k]."""
     if variational:
@@ -186,18 +193,18 @@ def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
     return OK
 
 
-@hot
+@inlined
 def spend(cw):
     return cw.w2.counts[0] + cw.w2.counts[1] + cw.w6.counts[0] + cw.w6.counts[1]
 
 
-@hot
+@inlined
 def share_step_size(src, dst):
     dst.ctrl[CTRL_H] = src.ctrl[CTRL_H]
     dst.ctrl[CTRL_ERR] = src.ctrl[CTRL_ERR]
 
 
-@hot
+@inlined
 def transient_converged(cw, p, opt, cs, want_stats, step_budget):
     """Revolutions until assess_revolution accepts a cycle or the budget ends.
 
@@ -211,9 +218,11 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
     by `campar bench map`). Returns (status, k, period, base, jumps).
     """
     k = 0
-    base = 0
+    base = np.int64(0)  # not a literal: numba would compile assess_revolution twice
     jumps = 0
-    cw.est[:, :, 0] = -1.0  # no estimates of this cell yet
+    for a in range(cw.est.shape[0]):  # no estimates of this cell yet
+        for b in range(cw.est.shape[1]):
+            cw.est[a, b, 0] = -1.0
     while k < cs.max_revolutions:
         status = step_revolution(cw, k, True, p, opt, cs, want_stats, step_budget)
         if status != OK:
@@ -235,7 +244,7 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
     return OK, k, 0, base, jumps
 
 
-@hot
+@inlined
 def nonperiodic_verdict(cw, k, cs):
     """True when the last window's Lyapunov exponent settles a non-periodic verdict."""
     chaos_due = 0 < cs.chaos_after <= k
@@ -246,7 +255,7 @@ def nonperiodic_verdict(cw, k, cs):
     return (chaos_due and stretch > cs.chaos_lyapunov) or (qp_due and abs(stretch) <= cs.lyap_tol)
 
 
-@hot
+@inlined
 def transient_fixed(cw, p, opt, cs, want_stats, step_budget):
     """cs.max_revolutions plain revolutions, then a window with variational equations.
 
@@ -266,7 +275,7 @@ def transient_fixed(cw, p, opt, cs, want_stats, step_budget):
     return OK, k, period
 
 
-@hot
+@inlined
 def fail_cell(out, i, status, k, steps):
     out.n[i] = 0
     out.p[i] = 0
@@ -284,12 +293,12 @@ def fail_cell(out, i, status, k, steps):
     if out.lyapunov.shape[0] > 0:
         out.lyapunov[i] = np.nan
     if out.multipliers.shape[0] > 0:
-        out.multipliers[i, :, :] = np.nan
+        fill(out.multipliers[i], np.nan)
     if out.sections.shape[0] > 0:
-        out.sections[i, :, :] = np.nan
+        fill(out.sections[i], np.nan)
 
 
-@hot
+@inlined
 def record_window(out, i, cw, first, count, period):
     """Statistics of revolutions first … first+count−1 into the outputs of cell i."""
     t_free, detach, eps_min, eps_max, pn_max, stretch, graze = window_stats(cw.revs, first, count)
@@ -301,16 +310,16 @@ def record_window(out, i, cw, first, count, period):
     return stretch, graze
 
 
-@hot
+@inlined
 def record_sections(out, i, cw, last, count):
     s = out.sections.shape[1]
-    out.sections[i, :, :] = np.nan
+    fill(out.sections[i], np.nan)
     for j in range(min(count, s)):
         out.sections[i, j, 0] = cw.xs[last - count + 1 + j, 0]
         out.sections[i, j, 1] = cw.xs[last - count + 1 + j, 1]
 
 
-@hot
+@inlined
 def run_cell(x_start, p, opt, cs, cw, out, i):
     """Compute cell i from x_start; returns (status, index of the final state in xs)."""
     period_time = TWO_PI / p.omega
@@ -379,7 +388,7 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
         if out.lyapunov.shape[0] > 0:
             out.lyapunov[i] = stretch / period_time
         if out.multipliers.shape[0] > 0:
-            out.multipliers[i, :, :] = np.nan
+            fill(out.multipliers[i], np.nan)
         if out.sections.shape[0] > 0:
             record_sections(out, i, cw, k, min(k, out.sections.shape[1]))
     if not want_stats:
@@ -393,7 +402,6 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     return OK, final
 
 
-@njit(cache=True, nogil=True)
 def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
     """Compute a continuation chain of cells in order; outputs are filled in place.
 
@@ -404,9 +412,15 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
     as for cell 0. Releases the GIL, so a thread can compute while another one
     talks MPI.
     """
-    cw = make_chain_work(cs)
-    x_start = np.empty(2)
-    prev = np.empty((3, 2))  # final states of the last three cells, newest first
+    chain_compiled(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out,
+                   make_chain_work(cs))  # fmt: skip
+
+
+@njit(cache=True, nogil=True)
+def chain_compiled(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out, cw):
+    """run_chain's compiled body, with the chain's buffers ``cw`` (make_chain_work)."""
+    x_start = cw.x_start
+    prev = cw.prev
     streak = 0  # how many of them are cycles of one period in a row (0: restart)
     prev_n = 0
     h_started = False
@@ -415,18 +429,19 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
         opt = scale_solver_options(solver, omega[i], cs.rk4_steps)
         flags = 0
         order = min(extrapolation_order(prev, streak), cs.extrapolate)
-        if streak == 0:
-            x_start[:] = x_init
-            if i > 0:
-                flags |= FLAG_RESTARTED
-        elif order == 2:
-            x_start[:] = 3.0 * prev[0] - 3.0 * prev[1] + prev[2]
+        for c in range(2):  # component-wise: array expressions would allocate
+            if streak == 0:
+                x_start[c] = x_init[c]
+            elif order == 2:
+                x_start[c] = 3.0 * prev[0, c] - 3.0 * prev[1, c] + prev[2, c]
+            elif order == 1:
+                x_start[c] = 2.0 * prev[0, c] - prev[1, c]
+            else:
+                x_start[c] = prev[0, c]
+        if streak == 0 and i > 0:
+            flags |= FLAG_RESTARTED
+        elif streak > 0 and order > 0:
             flags |= FLAG_WARM_EXTRAPOLATED
-        elif order == 1:
-            x_start[:] = 2.0 * prev[0] - prev[1]
-            flags |= FLAG_WARM_EXTRAPOLATED
-        else:
-            x_start[:] = prev[0]
         if not h_started:
             cw.x2[0] = x_start[0]
             cw.x2[1] = x_start[1]
@@ -457,6 +472,14 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
 
 
 @hot
+def fill(a, value):
+    """Set every element of a 2-D array (a slice assignment costs numba more to compile)."""
+    for i in range(a.shape[0]):
+        for j in range(a.shape[1]):
+            a[i, j] = value
+
+
+@hot
 def extrapolation_order(prev, streak):
     """Polynomial order of the warm start from the last cells' cycles (0: the last state).
 
@@ -475,24 +498,29 @@ def close(a, b):
     return abs(a[0] - b[0]) + abs(a[1] - b[1]) < EXTRAPOLATE_MAX
 
 
-@njit(cache=True)
 def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, clamp, x0, solver, cs, revolutions, rec):
     """Integrate ``revolutions`` revolutions from x0 (at θ = 0), recording into rec.
 
     Returns (status, final y, final y'). For figures of a steady orbit: start
     from a cell's final state and trace its period.
     """
+    x = np.array(x0, dtype=np.float64)
+    w = make_work(N_STATE, MAX_EVENTS, 0.0)
+    buffers = (np.zeros(N_STATE), np.zeros(2, dtype=np.int64), np.zeros(N_REV_STATS))
+    return trace_compiled(omega, zeta, f0, mu_kn, mu_cn, clamp, x, solver, cs, revolutions, rec,
+                          w, *buffers)  # fmt: skip
+
+
+@njit(cache=True)
+def trace_compiled(omega, zeta, f0, mu_kn, mu_cn, clamp, x, solver, cs, revolutions, rec, w, f,
+                   mode, row):  # fmt: skip
+    """trace_orbit's compiled body: integrates in place on x with the buffers w, f, mode, row."""
     p = make_params(omega, zeta, f0, mu_kn, mu_cn, clamp)
     opt = scale_solver_options(solver, omega, cs.rk4_steps)
-    w = make_work(N_STATE, MAX_EVENTS, 0.0)
-    x = x0.copy()
-    f = np.zeros(N_STATE)
-    mode = np.zeros(2, dtype=np.int64)
     eps, deps = gap(0.0, x, p, RISE)
     mode[1] = contact_mode(eps, deps, p)
     model.rhs(0.0, x, p, mode, f)
     w.ctrl[CTRL_H] = initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol, 2, 0.1)
-    row = np.zeros(N_REV_STATS)
     for _ in range(revolutions):
         status = run_revolution(x, f, p, opt, w, mode, row, False, cs.max_steps, rec)
         if status != OK:

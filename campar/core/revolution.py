@@ -13,8 +13,8 @@ import numpy as np
 from . import model
 from .analysis import REV_DETACH, add_step_stats, reset_revolution_stats
 from .codes import EVENT_LOOP, OK, STEP_LIMIT
-from .integrator import SolverOptions, advance, dense_eval
-from .jit import compiled, hot
+from .integrator import SolverOptions, advance, dense_eval, prepare_dense
+from .jit import hot
 from .model import (
     FREE,
     N_PHASES,
@@ -50,8 +50,7 @@ class Trace(NamedTuple):
     per_step: int  # dense samples per step (≥ 1: the step end itself)
 
 
-@compiled
-def make_trace(n_samples, n_events, per_step):
+def make_trace(n_samples, n_events, per_step) -> Trace:
     return Trace(
         np.zeros((n_samples, 7)),
         np.zeros((n_events, 4)),
@@ -84,9 +83,11 @@ def record_sample(rec, t, y0, y1, p, mode):
 def record_step(rec, method, w, t_prev, t, x, p, mode):
     """Dense samples inside the step just taken, then its end point."""
     h = t - t_prev
+    if rec.per_step > 1:
+        prepare_dense(model.rhs, method, t_prev, rec.prev, h, p, mode, w)
     for j in range(1, rec.per_step):
         theta = j / rec.per_step
-        dense_eval(method, w.K, rec.prev, x, h, theta, N_STATE, w.y_stage)
+        dense_eval(method, w, rec.prev, x, h, theta, N_STATE, w.y_stage)
         record_sample(rec, t_prev + theta * h, w.y_stage[0], w.y_stage[1], p, mode)
     record_sample(rec, t, x[0], x[1], p, mode)
 

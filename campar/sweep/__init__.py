@@ -5,9 +5,12 @@
 - ``arrays``: what each requested output stores (names, dtypes, shapes);
 - ``tile``: one tile through the kernel (``run_tile``) and the kernel settings
   built from a job, in one place;
-- ``runner``: the serial runner and the MPI master/workers, signals;
-- ``progress``: the live progress line, the run log, ``campar status``;
-- ``store``: Zarr and HDF5 backends behind one interface, commit flags, lock.
+- ``runner``: the serial runner and the MPI master/workers;
+- ``signals``: stop signals over a run's whole life (before, during, after it);
+- ``budget``: a job's store size and per-rank memory, estimated, and their limits;
+- ``progress``: the live progress line, the run log, ``campar status`` and ``verify``;
+- ``store``: Zarr and HDF5 backends behind one interface, commit flags and checksums,
+  verification and repair, lock.
 
 May import: ``campar.core``, ``campar.errors`` and itself. ``runner`` is the only
 module of campar that imports mpi4py; ``store`` imports nothing of the

@@ -1,8 +1,13 @@
-"""How far a sweep has got: the live progress line of a run, its run-log entry, ``campar status``.
+"""How far a sweep has got: the live progress line of a run, its run-log entry, ``campar status``
+and ``campar verify``.
 
 On a terminal the run rewrites one line (tiles done/total, cells/s, ETA) at
 most a few times a second; otherwise (a batch job's log) it writes a log line
 every ``every`` seconds, so logs stay short and still show the rate.
+
+``status`` and ``verify`` read the store once, tile by tile, checking every
+committed tile against its checksum (``store.verify_store``): their memory does
+not grow with the grid, and a damaged tile is counted apart, never as done.
 """
 
 import logging
@@ -17,7 +22,7 @@ import numpy as np
 
 from .. import __version__
 from ..core.codes import KIND_NAMES, Kind, cell_label, status_message
-from .plan import plan_tiles
+from .store import read_store, verify_store
 
 log = logging.getLogger("campar.run")
 
@@ -114,30 +119,47 @@ class Progress:
 # -- campar status ------------------------------------------------------------------
 
 
+class Tally:
+    """Counts of ``campar status``, added up tile by tile (memory does not grow with the grid)."""
+
+    def __init__(self, chatter_p: int):
+        self.chatter_p = chatter_p
+        self.cells = 0
+        self.failed, self.kinds, self.labels = Counter(), Counter(), Counter()
+
+    def add(self, check) -> None:
+        """One verified tile (``_integrity.TileCheck``)."""
+        a = check.arrays
+        status, kind = a["status"], a["kind"]
+        self.cells += status.size
+        self.failed.update(dict(_counts(status[status != 0])))
+        self.kinds.update(dict(_counts(kind)))
+        periodic = kind == Kind.PERIODIC
+        if periodic.any():  # each (n, p) as one integer: a 1-D unique is fast
+            pairs = a["n"][periodic].astype(np.int64) << 32 | a["p"][periodic].astype(np.uint32)
+            for pair, count in _counts(pairs):
+                n, p = pair >> 32, pair & 0xFFFFFFFF
+                self.labels[cell_label(0, n, p, self.chatter_p)] += count
+
+
 def summarize(reader) -> dict:
-    """Counts behind ``campar status``: tiles, cells, failures, kinds, labels, time."""
+    """Counts behind ``campar status``: tiles, cells, failures, kinds, labels, time, and the
+    tiles that fail verification (counted apart: not done)."""
     job = reader.job
-    tiles = plan_tiles(job)
-    done = reader.done
-    n_omega = job.shape[1]
-    cells_done = sum(t.n_rows for t in tiles if done[t.index]) * n_omega
-    rows = np.zeros(job.shape[0], bool)
-    for t in tiles:
-        rows[t.rows] = done[t.index]
-    status = reader.read("status")[rows]
-    kind = reader.read("kind")[rows]
-    periodic = kind == Kind.PERIODIC
-    n, p = reader.read("n")[rows][periodic], reader.read("p")[rows][periodic]
-    labels = Counter(cell_label(0, a, b, job.classify.chatter_p) for a, b in zip(n, p, strict=True))
+    tally = Tally(job.classify.chatter_p)
+    report = verify_store(reader, tally.add)
     runs = reader.attrs.get("runs", [])
     seconds = sum(_seconds(r) for r in runs)
     cells_run = sum(r.get("cells", 0) for r in runs)
     return {
-        "tiles": (int(done.sum()), len(tiles)),
-        "cells": (cells_done, job.shape[0] * n_omega),
-        "failed": {status_message(int(s)): int(c) for s, c in _counts(status[status != 0])},
-        "kinds": {KIND_NAMES[Kind(int(k))]: int(c) for k, c in _counts(kind)},
-        "labels": dict(labels.most_common()),
+        "tiles": (int(report.verified.sum()), report.tiles),
+        "cells": (tally.cells, job.shape[0] * job.shape[1]),
+        "failed": {status_message(int(s)): c for s, c in sorted(tally.failed.items())},
+        "kinds": {_kind_name(k): c for k, c in sorted(tally.kinds.items())},
+        "labels": dict(tally.labels.most_common()),
+        "damaged": report.damaged,
+        "problems": report.problems,
+        "checksums": report.checksums,
         "runs": len(runs),
         "seconds": seconds,
         "cells_per_s": cells_run / seconds if seconds > 0 else math.nan,
@@ -153,10 +175,13 @@ def describe(reader, max_labels: int = 12) -> str:
     lines = [
         f"store   {reader.path}  (job {job.name}, hash {reader.attrs.get('job_hash')})",
         f"grid    {job.shape[0]} {job.second} × {job.shape[1]} omega, {job.tiles.rows} rows a tile",
-        f"tiles   {s['tiles'][0]}/{s['tiles'][1]} done",
+        f"tiles   {s['tiles'][0]}/{s['tiles'][1]} done" + _damage(s["damaged"]),
         f"cells   {s['cells'][0]}/{s['cells'][1]} done, {failed} failed (status ≠ 0)",
     ]
     lines += [f"          {count} × {why}" for why, count in s["failed"].items()]
+    lines += [f"damage  {problem}" for problem in s["problems"]]
+    if not s["checksums"]:
+        lines.append("check   format without checksums: tiles checked for being readable only")
     if s["kinds"]:
         lines.append("kinds   " + ", ".join(f"{k} {c}" for k, c in s["kinds"].items()))
     if s["labels"]:
@@ -174,6 +199,23 @@ def describe(reader, max_labels: int = 12) -> str:
     return "\n".join(lines)
 
 
+def _damage(damaged: dict[int, str], shown: int = 8) -> str:
+    if not damaged:
+        return ""
+    tiles = ", ".join(map(str, sorted(damaged)[:shown])) + (", …" if len(damaged) > shown else "")
+    return (
+        f", {len(damaged)} damaged (tiles {tiles}: `campar verify` says why, "
+        "`campar run` computes them again)"
+    )
+
+
+def _kind_name(code: int) -> str:
+    try:
+        return KIND_NAMES[Kind(code)]
+    except ValueError:
+        return f"kind {code}"
+
+
 def _counts(values: np.ndarray):
     keys, counts = np.unique(values, return_counts=True)
     return zip(keys.tolist(), counts.tolist(), strict=True)
@@ -188,3 +230,30 @@ def _seconds(run: dict) -> float:
     except (KeyError, TypeError, ValueError):
         return 0.0
     return (end - start).total_seconds()
+
+
+# -- campar verify ------------------------------------------------------------------
+
+
+def verify_report(path) -> tuple[str, bool]:
+    """(the text ``campar verify`` prints, whether the store is intact)."""
+    start = time.monotonic()
+    with read_store(path) as reader:
+        report = verify_store(reader)
+        job = reader.job
+    seconds = time.monotonic() - start
+    committed, damaged = len(report.committed), len(report.damaged)
+    how = "checksums" if report.checksums else "readability only (a format without checksums)"
+    lines = [
+        f"store   {path}  (job {job.name}, {report.tiles} tiles)",
+        f"checked {committed} committed tiles ({how}) in {format_duration(seconds)}: "
+        + (
+            f"{damaged} damaged"
+            if damaged
+            else "all intact" + (", but:" if report.problems else "")
+        ),
+        *(f"  {line}" for line in report.lines()),
+    ]
+    if not report.clean:
+        lines.append("`campar run` on this store repairs it, computing damaged tiles again")
+    return "\n".join(lines), report.clean

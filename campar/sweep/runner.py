@@ -42,11 +42,22 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CamparError, Interrupted, JobError, StoreError, StoreLocked, StoreMismatch
+from ..errors import (
+    CamparError,
+    Interrupted,
+    JobError,
+    StoreDamaged,
+    StoreError,
+    StoreIOError,
+    StoreLocked,
+    StoreMismatch,
+)
 from .arrays import array_names
+from .budget import check_budget
 from .job import Job
 from .plan import Tile, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
+from .signals import Signals
 from .store import cell_arrays, open_store
 from .tile import run_tile
 
@@ -54,11 +65,9 @@ log = logging.getLogger("campar.run")
 
 TAG_READY, TAG_TILE, TAG_RESULT, TAG_ERROR, TAG_NOTICE, TAG_BYE = range(11, 17)
 STOP = -1
-SIGNALS = (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1)
 BACKOFF_SECONDS = 1e-3  # longest sleep of an idle loop between probes (mpi4py.futures)
 MAX_ATTEMPTS = 2  # a tile that fails on two lanes ends the run
 BYE_SECONDS = 10.0  # how long the master waits for workers to leave after STOP
-INSIST_SECONDS = 1.0
 SIGNAL_CHECK_SECONDS = 0.05  # a serial run's idle wait: signals are seen within this
 MPI_LAUNCHER_ENV = ("PMI_SIZE", "PMI_RANK", "OMPI_COMM_WORLD_SIZE", "PMIX_RANK")
 
@@ -90,34 +99,6 @@ class Backoff:
 
     def sleep(self) -> None:
         time.sleep(self.delay())
-
-
-class Signals:
-    """While installed, SIGTERM/SIGINT/SIGUSR1 only count (``count``, ``last``)."""
-
-    def __init__(self):
-        self.count, self.last, self.first_at, self.last_at, self._old = 0, None, 0.0, 0.0, {}
-
-    def _handle(self, signum, frame):
-        self.count += 1
-        self.last, self.last_at = signum, time.monotonic()
-        if self.count == 1:
-            self.first_at = self.last_at
-
-    @property
-    def insist(self) -> bool:
-        """A second signal a while after the first: abandon now. (A terminal's Ctrl-C can
-        reach a rank twice at once, from the terminal and from mpirun.)"""
-        return self.count >= 2 and self.last_at - self.first_at > INSIST_SECONDS
-
-    def __enter__(self):
-        for sig in SIGNALS:
-            self._old[sig] = signal.signal(sig, self._handle)
-        return self
-
-    def __exit__(self, *exc):
-        for sig, old in self._old.items():
-            signal.signal(sig, old)
 
 
 class ThreadLane:
@@ -465,16 +446,27 @@ def mpi_world():
     return MPI.COMM_WORLD if MPI.COMM_WORLD.Get_size() > 1 else None
 
 
-def run_job(job: Job, store_path: str | Path | None = None, *, overwrite=False, grace=30.0):
+def run_job(
+    job: Job,
+    store_path: str | Path | None = None,
+    *,
+    overwrite=False,
+    grace=30.0,
+    max_store: int | None = None,
+    max_memory: int | None = None,
+):
     """Compute every pending tile of ``job`` into its store; serial, or MPI under mpirun.
 
     Returns a RunSummary on completion; raises Interrupted (exit 75) after a
-    signal and CamparError when a tile fails twice. Under MPI every rank returns
-    or raises alike (workers' errors carry ``rank``; the master reports them).
+    signal and CamparError when a tile fails twice; JobError, before anything
+    touches the disk, if the store or a rank's memory would exceed ``max_store``
+    or ``max_memory`` bytes (``budget``'s defaults if None). Under MPI every rank
+    returns or raises alike (workers' errors carry ``rank``; the master reports them).
     """
     path = store_path or job.store
     if path is None:
         raise JobError(f"job {job.name} names no store: add 'store: PATH' or pass --store PATH")
+    check_budget(job, max_store=max_store, max_memory=max_memory)
     with Signals() as signals:
         comm = mpi_world()
         if comm is not None and comm.Get_rank() > 0:
@@ -489,7 +481,10 @@ def run_job(job: Job, store_path: str | Path | None = None, *, overwrite=False, 
 
 
 # Errors a worker re-raises after the master (by index); others arrive as CamparError.
-SHARED_ERRORS = (CamparError, JobError, StoreError, StoreMismatch, StoreLocked, Interrupted)
+SHARED_ERRORS = (
+    CamparError, JobError, StoreError, StoreMismatch, StoreLocked, Interrupted, StoreIOError,
+    StoreDamaged,
+)  # fmt: skip
 
 
 @contextlib.contextmanager
@@ -559,8 +554,9 @@ def run_master(job, store, signals, comm, grace) -> RunSummary:
     if master.failure:
         raise CamparError(master.failure)
     if remaining:
+        why = master.stop_reason or "tiles damaged on disk since they were written (logged above)"
         raise Interrupted(
-            f"stopped by {master.stop_reason} with {remaining} of {len(all_tiles)} tiles "
+            f"stopped by {why} with {remaining} of {len(all_tiles)} tiles "
             f"pending; run the same command again to resume"
         )
     return RunSummary(outcome, entry)

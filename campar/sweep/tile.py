@@ -8,7 +8,7 @@ depend on the number of ranks or on interruptions.
 
 import numpy as np
 
-from ..core.integrator import DP54, RK4, SolverOptions
+from ..core.integrator import DOP853, DP54, RK4, SolverOptions
 from ..core.jitcache import ensure_fresh_cache
 from ..core.kernel import (
     CONVERGED,
@@ -40,12 +40,15 @@ def output_bits(job: Job) -> int:
     return bits
 
 
+METHODS = {"dp54": DP54, "dop853": DOP853, "rk4": RK4}  # the job's integrator.method
+
+
 def solver_options(job: Job) -> SolverOptions:
     """The job's integrator options; the kernel scales h_fixed, h_min and event_tol
     to each cell's period (core.revolution.scale_solver_options)."""
     integ = job.integrator
     return SolverOptions(
-        method=DP54 if integ.method == "dp54" else RK4,
+        method=METHODS[integ.method],
         rtol=integ.rtol,
         atol=integ.atol,
         h_fixed=0.0,
@@ -165,3 +168,24 @@ def chain_starts(job: Job) -> np.ndarray:
         ok = np.all(np.isfinite(out.state), axis=1)[:, None]
         _FIRST_COLUMN_STARTS[key] = np.where(ok, out.state, x_init)
     return _FIRST_COLUMN_STARTS[key]
+
+
+def warm_up() -> float:
+    """Compile the kernel into numba's on-disk cache, as the first map or point of a fresh
+    install would (one cell of the paper's set-up); returns the seconds it took. Every
+    later process loads the cache in about a second (benchmarks/RESULTS.md)."""
+    import time
+
+    start = time.perf_counter()
+    job = Job.from_dict(
+        {
+            "name": "warm_up",
+            "sweep": {
+                "omega": {"from": 3.0, "to": 3.0, "points": 1},
+                "mu_cn": {"from": 0.8, "to": 0.8, "points": 1},
+            },
+        },
+        source="warm-up",
+    )
+    run_tile(job, Tile(0, 0, 1))
+    return time.perf_counter() - start

@@ -9,6 +9,7 @@
   (PD, SN, NS, G, chaos, jump) from its multipliers and extrema of ε;
 - ``dataset``: ``open`` — a result store as a labelled, CF-annotated xarray
   Dataset, either backend, with the n-p labels as strings (``campar.open``);
+- ``output``: output files checked before anything is computed (``figure_file``);
 - ``plot``: figures of computed results (maps of a store, orbits, bifurcation
   diagrams); it never recomputes and never imports the kernel.
 

@@ -27,6 +27,7 @@ import numpy as np
 import xarray as xr
 
 from ..core.codes import KIND_LABELS, cell_label
+from ..errors import StoreDamaged
 from ..sweep.plan import plan_tiles
 from ..sweep.store import FORMAT, backend_name, read_store, store_arrays, upgraded_attrs
 
@@ -38,6 +39,8 @@ def open(path: str | Path) -> xr.Dataset:
     """The store at ``path`` (Zarr directory or HDF5 file) as a labelled xarray Dataset."""
     path = Path(path)
     with read_store(path) as reader:
+        if reader.file_damage:  # xarray would hand the damaged file to HDF5 itself
+            raise StoreDamaged(f"{path}: {reader.file_damage}; `campar run` repairs it")
         ds = _open_current(path, reader) if reader.format == FORMAT else _from_reader(reader)
         job = reader.job
     ds = _normalise(ds)
@@ -90,11 +93,12 @@ def _open_current(path: Path, reader) -> xr.Dataset:
     ds = xr.open_dataset(path, engine=engine, mask_and_scale=integers, chunks=None)
     if reader.journaled:
         ds.load()
-        tiles = plan_tiles(reader.job)
+        tiles, sums = plan_tiles(reader.job), reader.tile_checksums()[0]
         for index, arrays in reader.journaled.items():
             rows = {reader.job.second: tiles[index].rows}
             for name, values in arrays.items():
                 ds[name][rows] = values
+            ds["checksum"][index] = sums[index]
             ds["done"][index] = 1
     return ds
 
@@ -112,6 +116,8 @@ def _from_reader(reader) -> xr.Dataset:
             coords.append(a.name)
         elif a.name == "done":
             data = reader.done.astype(a.dtype)
+        elif a.name == "checksum":  # none before format 3
+            data = np.zeros(a.shape, a.dtype)
         else:
             data = reader.read(a.name)
         variables[a.name] = xr.Variable(a.dims, data, attrs, encoding)

@@ -16,17 +16,33 @@ dimension is a coordinate (``component`` y/ydot, ``tile`` with its row range),
 and the HDF5 file is a netCDF-4 file, so ``xarray.open_zarr`` and
 ``xarray.open_dataset(path, engine="h5netcdf")`` give the same Dataset
 (``campar.open``). Format 1 stores are still read; only the current format resumes.
+
+From format 3 on every committed tile carries a checksum (``_integrity``):
+``verify_store`` reads every committed tile back and reports the damaged ones,
+and ``open_store`` does so before a resume, makes the damaged tiles pending
+again (logging which and why) and so recomputes them. A store reached through
+symbolic links is used at its real path: the lock, the files and every atomic
+replace act there, and the links stay. A failed read or write of the store
+(full disk, permissions) raises StoreIOError (exit 74) naming the path and the
+cause, and leaves no temporary file behind.
 """
 
+import logging
 import os
+import re
 import shutil
+import time
 from pathlib import Path
 
-from ...errors import StoreError
+import numpy as np
+
+from ...errors import StoreDamaged, StoreError, io_error
 from ..job import Job
+from ..plan import plan_tiles
 from . import _hdf5, _zarr
 from ._base import Store, StoreReader
-from ._lock import StoreLock, lock_path
+from ._integrity import Verification, tile_checksum, verify_store
+from ._lock import StoreLock, holder_alive, lock_path
 from ._schema import (
     FORMAT,
     ArraySchema,
@@ -44,6 +60,7 @@ __all__ = [
     "ArraySchema",
     "Store",
     "StoreReader",
+    "Verification",
     "backend_name",
     "cell_arrays",
     "fill_value",
@@ -52,8 +69,12 @@ __all__ = [
     "open_store",
     "read_store",
     "store_arrays",
+    "tile_checksum",
     "upgraded_attrs",
+    "verify_store",
 ]
+
+log = logging.getLogger("campar.sweep.store")
 
 HDF5_SUFFIXES = (".h5", ".hdf5")
 _STORES = {_zarr: _zarr.ZarrStore, _hdf5: _hdf5.Hdf5Store}
@@ -68,61 +89,122 @@ def _backend(path: Path):
     return _hdf5 if backend_name(path) == "hdf5" else _zarr
 
 
+def real_path(path: Path) -> Path:
+    """The store's own path: every symbolic link (of the store or its folders) resolved."""
+    return Path(os.path.realpath(path))
+
+
 def open_store(path: str | Path, job: Job, *, overwrite: bool = False) -> Store:
     """Open the store of a run: create it, or resume it if it holds the same job.
 
-    Raises StoreLocked if another live run holds it, StoreMismatch if it holds
-    a different job (untouched, unless ``overwrite`` replaces it), StoreError
-    if ``path`` is something other than a campar store (never replaced).
+    Raises StoreLocked if another live run holds it (through whatever alias),
+    StoreMismatch if it holds a different job (untouched, unless ``overwrite``
+    replaces it), StoreError if ``path`` is something other than a campar store
+    (never replaced), StoreDamaged if its metadata is, StoreIOError if the
+    system refuses a read or write. Committed tiles are verified first; the
+    damaged ones are made pending (``Store.done`` is unset for them).
     """
     path = Path(path)
-    backend = _backend(path)
-    lock = StoreLock.acquire(path)
+    backend, real = _backend(path), real_path(path)
+    lock = StoreLock.acquire(real)
     try:
-        _remove_aside(path)
-        attrs = backend.read_attrs(path)
-        if attrs is None and path.exists() and not _empty_dir(path):
+        _remove_aside(real)
+        attrs = _read_attrs_for(path, real, backend, job)
+        if attrs is None and real.exists() and not _empty_dir(real):
             raise StoreError(
                 f"{path} exists and is not a campar store; choose another --store path "
                 "(campar never deletes what it did not write)"
             )
         if attrs is not None and not overwrite:
             check_same_job(path, attrs, job)
-        if attrs is None and path.exists():
-            path.rmdir()  # an empty directory
+        if attrs is None and real.exists():
+            real.rmdir()  # an empty directory
         elif attrs is not None and overwrite:
-            backend.remove(path)
-        if not path.exists():
-            backend.create(path, job)
-        backend.clean_leftovers(path, job)
-        return _STORES[backend](path, job, lock)
+            backend.remove(real)  # the target: a link to it stays, and finds the new store
+        if not real.exists():
+            backend.create(real, job)
+            done = np.zeros(len(plan_tiles(job)), bool)
+        else:
+            backend.clean_leftovers(real, job)
+            done = _verify_for_resume(path, real, backend, attrs, job)
+        return _STORES[backend](path, job, lock, done, real)
+    except OSError as exc:
+        lock.release()
+        raise io_error(f"cannot open the store {path}", exc) from None
     except BaseException:
         lock.release()
         raise
 
 
+def _read_attrs_for(path: Path, real: Path, backend, job: Job) -> dict | None:
+    """The store's attributes; None after keeping aside an HDF5 file of this very job (its
+    seal says so) that HDF5 cannot read: a new store replaces it, the old one is kept."""
+    try:
+        return backend.read_attrs(real)
+    except StoreDamaged as exc:
+        if getattr(exc, "sealed_job", None) != job.digest():
+            raise
+        aside = backend.set_store_aside(real)
+        log.warning("%s; kept as %s, the map is computed again", exc, aside.name)
+        return None
+
+
+def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job) -> np.ndarray:
+    """Verify every committed tile; repair the damaged ones (pending again) and log why."""
+    start = time.monotonic()
+    try:
+        with _READERS[backend](path, attrs, real) as reader:
+            report = verify_store(reader)
+    except StoreDamaged as exc:
+        raise StoreDamaged(f"{exc}; --overwrite recomputes the store") from None
+    for problem in report.problems:
+        log.warning("%s: %s", path, problem)
+    for index, why in sorted(report.damaged.items()):
+        log.warning("%s: tile %d is damaged (%s): computed again", path, index, why)
+    if not report.clean:
+        backend.repair(real, job, report)
+    if report.committed:
+        log.info(
+            "%s: %d committed tiles verified in %.1f s, %d damaged",
+            path, len(report.committed), time.monotonic() - start, len(report.damaged),
+        )  # fmt: skip
+    return report.verified
+
+
 def read_store(path: str | Path) -> StoreReader:
-    """Open a store read-only (no lock; safe while a run writes it)."""
+    """Open a store read-only (no lock; safe while a run writes it). StoreDamaged if its
+    metadata cannot be read or disagrees with itself; StoreIOError if the system refuses."""
     path = Path(path)
-    backend = _backend(path)
-    if not path.exists():
+    backend, real = _backend(path), real_path(path)
+    if not real.exists():
         raise StoreError(f"no store at {path}")
-    attrs = backend.read_attrs(path)
-    if attrs is None:
-        raise StoreError(f"{path} is not a campar {backend_name(path)} store")
-    check_readable(path, attrs)
-    return _READERS[backend](path, attrs)
+    try:
+        attrs = backend.read_attrs(real)
+        if attrs is None:
+            raise StoreError(f"{path} is not a campar {backend_name(path)} store")
+        check_readable(path, attrs)
+        return _READERS[backend](path, attrs, real)
+    except OSError as exc:
+        raise io_error(f"cannot read the store {path}", exc) from None
 
 
 def _empty_dir(path: Path) -> bool:
     return path.is_dir() and not any(path.iterdir())
 
 
+LOCK_TMP = re.compile(r"\.lock\.(\d+)\.tmp$")
+
+
 def _remove_aside(path: Path) -> None:
-    """Remove what a killed creation or deletion left beside the store (we hold the lock)."""
+    """Remove what a killed creation or deletion left beside the store (we hold the lock),
+    and lock files a killed run was writing."""
     for pattern in (".creating-*", ".deleting-*"):
         for leftover in path.parent.glob(_hdf5.glob_escape(path.name) + pattern):
             if leftover.is_dir():
                 shutil.rmtree(leftover, ignore_errors=True)
             else:
                 os.unlink(leftover)
+    for leftover in path.parent.glob(_hdf5.glob_escape(path.name) + ".lock.*.tmp"):
+        match = LOCK_TMP.search(leftover.name)
+        if match and not holder_alive({"pid": int(match.group(1))}):
+            leftover.unlink(missing_ok=True)

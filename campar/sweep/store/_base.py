@@ -8,48 +8,112 @@ For developers — a backend implements:
   campar store of this backend;
 - ``clean_leftovers(path)``: remove what a killed writer left behind and
   finish any commit it left half done;
+- ``repair(path, job, report)``: make the tiles a verification found damaged
+  pending again, their cells the fill value (a resume then recomputes them);
 - a ``Store`` subclass with ``_write_tile``, ``_write_runs`` and ``_close``;
-- a ``StoreReader`` subclass with ``_read``, ``_done`` and ``close`` (and
-  ``journaled`` if committed tiles can wait outside the store's arrays);
+- a ``StoreReader`` subclass with ``_read_rows``, ``_tile_values``, ``_shapes``
+  and ``close`` (and ``journaled``/``journal_problems`` if
+  committed tiles can wait outside the store's arrays). Reads of one tile must
+  raise, never crash, on damaged bytes: ``_integrity`` turns that into a report;
 - the layout and attributes of ``_schema.store_arrays`` and ``initial_attrs``,
   so that xarray opens every backend to the same Dataset.
 
-The commit protocol every backend keeps: a tile's arrays are durable before
-its ``done`` flag is, so ``done`` never claims a tile whose data a kill lost.
+The commit protocol every backend keeps: a tile's arrays, then its checksum,
+then its ``done`` flag, so ``done`` never claims a tile whose data a kill lost,
+and a tile whose data changed afterwards fails its checksum (``_integrity``).
+Every path a backend touches is the store's real path (symbolic links
+resolved by ``open_store``); ``path`` is the one the user gave, for messages.
+Any OSError of a write reaches the caller as StoreIOError (exit 74).
 """
 
+import contextlib
 from abc import ABC, abstractmethod
 from pathlib import Path
 
 import numpy as np
 
-from ..job import Job
+from ...errors import CamparError, StoreDamaged, StoreError, io_error
+from ..job import Job, job_digest
 from ..plan import Tile, plan_tiles
+from ._integrity import describe_exception, tile_checksum
 from ._lock import StoreLock
-from ._schema import cell_arrays, check_tile_arrays, coordinates
+from ._schema import CHECKSUMS_FROM, cell_arrays, check_tile_arrays, coordinates, layout_problems
 
 
 class StoreReader(ABC):
-    """Read-only view of a store: no lock, safe while a run writes it."""
+    """Read-only view of a store: no lock, safe while a run writes it.
 
-    def __init__(self, path: Path, attrs: dict):
-        self.path = path
+    Opening checks that the metadata agrees with itself (StoreDamaged if not);
+    the tiles are checked by ``_integrity.verify_store``, which reads them.
+    """
+
+    def __init__(self, path: Path, attrs: dict, real: Path | None = None):
+        self.path = path  # as given, for messages
+        self.real = real or path  # symbolic links resolved
         self.attrs = attrs
-        self.job = Job.from_dict(attrs["job"], source=f"job stored in {path}")
+        try:
+            self.job = Job.from_dict(attrs["job"], source=f"job stored in {path}")
+        except (CamparError, KeyError, TypeError) as exc:
+            stored = attrs.get("job")
+            if isinstance(stored, dict) and job_digest(stored) == attrs.get("job_hash"):
+                raise StoreError(  # intact, but not this campar's: another version wrote it
+                    f"{path} holds a job this campar cannot read ({exc}): it was written by "
+                    "another campar version; read it with that version, or upgrade"
+                ) from None
+            raise StoreDamaged(
+                f"{path} is damaged: its stored job cannot be read ({exc})"
+            ) from None
         self.format = attrs.get("campar_store")
         self.names = [a.name for a in cell_arrays(self.job)]
         self.coords = coordinates(self.job)
+        self.array_dtypes = {a.name: a.dtype for a in cell_arrays(self.job)}
+
+    def _check_layout(self) -> None:
+        """StoreDamaged unless the arrays are as the stored job says (backends call this
+        once their file is open); ``array_shapes`` from then on."""
+        self.array_shapes = self._shapes()
+        problems = layout_problems(self.job, self.attrs, self.array_shapes)
+        if problems:
+            raise StoreDamaged(
+                f"{self.path}: its metadata disagrees with itself: " + "; ".join(problems)
+            )
 
     @property
     def done(self) -> np.ndarray:
-        """Commit flag per tile (bool, one per tile of ``plan_tiles(job)``)."""
-        return self._done()
+        """Commit flag per tile (bool, one per tile of ``plan_tiles(job)``); a flag that
+        cannot be read counts as unset. Says nothing of the tiles' bytes: ``verify_store``."""
+        return self.tile_flags()[0]
+
+    def tile_flags(self) -> tuple[np.ndarray, dict[int, str]]:
+        """(done per tile, {tile: why its flag is damaged}) — a damaged flag is unset."""
+        flags, problems = self._tile_values("done")
+        flags = flags.astype(np.int64)  # bool in format 1, int8 from format 2 on
+        for index in np.flatnonzero((flags != 0) & (flags != 1)).tolist():
+            problems.setdefault(index, f"done flag holds {flags[index]}, neither 0 nor 1")
+        done = flags == 1
+        done[list(problems)] = False
+        return done, problems
+
+    def tile_checksums(self) -> tuple[np.ndarray | None, dict[int, str]]:
+        """(checksum per tile, 0 none; {tile: why it cannot be read}); None before format 3."""
+        if (self.format or 0) < CHECKSUMS_FROM:
+            return None, {}
+        return self._tile_values("checksum")
 
     def read(self, name: str) -> np.ndarray:
-        """A per-cell array over (second, omega[, tail]); uncomputed cells hold the fill."""
+        """A per-cell array over (second, omega[, tail]); uncomputed cells hold the fill.
+        The whole array in memory: views of large stores read ``read_rows`` by tiles."""
+        self._known(name)
+        return self._read_rows(name, slice(None))
+
+    def read_rows(self, name: str, rows: slice) -> np.ndarray:
+        """A per-cell array over the chains ``rows``; raises on damaged bytes."""
+        self._known(name)
+        return self._read_rows(name, rows)
+
+    def _known(self, name: str) -> None:
         if name not in self.names:
             raise KeyError(f"{self.path} has no array {name!r}; it has {', '.join(self.names)}")
-        return self._read(name)
 
     @property
     def journaled(self) -> dict[int, dict[str, np.ndarray]]:
@@ -57,11 +121,31 @@ class StoreReader(ABC):
         index (HDF5 between checkpoints); ``read`` and ``done`` include them already."""
         return {}
 
-    @abstractmethod
-    def _done(self) -> np.ndarray: ...
+    @property
+    def journal_problems(self) -> dict[int, str]:
+        """Tiles whose journal entry cannot be read (they count as not committed)."""
+        return {}
+
+    def metadata_problems(self) -> list[str]:
+        """Parts of the store's metadata a reader does not need but other tools do, damaged."""
+        return []
+
+    @property
+    def file_damage(self) -> str | None:
+        """Why the store's file cannot be handed to other readers as it is (HDF5 damaged on
+        disk: this reader reads a rescued copy), or None."""
+        return None
 
     @abstractmethod
-    def _read(self, name: str) -> np.ndarray: ...
+    def _tile_values(self, name: str) -> tuple[np.ndarray, dict[int, str]]:
+        """A one-per-tile array (``done``, ``checksum``) and {tile: why its element cannot
+        be read}: ``tile_values`` does it for a backend."""
+
+    @abstractmethod
+    def _read_rows(self, name: str, rows: slice) -> np.ndarray: ...
+
+    @abstractmethod
+    def _shapes(self) -> dict[str, tuple]: ...
 
     @abstractmethod
     def close(self) -> None: ...
@@ -73,11 +157,28 @@ class StoreReader(ABC):
         self.close()
 
 
+def tile_values(read, n_tiles: int, dtype, name: str) -> tuple[np.ndarray, dict[int, str]]:
+    """A one-per-tile array read whole by ``read(slice)``, or element by element if that
+    fails, so one damaged chunk spoils one element: (values, {tile: why unreadable})."""
+    try:
+        return np.asarray(read(slice(None))).reshape(n_tiles), {}
+    except Exception:  # zarr, numcodecs and h5py raise many kinds
+        pass
+    values, problems = np.zeros(n_tiles, dtype), {}
+    for index in range(n_tiles):
+        try:
+            values[index] = np.asarray(read(slice(index, index + 1))).reshape(())
+        except Exception as exc:
+            problems[index] = f"{name} unreadable ({describe_exception(exc)})"
+    return values, problems
+
+
 class Store(ABC):
     """A store opened for one run: holds the lock; the only writer."""
 
-    def __init__(self, path: Path, job: Job, lock: StoreLock, runs: list):
-        self.path = path
+    def __init__(self, path: Path, job: Job, lock: StoreLock, runs: list, real: Path | None = None):
+        self.path = path  # as given, for messages
+        self.real = real or path  # where the files are
         self.job = job
         self.tiles = plan_tiles(job)
         self._lock = lock
@@ -94,12 +195,21 @@ class Store(ABC):
         if tile != self.tiles[tile.index]:
             raise ValueError(f"{tile} is not tile {tile.index} of job {self.job.name}")
         check_tile_arrays(self.job, tile, arrays)
-        self._write_tile(tile, arrays)
+        names = [a.name for a in cell_arrays(self.job)]
+        try:
+            self._write_tile(tile, arrays, tile_checksum(arrays, names))
+        except OSError as exc:
+            raise io_error(
+                f"cannot write tile {tile.index} to the store {self.path}", exc
+            ) from None
 
     def log_run(self, entry: dict) -> None:
         """Append one entry to the store's run log (attribute ``runs``)."""
         self._runs.append(dict(entry))
-        self._write_runs(self._runs)
+        try:
+            self._write_runs(self._runs)
+        except OSError as exc:
+            raise io_error(f"cannot write the run log of the store {self.path}", exc) from None
 
     @property
     def runs(self) -> list[dict]:
@@ -112,8 +222,11 @@ class Store(ABC):
         self._closed = True
         try:
             self._close()
+        except OSError as exc:
+            raise io_error(f"cannot flush the store {self.path}", exc) from None
         finally:
-            self._lock.release()
+            with contextlib.suppress(OSError):  # a lock that cannot go is reported stale later
+                self._lock.release()
 
     def __enter__(self):
         return self
@@ -122,7 +235,8 @@ class Store(ABC):
         self.close()
 
     @abstractmethod
-    def _write_tile(self, tile: Tile, arrays: dict[str, np.ndarray]) -> None: ...
+    def _write_tile(self, tile: Tile, arrays: dict[str, np.ndarray], checksum: int) -> None:
+        """Arrays, then ``checksum``, then the ``done`` flag: the commit."""
 
     @abstractmethod
     def _write_runs(self, runs: list[dict]) -> None: ...

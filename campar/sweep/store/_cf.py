@@ -117,6 +117,16 @@ def done_attrs(dtype: np.dtype) -> dict:
     }
 
 
+def checksum_attrs(dtype: np.dtype) -> dict:
+    return {
+        "long_name": "checksum of the tile's arrays",
+        "comment": "BLAKE2b digest (8 bytes, little-endian) of every per-cell array over the "
+        "tile's rows, in the store's order, each with its name, dtype and shape; written "
+        "before the tile's done flag; 0: none (campar verify checks it)",
+        "coordinates": "tile_row_start tile_row_stop",
+    }
+
+
 def global_attrs(job: Job, created: str) -> dict:
     """The file's CF and campar attributes, besides campar's own (job, runs, …)."""
     start = job.initial

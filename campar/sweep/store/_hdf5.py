@@ -4,13 +4,22 @@ HDF5 from PyPI is serial and not crash-safe: a process killed while the
 library updates a file can leave it unreadable, finished tiles and all. So a
 run never modifies the store file in place:
 
-1. a finished tile goes to the journal first, ``<store>.journal/tile-000012.npz``,
-   written aside and renamed, so an entry is whole or absent — this is the
-   tile's commit;
+1. a finished tile goes to the journal first, ``<store>.journal/tile-000012.npz``
+   with its arrays and their checksum, written aside and renamed, so an entry
+   is whole or absent — this is the tile's commit;
 2. at a checkpoint (every ``CHECKPOINT_TILES`` tiles or ``CHECKPOINT_SECONDS``,
    and at close) the file is copied, the journal applied to the copy (arrays,
-   then ``done``), the copy flushed, fsynced and renamed over the store, and
-   only then are the applied entries deleted.
+   checksum, then ``done``), the copy flushed, fsynced and renamed over the
+   store, and only then are the applied entries deleted. A checkpoint first
+   checks that the disk has room for the copy, and removes the copy if it
+   fails anyway: a full disk leaves the store and the journal as they were.
+
+An entry that cannot be read or fails its checksum (damaged on disk) is never
+applied: it is set aside as ``tile-000012.npz.damaged-<time>`` and its tile
+recomputed. A store whose verification finds damage is rebuilt: a new file
+built aside from the job, every tile that verified copied into it, renamed
+over the store — whatever was damaged, data or the file's own structure, is
+left behind.
 
 A kill at any point leaves the last checkpoint plus whole journal entries;
 the next ``open_store`` replays them, and readers overlay them, so
@@ -28,39 +37,118 @@ attributes, which keeps that structure.
 """
 
 import contextlib
+import errno
+import logging
 import os
 import re
 import shutil
+import tempfile
 import time
 from pathlib import Path
 
 import h5py
 import numpy as np
 
+from ...errors import StoreDamaged
 from ..job import Job
 from ..plan import Tile, plan_tiles
-from ._base import Store, StoreReader
+from ._base import Store, StoreReader, tile_values
+from ._h5guard import (
+    FOREIGN,
+    USERBLOCK,
+    open_checked,
+    release,
+    rescue,
+    rescue_attrs,
+    reserve,
+    seal,
+    sealed_job,
+    zeroed_start,
+)
+from ._integrity import Verification, describe_exception
+from ._journal import (  # noqa: F401 (re-exported: the backend's journal)
+    ENTRY,
+    ENTRY_TMP,
+    damaged_name,
+    journal_dir,
+    journal_entries,
+    load_entry,
+    read_entry,
+    set_aside,
+    verified_entry,
+    write_entry,
+)
 from ._lock import StoreLock
-from ._schema import ArraySchema, decode_attrs, initial_attrs, run_attrs, store_arrays
+from ._schema import (
+    FORMAT,
+    TILE_ARRAYS,
+    ArraySchema,
+    decode_attrs,
+    initial_attrs,
+    run_attrs,
+    store_arrays,
+)
+
+log = logging.getLogger("campar.sweep.store")
 
 CHECKPOINT_TILES = 64
 CHECKPOINT_SECONDS = 60.0
-ENTRY = re.compile(r"^tile-(\d+)\.npz$")
-
-
-def journal_dir(path: Path) -> Path:
-    return path.with_name(path.name + ".journal")
+ROOM_MARGIN = 1 << 16  # bytes a checkpoint wants free beyond its copy and 10 % (HDF5 metadata)
 
 
 def read_attrs(path: Path) -> dict | None:
+    """Attributes of the campar store at ``path``, None if it is none; StoreDamaged for a
+    damaged one whose attributes cannot be read (read in a child process: ``_h5guard``)."""
     if not path.is_file():
         return None
     try:
-        with h5py.File(path, "r") as f:
-            attrs = decode_attrs(f.attrs)
-    except (OSError, ValueError):
-        return None
+        f, state = open_checked(path)
+        if f is None and state == FOREIGN:
+            if zeroed_start(path):
+                raise StoreDamaged(
+                    f"{path} begins with zeroed bytes where an HDF5 file has its signature: a "
+                    "damaged store? campar cannot tell which job it holds, and never deletes "
+                    "it: move it away and run again"
+                )
+            return None
+        if f is None:
+            attrs = _rescued_attrs(path, state)
+        else:
+            with f:
+                attrs = decode_attrs(f.attrs)
+    except PermissionError:
+        raise
+    except (OSError, ValueError, KeyError, RuntimeError) as exc:  # an unsealed file
+        raise StoreDamaged(
+            f"{path} is an HDF5 file that cannot be opened ({describe_exception(exc)}); "
+            "campar never deletes it: move it away and run again"
+        ) from None
     return attrs if "job_hash" in attrs else None
+
+
+def _rescued_attrs(path: Path, state: str) -> dict:
+    rescued = rescue_attrs(path)
+    if rescued.attrs is None:
+        sealed = sealed_job(path)
+        error = StoreDamaged(
+            f"{path} is damaged ({state}) and {rescued.failure}; "
+            + (f"its seal says it holds job {sealed}: `campar run` of that job keeps it aside "
+               "and computes the map again" if sealed else
+               "campar cannot tell which job it holds, and never deletes it: move it away "
+               "and run again")
+        )  # fmt: skip
+        error.sealed_job = sealed
+        raise error
+    return rescued.attrs
+
+
+def set_store_aside(path: Path) -> Path:
+    """Keep a store file HDF5 cannot read (and its journal) under a name campar ignores."""
+    aside = damaged_name(path)
+    os.replace(path, aside)
+    if journal_dir(path).is_dir():
+        os.replace(journal_dir(path), aside.with_name(f"{aside.name}.journal"))
+    return aside
 
 
 def write_attrs(node, attrs: dict, dtype: np.dtype | None = None) -> None:
@@ -74,24 +162,45 @@ def write_attrs(node, attrs: dict, dtype: np.dtype | None = None) -> None:
 
 
 def create(path: Path, job: Job) -> None:
-    """Write the whole empty store aside, then rename it to ``path``."""
+    """Write the whole empty store aside, then rename it to ``path`` (nothing is left of a
+    creation that fails)."""
     shutil.rmtree(journal_dir(path), ignore_errors=True)  # entries of an older store
     tmp = path.with_name(f"{path.name}.creating-{os.getpid()}")
+    try:
+        build(tmp, job)
+        seal(tmp, job.digest())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def build(tmp: Path, job: Job) -> None:
+    """A new empty store file of ``job`` at ``tmp``, with room for its seal (not sealed).
+    Built in memory and written by Python: HDF5 never meets a full disk."""
+    memory = dict(driver="core", backing_store=False, userblock_size=USERBLOCK)
+    with h5py.File(tmp.name, "w", track_order=True, **memory) as f:
+        _layout(f, job)
+        f.flush()
+        image = f.id.get_file_image()  # the HDF5 part: the user block is the caller's
+    with open(tmp, "wb") as fh:
+        fh.write(bytes(USERBLOCK))
+        fh.write(image)
+
+
+def _layout(f: h5py.File, job: Job) -> None:
     arrays = store_arrays(job)
-    with h5py.File(tmp, "w", track_order=True) as f:
-        write_attrs(f, initial_attrs(job))
-        dims = [a.name for a in arrays if a.is_dimension]
-        for a in arrays:
-            data = _create_dataset(f, a)
-            if a.is_dimension:
-                data.make_scale(a.name)
-                data.attrs["_Netcdf4Dimid"] = np.int32(dims.index(a.name))
-            else:
-                for axis, dim in enumerate(a.dims):
-                    data.dims[axis].attach_scale(f[dim])
-            write_attrs(data, a.attrs, a.dtype)
-    _fsync(tmp)
-    os.replace(tmp, path)
+    write_attrs(f, initial_attrs(job))
+    dims = [a.name for a in arrays if a.is_dimension]
+    for a in arrays:
+        data = _create_dataset(f, a)
+        if a.is_dimension:
+            data.make_scale(a.name)
+            data.attrs["_Netcdf4Dimid"] = np.int32(dims.index(a.name))
+        else:
+            for axis, dim in enumerate(a.dims):
+                data.dims[axis].attach_scale(f[dim])
+        write_attrs(data, a.attrs, a.dtype)
 
 
 def _create_dataset(f: h5py.File, a: ArraySchema) -> h5py.Dataset:
@@ -103,7 +212,7 @@ def _create_dataset(f: h5py.File, a: ArraySchema) -> h5py.Dataset:
         return f.create_dataset(a.name, data=a.values, dtype=a.dtype, track_order=True)
     return f.create_dataset(
         a.name, shape=a.shape, dtype=a.dtype, chunks=a.chunks, fillvalue=a.fill,
-        compression=None if a.name == "done" else "gzip", track_order=True,
+        compression=None if a.name in TILE_ARRAYS else "gzip", track_order=True,
     )  # fmt: skip
 
 
@@ -113,92 +222,124 @@ def remove(path: Path) -> None:
 
 
 def clean_leftovers(path: Path, job: Job) -> list[Path]:
-    """Delete a killed checkpoint's copy and half-written entries, then replay the journal."""
+    """Delete a killed checkpoint's copy and half-written entries (the journal's whole entries
+    are applied when the store opens, damaged ones kept aside)."""
     removed = [p for p in path.parent.glob(f"{glob_escape(path.name)}.checkpoint-*")]
     journal = journal_dir(path)
     if journal.is_dir():
-        removed += [p for p in journal.iterdir() if not ENTRY.match(p.name)]
+        removed += [p for p in journal.iterdir() if ENTRY_TMP.match(p.name)]
     for p in removed:
         p.unlink(missing_ok=True)
-    apply_journal(path, job)
     return removed
+
+
+def repair(path: Path, job: Job, report: Verification) -> None:
+    """Rebuild the store from the tiles that verified (file and journal): a new file built
+    aside, the old one's attributes and those tiles copied in, then renamed over it."""
+    keep = np.flatnonzero(report.verified).tolist()
+    with _replacement(path, job) as tmp:
+        build(tmp, job)
+        with open(tmp, "ab") as fh:
+            reserve(fh, _room(path, journal_entries(path).values()), tmp)
+        with Hdf5Reader(path, None, path) as old, h5py.File(tmp, "r+") as new:
+            for key, value in old._file.attrs.items():  # date created, history, run log
+                new.attrs[key] = value
+            sums = old.tile_checksums()[0]
+            for index in keep:
+                rows = old._tiles[index].rows
+                for name in old.names:
+                    new[name][rows] = old.read_rows(name, rows)
+                new["checksum"][index] = sums[index]
+                new["done"][index] = 1
+    for index, entry in journal_entries(path).items():
+        if index in report.damaged:
+            set_aside(entry, report.damaged[index])
+        else:
+            entry.unlink(missing_ok=True)  # in the new file now
 
 
 def glob_escape(name: str) -> str:
     return re.sub(r"([\[\]*?])", r"[\1]", name)
 
 
-# -- the journal -----------------------------------------------------------------
+# -- checkpoints -----------------------------------------------------------------
 
 
-def journal_entries(path: Path) -> dict[int, Path]:
-    journal = journal_dir(path)
-    if not journal.is_dir():
-        return {}
-    found = {}
-    for p in journal.iterdir():
-        match = ENTRY.match(p.name)
-        if match:
-            found[int(match.group(1))] = p
-    return dict(sorted(found.items()))
-
-
-def write_entry(path: Path, index: int, arrays: dict[str, np.ndarray]) -> None:
-    journal = journal_dir(path)
-    journal.mkdir(exist_ok=True)
-    final = journal / f"tile-{index:06d}.npz"
-    tmp = journal / f".{final.name}.{os.getpid()}.tmp"
-    with open(tmp, "wb") as fh:
-        np.savez(fh, **arrays)
-    os.replace(tmp, final)
-
-
-def load_entry(entry: Path) -> dict[str, np.ndarray] | None:
-    """A journal entry's arrays, or None if a checkpoint removed it meanwhile."""
+@contextlib.contextmanager
+def _replacement(path: Path, job: Job):
+    """A new version of the store file, written at the temporary path this yields: released,
+    sealed and renamed over ``path`` when the block succeeds, removed when it fails."""
+    tmp = path.with_name(f"{path.name}.checkpoint-{os.getpid()}")
     try:
-        with np.load(entry) as data:
-            return {name: data[name] for name in data.files}
-    except FileNotFoundError:
-        return None
+        yield tmp
+        release(tmp)
+        seal(tmp, job.digest())  # digest and fsync
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
-def apply_journal(path: Path, job: Job, runs: list[dict] | None = None) -> int:
-    """Checkpoint: fold the journal (and a new run log) into the store file atomically."""
+def apply_journal(path: Path, job: Job, runs: list[dict] | None = None) -> list[int]:
+    """Checkpoint: fold the journal (and a new run log) into the store file atomically.
+    Returns the tiles whose entries were damaged (set aside: no longer committed)."""
     entries = journal_entries(path)
     if not entries and runs is None:
-        return 0
+        return []
     tiles = plan_tiles(job)
-    tmp = path.with_name(f"{path.name}.checkpoint-{os.getpid()}")
-    shutil.copyfile(path, tmp)
-    with h5py.File(tmp, "r+") as f:
-        for index, entry in entries.items():
-            for name, values in load_entry(entry).items():
-                f[name][tiles[index].rows] = values
-        for index in entries:
-            f["done"][index] = 1
-        if runs is not None:
-            write_attrs(f, run_attrs(job, decode_attrs(f.attrs), runs))
-    _fsync(tmp)
-    os.replace(tmp, path)
-    for entry in entries.values():
+    applied, damaged = [], []
+    with _replacement(path, job) as tmp:
+        _copy_with_room(path, tmp, _room(path, entries.values()))
+        with h5py.File(tmp, "r+") as f:
+            for index, entry in entries.items():
+                arrays, problem = read_entry(entry, job, index)
+                if problem:
+                    set_aside(entry, problem)
+                    damaged.append(index)
+                elif arrays is not None:
+                    f["checksum"][index] = arrays.pop("checksum")
+                    for name, values in arrays.items():
+                        f[name][tiles[index].rows] = values
+                    applied.append(entry)
+            for entry in applied:  # the flags last
+                f["done"][int(ENTRY.match(entry.name).group(1))] = 1
+            if runs is not None:
+                write_attrs(f, run_attrs(job, decode_attrs(f.attrs), runs))
+    for entry in applied:
         entry.unlink(missing_ok=True)
-    return len(entries)
+    return damaged
 
 
-def _fsync(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
+def _room(path: Path, entries) -> int:
+    """Bytes a checkpoint's copy may take: the file, its journal entries (uncompressed: more
+    than their chunks will take) and a margin for HDF5's own metadata."""
+    size = path.stat().st_size
+    return int(1.1 * size) + sum(e.stat().st_size for e in entries) + ROOM_MARGIN
+
+
+def _copy_with_room(path: Path, tmp: Path, needed: int) -> None:
+    """Copy the store file to ``tmp`` with ``needed`` bytes of disk reserved for it: a full
+    disk is an OSError here, never a failed write inside HDF5 (which crashes it)."""
+    free = shutil.disk_usage(path.parent).free
+    if free < needed:
+        raise OSError(
+            errno.ENOSPC,
+            f"No space left on device: a checkpoint needs {needed / 1e6:.1f} MB beside the "
+            f"store, {free / 1e6:.1f} MB are free",
+            str(path.parent),
+        )
+    with open(path, "rb") as src, open(tmp, "wb") as dst:
+        reserve(dst, needed, tmp)
+        shutil.copyfileobj(src, dst, 1 << 20)
 
 
 class Hdf5Store(Store):
-    def __init__(self, path: Path, job: Job, lock: StoreLock):
-        with h5py.File(path, "r") as f:
+    def __init__(self, path: Path, job: Job, lock: StoreLock, done: np.ndarray, real: Path):
+        apply_journal(real, job)  # what an earlier run committed (verified by open_store)
+        with h5py.File(real, "r") as f:
             runs = decode_attrs(f.attrs)["runs"]
-            self._done = f["done"][:].astype(bool)
-        super().__init__(path, job, lock, runs)  # the journal is empty: clean_leftovers replayed it
+        super().__init__(path, job, lock, runs, real)
+        self._done = np.array(done, bool)
         self._journaled = 0
         self._runs_dirty = False
         self._last_checkpoint = time.monotonic()
@@ -207,8 +348,8 @@ class Hdf5Store(Store):
     def done(self) -> np.ndarray:
         return self._done.copy()
 
-    def _write_tile(self, tile: Tile, arrays: dict[str, np.ndarray]) -> None:
-        write_entry(self.path, tile.index, arrays)
+    def _write_tile(self, tile: Tile, arrays: dict[str, np.ndarray], checksum: int) -> None:
+        write_entry(self.real, tile.index, arrays, checksum)
         self._done[tile.index] = True
         self._journaled += 1
         due = time.monotonic() - self._last_checkpoint >= CHECKPOINT_SECONDS
@@ -220,7 +361,8 @@ class Hdf5Store(Store):
         self.checkpoint()
 
     def checkpoint(self) -> None:
-        apply_journal(self.path, self.job, self._runs if self._runs_dirty else None)
+        damaged = apply_journal(self.real, self.job, self._runs if self._runs_dirty else None)
+        self._done[damaged] = False  # damaged on disk since this run wrote them
         self._journaled = 0
         self._runs_dirty = False
         self._last_checkpoint = time.monotonic()
@@ -229,33 +371,124 @@ class Hdf5Store(Store):
         if self._journaled or self._runs_dirty:
             self.checkpoint()
         with contextlib.suppress(OSError):  # only if empty
-            journal_dir(self.path).rmdir()
+            journal_dir(self.real).rmdir()
 
 
 class Hdf5Reader(StoreReader):
-    def __init__(self, path: Path, attrs: dict):
+    def __init__(self, path: Path, attrs: dict | None, real: Path):
         del attrs  # re-read below, after the journal: the file may have been replaced since
         # Journal first, file second: an entry a checkpoint removes meanwhile is then in the file.
-        entries = {i: load_entry(e) for i, e in journal_entries(path).items()}
-        self._journal = {i: arrays for i, arrays in entries.items() if arrays is not None}
-        self._file = h5py.File(path, "r")
-        super().__init__(path, decode_attrs(self._file.attrs))
+        raw = {}
+        for index, entry in journal_entries(real).items():
+            try:
+                raw[index] = (entry, load_entry(entry))
+            except Exception as exc:
+                raw[index] = (entry, exc)
+        self._rescue_dir, self._file_problems = None, []
+        try:
+            self._file = self._open(real)
+        except OSError as exc:
+            read_attrs(real)  # StoreDamaged if it is a damaged HDF5 file
+            raise StoreDamaged(f"{path} cannot be opened ({describe_exception(exc)})") from None
+        try:
+            super().__init__(path, decode_attrs(self._file.attrs), real)
+            self._check_layout()
+        except BaseException:
+            self.close()
+            raise
         self._tiles = plan_tiles(self.job)
+        if self.format == FORMAT and self._rescue_dir is None and self._sealed is False:
+            self._file_problems.append(
+                "the file carries no campar digest (rewritten by another tool?): only its "
+                "tiles' checksums vouch for it; `campar run` seals it again"
+            )
+        self._journal, self._sums, self._journal_problems = {}, {}, {}
+        for index, (entry, loaded) in raw.items():
+            self._take_entry(index, entry, loaded)
+
+    def _take_entry(self, index: int, entry: Path, loaded) -> None:
+        if isinstance(loaded, Exception):
+            why = f"journal entry {entry.name} unreadable ({describe_exception(loaded)})"
+            self._journal_problems[index] = why
+            return
+        if loaded is None:
+            return  # folded into the file by a checkpoint meanwhile
+        if (self.format or 0) < 3:
+            self._journal[index] = loaded
+            return
+        arrays, why = verified_entry(entry, self.job, index, loaded)
+        if why:
+            self._journal_problems[index] = why
+        else:
+            self._sums[index] = arrays.pop("checksum")
+            self._journal[index] = arrays
+
+    def _open(self, real: Path) -> h5py.File:
+        """The store file once it passed its check; else a copy of what can be rescued from it
+        (``_h5guard``), with the tiles lost in the rescue counted as damaged."""
+        f, state = open_checked(real)
+        self._sealed = state is None
+        if f is not None:
+            return f
+        self._rescue_dir = Path(tempfile.mkdtemp(prefix="campar-rescue-"))
+        copy = self._rescue_dir / real.name
+        rescued = rescue(real, copy)
+        if not rescued.finished:
+            shutil.rmtree(self._rescue_dir, ignore_errors=True)
+            self._rescue_dir = None
+            raise StoreDamaged(
+                f"{self.path} is damaged ({state}) and {rescued.failure or 'cannot be read'}: "
+                "no tile of it can be trusted; move it away and run again"
+            )
+        self._damage = f"the HDF5 file is damaged ({state})"
+        self._file_problems.append(f"{self._damage}: tiles read from a rescued copy of those "
+                                   "that verify")  # fmt: skip
+        self._rescued_damage = rescued.damaged
+        return h5py.File(copy, "r")
 
     @property
     def journaled(self) -> dict[int, dict[str, np.ndarray]]:
         return dict(self._journal)
 
-    def _done(self) -> np.ndarray:
-        done = self._file["done"][:].astype(bool)  # int8 from format 2 on
-        done[list(self._journal)] = True
-        return done
+    @property
+    def journal_problems(self) -> dict[int, str]:
+        """Tiles whose journal entry is damaged, or lost in rescuing a damaged file."""
+        return {**getattr(self, "_rescued_damage", {}), **self._journal_problems}
 
-    def _read(self, name: str) -> np.ndarray:
-        data = self._file[name][:]
+    def metadata_problems(self) -> list[str]:
+        return list(self._file_problems)
+
+    @property
+    def file_damage(self) -> str | None:
+        return getattr(self, "_damage", None)
+
+    def _shapes(self) -> dict[str, tuple]:
+        return {
+            name: tuple(v.shape) for name, v in self._file.items() if isinstance(v, h5py.Dataset)
+        }
+
+    def _tile_values(self, name: str) -> tuple[np.ndarray, dict[int, str]]:
+        data = self._file[name]
+        values, problems = tile_values(data.__getitem__, len(self._tiles), data.dtype, name)
+        for index in self._journal:
+            values[index] = self._sums.get(index, 0) if name == "checksum" else 1
+            problems.pop(index, None)
+        return values, problems
+
+    def _read_rows(self, name: str, rows: slice) -> np.ndarray:
+        data = self._file[name][rows]
+        first, stop, _ = rows.indices(self.job.shape[0])
         for index, arrays in self._journal.items():
-            data[self._tiles[index].rows] = arrays[name]
+            tile = self._tiles[index]
+            lo, hi = max(tile.row_start, first), min(tile.row_stop, stop)
+            if lo < hi:
+                data[lo - first : hi - first] = arrays[name][
+                    lo - tile.row_start : hi - tile.row_start
+                ]
         return data
 
     def close(self) -> None:
-        self._file.close()
+        if getattr(self, "_file", None) is not None:
+            self._file.close()
+        if self._rescue_dir is not None:
+            shutil.rmtree(self._rescue_dir, ignore_errors=True)

@@ -6,7 +6,10 @@ replaces it. It is created atomically (written aside, then hard-linked to its
 name, which fails if the name exists), so it is never seen half written. A
 lock left by a killed run is stale when it names this host and a process that
 no longer exists (or a pid since reused by a younger process); it is then taken
-over with a warning. A lock of another host cannot be checked and is refused.
+over with a warning. A lock of another host cannot be checked and is refused,
+and so is a lock file that names no run (empty or garbled: not written by
+campar, which writes it whole). ``store`` is the store's real path (symbolic
+links resolved), so every alias of a store finds the same lock.
 """
 
 import json
@@ -16,7 +19,7 @@ import socket
 from datetime import UTC, datetime
 from pathlib import Path
 
-from ...errors import StoreLocked
+from ...errors import StoreLocked, io_error
 
 log = logging.getLogger("campar.sweep.store")
 
@@ -68,7 +71,15 @@ class StoreLock:
     @classmethod
     def acquire(cls, store: Path) -> "StoreLock":
         path = lock_path(store)
-        path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            return cls._acquire(store, path)
+        except OSError as exc:
+            where = OSError(exc.errno, exc.strerror, str(path.parent))  # not our temporary name
+            raise io_error(f"cannot take the lock of the store {store}", where) from None
+
+    @classmethod
+    def _acquire(cls, store: Path, path: Path) -> "StoreLock":
         me = {
             "host": socket.gethostname(),
             "pid": os.getpid(),
@@ -81,6 +92,11 @@ class StoreLock:
             holder = _read_holder(path)
             if holder is None:
                 continue  # vanished meanwhile: try again
+            if not holder.get("host") or not holder.get("pid"):
+                raise StoreLocked(
+                    f"{store} has a lock file {path} that names no run (empty or garbled; "
+                    "campar writes it whole): delete it if no run uses the store"
+                )
             if holder.get("host") != me["host"] or holder_alive(holder):
                 raise StoreLocked(
                     f"{store} is in use by pid {holder.get('pid')} on host "
@@ -105,8 +121,11 @@ class StoreLock:
 
 def _create_exclusive(path: Path, text: str) -> bool:
     tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
     try:
+        with open(tmp, "w") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())  # never an empty lock after a power cut
         os.link(tmp, path)
         return True
     except FileExistsError:

@@ -4,7 +4,8 @@ Every per-cell array lies over (second, omega[, tail]) and is chunked one tile
 of chains by the whole ω axis, so a tile is one chunk of every array and a
 killed writer can only leave whole chunks behind. ``done`` has one element per
 tile and one chunk per element: the commit flag of a tile never shares a chunk
-with a neighbour's.
+with a neighbour's. Nor does its ``checksum`` (of the tile's arrays, ``_integrity``),
+which is written between the arrays and the flag.
 """
 
 import json
@@ -18,16 +19,18 @@ import numpy as np
 from ... import __version__
 from ...errors import StoreError, StoreMismatch
 from ..arrays import COMPONENTS, PARTS, TAIL_DIMS, array_names, array_spec
-from ..job import Job
+from ..job import Job, job_digest
 from ..plan import Tile, plan_tiles
-from ._cf import cell_attrs, coordinate_attrs, done_attrs, global_attrs, history
+from ._cf import cell_attrs, checksum_attrs, coordinate_attrs, done_attrs, global_attrs, history
 
 # Bumped when the layout changes in a way old readers cannot follow. 1: no CF
 # metadata, tail dimension "var" unlabelled, ``done`` bool, Zarr attributes as
 # nested JSON. 2: CF-1.10 attributes, every dimension a coordinate, ``done`` int8,
-# the HDF5 file a netCDF-4 file, attributes job/versions/runs JSON text in both.
-FORMAT = 2
-READABLE_FORMATS = (1, 2)  # read_store reads these; only FORMAT is resumed
+# the HDF5 file a netCDF-4 file, attributes job/versions/runs JSON text in both. 3: a
+# ``checksum`` per tile, written before ``done`` (a committed tile can be verified).
+FORMAT = 3
+READABLE_FORMATS = (1, 2, 3)  # read_store reads these; only FORMAT is resumed
+CHECKSUMS_FROM = 3  # the first format whose tiles carry a checksum
 JSON_ATTRS = ("job", "versions", "runs")  # nested: JSON text (netCDF attributes cannot nest)
 
 DEPENDENCIES = ("numpy", "numba", "zarr", "h5py", "mpi4py", "pydantic")
@@ -85,6 +88,16 @@ def done_array(job: Job) -> ArraySchema:
     return ArraySchema("done", dtype, (n_tiles,), (1,), ("tile",), 0, done_attrs(dtype))
 
 
+def checksum_array(job: Job) -> ArraySchema:
+    """The checksum of each committed tile's arrays (``_integrity``): uint64, 0 none."""
+    n_tiles, dtype = len(plan_tiles(job)), np.dtype(np.uint64)
+    return ArraySchema("checksum", dtype, (n_tiles,), (1,), ("tile",), 0, checksum_attrs(dtype))
+
+
+# Arrays with one element per tile, one chunk each, uncompressed: the commit of a tile.
+TILE_ARRAYS = ("checksum", "done")
+
+
 def coordinates(job: Job) -> dict[str, np.ndarray]:
     return {"omega": job.omega, job.second: job.second_values}
 
@@ -119,7 +132,7 @@ def coordinate_arrays(job: Job) -> list[ArraySchema]:
 
 def store_arrays(job: Job) -> list[ArraySchema]:
     """Every variable of the store, in the order they are created."""
-    return [*coordinate_arrays(job), *cell_arrays(job), done_array(job)]
+    return [*coordinate_arrays(job), *cell_arrays(job), checksum_array(job), done_array(job)]
 
 
 def versions() -> dict[str, str]:
@@ -213,6 +226,32 @@ def check_tile_arrays(job: Job, tile: Tile, arrays: dict[str, np.ndarray]) -> No
                 f"tile {tile.index}: {name} is {got.dtype}{list(got.shape)}, "
                 f"expected {schema.dtype}{list(shape)}"
             )
+
+
+def layout_problems(job: Job, attrs: dict, shapes: dict[str, tuple]) -> list[str]:
+    """What in a store's metadata disagrees with itself: the stored job with its hash, the
+    arrays' shapes (``shapes``: name → shape as stored) with the stored job's grid. An empty
+    list for a store as campar wrote it; else the store was edited or damaged."""
+    problems = []
+    stored = attrs.get("job")
+    if isinstance(stored, dict) and job_digest(stored) != attrs.get("job_hash"):
+        problems.append(
+            f"the stored job does not match its hash {attrs.get('job_hash')} "
+            "(the metadata was edited or damaged)"
+        )
+    expected = cell_arrays(job) + [done_array(job)]
+    if attrs.get("campar_store", 0) >= CHECKSUMS_FROM:
+        expected.append(checksum_array(job))
+    for a in expected:
+        got = shapes.get(a.name)
+        if got is None:
+            problems.append(f"array {a.name} is missing")
+        elif tuple(got) != a.shape:
+            problems.append(
+                f"array {a.name} has shape {list(got)}, the stored job's grid "
+                f"({job.shape[0]} {job.second} × {job.shape[1]} omega) makes it {list(a.shape)}"
+            )
+    return problems
 
 
 # -- is this the same job? ----------------------------------------------------

@@ -3,8 +3,13 @@
 Crash safety comes from zarr's ``LocalStore``, which writes every chunk and
 metadata document aside (``<key>.<32 hex>.partial``) and renames it into
 place: a killed writer leaves whole files plus stray ``.partial`` files, which
-``clean_leftovers`` deletes. A tile's ``done`` chunk is written after its array
-chunks, so a kill in between leaves the tile pending and it is recomputed.
+``clean_leftovers`` deletes (also after a write that failed, a full disk).
+A tile's ``checksum`` and then its ``done`` chunk are written after its array
+chunks, so a kill in between leaves the tile pending and it is recomputed. A
+damaged tile is repaired by deleting its chunks (they read as the fill) after
+unsetting its flag. Every chunk ends with a CRC32C of its bytes (the ``crc32c``
+codec of Zarr v3): a chunk changed on disk cannot be read, so damage is seen
+even where the checksum of the decoded tile would not change.
 
 Metadata is consolidated once at creation (array metadata never changes
 afterwards) so ``xarray.open_zarr(path)`` opens the store without a warning.
@@ -23,32 +28,61 @@ from pathlib import Path
 
 import numpy as np
 import zarr
+from zarr.codecs import Crc32cCodec, ZstdCodec
 from zarr.errors import ZarrUserWarning
 
+from ...errors import StoreDamaged
 from ..job import Job
-from ..plan import Tile
-from ._base import Store, StoreReader
+from ..plan import Tile, plan_tiles
+from ._base import Store, StoreReader, tile_values
+from ._integrity import Verification, describe_exception
 from ._lock import StoreLock
-from ._schema import cell_arrays, decode_attrs, initial_attrs, run_attrs, store_arrays
+from ._schema import (
+    TILE_ARRAYS,
+    cell_arrays,
+    decode_attrs,
+    initial_attrs,
+    run_attrs,
+    store_arrays,
+)
 
 PARTIAL = re.compile(r"\.[0-9a-f]{32}\.partial$")
 
 
 def read_attrs(path: Path) -> dict | None:
-    """Attributes of the campar store at ``path``, or None if it is none."""
+    """Attributes of the campar store at ``path``, or None if it is none; StoreDamaged if it
+    has a campar store's layout but its metadata cannot be read."""
     if not (path / "zarr.json").is_file():
         return None
     try:
         attrs = zarr.open_group(path, mode="r").attrs.asdict()
-    except (OSError, ValueError):
+        return decode_attrs(attrs) if "job_hash" in attrs else None
+    except PermissionError:
+        raise
+    except (OSError, ValueError, TypeError) as exc:  # JSON errors are ValueErrors
+        if (path / "done").is_dir():
+            raise StoreDamaged(
+                f"{path} has a campar store's layout but its metadata (zarr.json) cannot be "
+                f"read ({describe_exception(exc)}): campar cannot tell which job it holds; "
+                "move it away and run again"
+            ) from None
         return None
-    return decode_attrs(attrs) if "job_hash" in attrs else None
 
 
 def create(path: Path, job: Job) -> None:
-    """Build the whole empty store aside, then rename it to ``path``."""
+    """Build the whole empty store aside, then rename it to ``path``; nothing is left of a
+    creation that fails (a full disk)."""
     tmp = path.with_name(f"{path.name}.creating-{os.getpid()}")
     shutil.rmtree(tmp, ignore_errors=True)
+    try:
+        _build(tmp, job)
+        os.rename(tmp, path)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _build(tmp: Path, job: Job) -> None:
     group = zarr.create_group(tmp, zarr_format=3, attributes=initial_attrs(job))
     for a in store_arrays(job):
         text = a.dtype.kind == "U"
@@ -56,7 +90,7 @@ def create(path: Path, job: Job) -> None:
             a.name, shape=a.shape, dtype=str if text else a.dtype, chunks=a.chunks,
             fill_value="" if text else a.fill, dimension_names=list(a.dims),
             attributes=zarr_attrs(a.attrs, a.dtype),
-            compressors=None if a.name == "done" else "auto",
+            compressors=_codecs(a.name),
         )  # fmt: skip
         if a.values is not None:
             array[...] = a.values
@@ -64,7 +98,12 @@ def create(path: Path, job: Job) -> None:
         # "consolidated metadata is not part of the v3 spec": xarray reads it, and we want that.
         warnings.simplefilter("ignore", ZarrUserWarning)
         zarr.consolidate_metadata(tmp)
-    os.rename(tmp, path)
+
+
+def _codecs(name: str) -> list:
+    """Zstd for the arrays (not the one-byte flags), then a CRC32C of every chunk's bytes:
+    a chunk changed on disk fails to read, even where zstd would decode it alike."""
+    return [Crc32cCodec()] if name in TILE_ARRAYS else [ZstdCodec(level=0), Crc32cCodec()]
 
 
 def zarr_attrs(attrs: dict, dtype: np.dtype) -> dict:
@@ -97,42 +136,91 @@ def clean_leftovers(path: Path, job: Job) -> list[Path]:
     return removed
 
 
+def repair(path: Path, job: Job, report: Verification) -> None:
+    """Make the damaged tiles pending: unset the flag, then delete the checksum's and the
+    arrays' chunks (read as the fill from then on)."""
+    group = zarr.open_group(path, mode="r+")
+    names = ["done", "checksum", *(a.name for a in cell_arrays(job))]  # the flag first
+    for index in sorted(report.damaged):
+        for name in names:
+            array = group[name]
+            key = array.metadata.encode_chunk_key((index,) + (0,) * (array.ndim - 1))
+            group.store.delete_sync(f"{name}/{key}")
+
+
 class ZarrStore(Store):
-    def __init__(self, path: Path, job: Job, lock: StoreLock):
-        group = zarr.open_group(path, mode="r+")
-        super().__init__(path, job, lock, decode_attrs(group.attrs.asdict())["runs"])
+    def __init__(self, path: Path, job: Job, lock: StoreLock, done: np.ndarray, real: Path):
+        group = zarr.open_group(real, mode="r+")
+        super().__init__(path, job, lock, decode_attrs(group.attrs.asdict())["runs"], real)
         self._group = group
         self._arrays = {a.name: group[a.name] for a in cell_arrays(job)}
+        self._checksums = group["checksum"]
         self._flags = group["done"]
-        self._done = self._flags[:].astype(bool)
+        self._done = np.array(done, bool)
+        self._clear(np.flatnonzero(~self._done))
+
+    def _clear(self, tiles) -> None:
+        """Delete the chunks of pending tiles that a killed or failed write left: outside the
+        committed tiles the store holds only the fill, never numbers no flag vouches for."""
+        for name, array in self._arrays.items():
+            tail = (0,) * (array.ndim - 1)
+            for index in tiles:
+                key = f"{name}/{array.metadata.encode_chunk_key((int(index), *tail))}"
+                if (self.real / key).exists():
+                    self._group.store.delete_sync(key)
 
     @property
     def done(self) -> np.ndarray:
         return self._done.copy()
 
-    def _write_tile(self, tile: Tile, arrays: dict[str, np.ndarray]) -> None:
-        for name, values in arrays.items():
-            self._arrays[name][tile.rows] = values
-        self._flags[tile.index] = 1  # the commit: after every array chunk
+    def _write_tile(self, tile: Tile, arrays: dict[str, np.ndarray], checksum: int) -> None:
+        try:
+            for name, values in arrays.items():
+                self._arrays[name][tile.rows] = values
+            self._checksums[tile.index] = checksum
+            self._flags[tile.index] = 1  # the commit: after every array chunk and the checksum
+        except OSError:
+            clean_leftovers(self.real, self.job)  # a failed write's .partial files
+            raise
         self._done[tile.index] = True
 
     def _write_runs(self, runs: list[dict]) -> None:
-        self._group.attrs.update(run_attrs(self.job, self._group.attrs.asdict(), runs))
+        try:
+            self._group.attrs.update(run_attrs(self.job, self._group.attrs.asdict(), runs))
+        except OSError:
+            clean_leftovers(self.real, self.job)
+            raise
 
     def _close(self) -> None:
         pass  # every write is already a whole file on disk
 
 
 class ZarrReader(StoreReader):
-    def __init__(self, path: Path, attrs: dict):
-        self._group = zarr.open_group(path, mode="r")
-        super().__init__(path, attrs)
+    def __init__(self, path: Path, attrs: dict, real: Path):
+        self._group = zarr.open_group(real, mode="r")
+        super().__init__(path, attrs, real)
+        self._check_layout()
 
-    def _done(self) -> np.ndarray:
-        return self._group["done"][:].astype(bool)  # int8 from format 2 on
+    def _shapes(self) -> dict[str, tuple]:
+        return {name: tuple(array.shape) for name, array in self._group.arrays()}
 
-    def _read(self, name: str) -> np.ndarray:
-        return self._group[name][:]
+    def _tile_values(self, name: str) -> tuple[np.ndarray, dict[int, str]]:
+        array = self._group[name]
+        return tile_values(array.__getitem__, len(plan_tiles(self.job)), array.dtype, name)
+
+    def _read_rows(self, name: str, rows: slice) -> np.ndarray:
+        return self._group[name][rows]
+
+    def metadata_problems(self) -> list[str]:
+        """Arrays whose own metadata document is damaged (campar and xarray read the
+        consolidated copy in the store's zarr.json; other Zarr readers do not)."""
+        problems = []
+        for name, _ in self._group.arrays():
+            try:
+                zarr.open_array(self.real / name, mode="r", zarr_format=3)
+            except Exception as exc:
+                problems.append(f"{name}/zarr.json unreadable ({describe_exception(exc)})")
+        return problems
 
     def close(self) -> None:
         pass  # zarr holds no open files between reads

@@ -9,8 +9,9 @@ into the colour scale: they are left transparent over a hatch, dark red
 cross-hatch for failed cells (NaN), light grey for tiles not computed yet.
 """
 
+import logging
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +39,9 @@ NICE_TICKS = MaxNLocator(4, steps=[1, 2, 2.5, 5, 10])
 LEGEND_ROWS = 16  # entries per legend column before a new column starts
 LEGEND_MAX = 24  # entries a legend shows; rarer n-p are summed in one line
 EDGE = "0.45"  # outline of legend swatches, so white and pale ones show
+MAX_DRAWN = 1000  # cells per axis a map of a store draws at most (more do not show at 300 dpi)
+
+log = logging.getLogger("campar.views")
 
 
 @dataclass(frozen=True)
@@ -362,10 +366,16 @@ def plot_store(path, what: str = "labels", output=None, omega=None, second=None)
     """Draw a map of a result store into an image file; returns the file's path.
 
     omega, second: (a, b) zoom ranges. output defaults to "<store name>-<what>.png"
-    in the current directory. Tiles not committed yet are drawn as "not computed".
+    in the current directory; it is checked before the store is read. Tiles not
+    committed yet are drawn as "not computed", and so are tiles that fail their
+    checksum (with a warning). The store is read tile by tile and at most
+    ``MAX_DRAWN`` cells are drawn along each axis (every k-th, said in the title),
+    so memory does not grow with the grid.
     """
-    from ...sweep.store import read_store  # only this view reads files
+    from ...sweep.store import fill_value, read_store, verify_store  # only this view reads files
+    from ..output import figure_file
 
+    output = figure_file(output or f"{Path(path).stem}-{what}.png")
     needed = arrays_for(what)
     with read_store(path) as store:
         missing = [name for name in needed if name not in store.names]
@@ -374,10 +384,38 @@ def plot_store(path, what: str = "labels", output=None, omega=None, second=None)
                 f"{path} holds no {', '.join(missing)} (it has {', '.join(store.names)}); "
                 "add the output to the job's outputs and run it"
             )
-        arrays = {name: store.read(name) for name in needed}
-        arrays["computed"] = computed_mask(store.job, store.done)
-        job = store.job
-    figure = plot_map(job, arrays, what, omega=omega, second=second)
-    if output is None:
-        output = f"{Path(path).stem}-{what}.png"
-    return save_figure(figure, output)
+        full = MapGrid.from_job(store.job)
+        rows = drawn_indices(full.second, second, full.second_name)
+        cols = drawn_indices(full.omega, omega, "omega")
+        shape = (len(rows), len(cols))
+        arrays = {n: np.full(shape, fill_value(store.array_dtypes[n])) for n in needed}
+        arrays["computed"] = np.zeros(shape, bool)
+        slot = np.full(full.shape[0], -1)
+        slot[rows] = np.arange(len(rows))
+
+        def take(check):  # one verified tile: its drawn cells
+            local = slot[check.tile.rows]
+            keep = local >= 0
+            for name in needed:
+                arrays[name][local[keep]] = check.arrays[name][keep][:, cols]
+            arrays["computed"][local[keep]] = True
+
+        report = verify_store(store, take)
+    if report.damaged:
+        log.warning(
+            "%s: %d damaged tiles drawn as not computed (`campar verify %s` says why)",
+            path, len(report.damaged), path,
+        )  # fmt: skip
+    grid = replace(full, omega=full.omega[cols], second=full.second[rows])
+    step = (-(-full.shape[0] // len(rows)), -(-full.shape[1] // len(cols)))
+    title = None if step == (1, 1) else (
+        f"{parameter_text(grid.fixed)}   (every {step[0]}th × {step[1]}th cell drawn)"
+    )  # fmt: skip
+    return save_figure(plot_map(grid, arrays, what, title=title), output)
+
+
+def drawn_indices(centres: np.ndarray, bounds, name: str) -> np.ndarray:
+    """Indices of the cells a map of a store draws along one axis: those in the zoom range,
+    every k-th of them so that at most MAX_DRAWN remain."""
+    inside = np.arange(len(centres))[centre_range(centres, bounds, name)]
+    return inside[:: -(-len(inside) // MAX_DRAWN)]

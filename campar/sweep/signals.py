@@ -1,0 +1,120 @@
+"""Signals over a run's whole life: before it starts, while it runs, after it ends.
+
+SIGTERM, SIGINT and SIGUSR1 (what SLURM and mpich's mpirun send) mean "stop":
+
+- before the run's own handlers are installed (imports, reading the job,
+  opening the store, starting MPI), ``guard_start`` turns them into
+  ``Interrupted("interrupted before start")`` — one line, exit 130 for SIGINT
+  (a Ctrl-C) and 75 for the others, nothing computed. Under a launcher of
+  several ranks a rank must not leave early on its own (the others would wait
+  in MPI_Init for ever, measured with mpich): there the signal is kept, and the
+  run's ``Signals`` starts with it, so all ranks stop together (exit 75);
+- while the run holds its store, ``Signals`` only counts them: the runner stops
+  handing out tiles, collects or abandons those in flight, logs and exits 75;
+- once the run has finished its work (``finished()``), they are ignored: the
+  process is only leaving, and its exit code says what the run did.
+
+Only the main thread receives Python signal handlers, and only there are they
+installed (a library caller's threads are left alone). Before Python has run
+campar's first line (interpreter start-up, a few tens of milliseconds) the
+system's defaults apply: nothing of campar can be running then.
+"""
+
+import os
+import signal
+import threading
+import time
+
+from ..errors import Interrupted
+
+SIGNALS = (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1)
+INSIST_SECONDS = 1.0
+EXIT_CODES = {signal.SIGINT: 130}  # 128 + SIGINT, as a shell reports a Ctrl-C; others 75
+
+MPI_SIZE_ENV = ("PMI_SIZE", "OMPI_COMM_WORLD_SIZE", "PMIX_SIZE")  # set by MPI launchers
+
+_phase = {"now": "idle"}  # idle (a library caller) | starting | running | finished
+_kept: list[tuple[int, float]] = []  # (signal, when) received before the start, under MPI
+
+
+def guard_start() -> dict:
+    """From now until a run installs ``Signals``: a stop signal ends the process with one
+    line (``Interrupted``), whatever it was doing (the CLI calls this first). Returns the
+    handlers it replaced (for ``restore_signals``)."""
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    _phase["now"] = "starting"
+    _kept.clear()
+    return {sig: signal.signal(sig, _before_start) for sig in SIGNALS}
+
+
+def _ranks() -> int:
+    for name in MPI_SIZE_ENV:
+        if os.environ.get(name, "").isdigit():
+            return int(os.environ[name])
+    return 1
+
+
+def restore_signals(saved: dict) -> None:
+    """Put back the handlers ``guard_start`` replaced (a caller of ``campar.cli.main``)."""
+    _phase["now"] = "idle"
+    for sig, handler in saved.items():
+        signal.signal(sig, handler)
+
+
+def finished() -> None:
+    """The run's work is done (complete, or stopped and logged): later signals are ignored."""
+    _phase["now"] = "finished"
+    if threading.current_thread() is threading.main_thread():
+        for sig in SIGNALS:
+            signal.signal(sig, signal.SIG_IGN)
+
+
+def _before_start(signum, frame):
+    if _phase["now"] != "starting":
+        return  # a run took over, or has finished: nothing to interrupt
+    if _ranks() > 1:
+        _kept.append((signum, time.monotonic()))  # for the run's Signals: all ranks stop
+        return
+    _phase["now"] = "interrupted"  # one exception, even if the signal comes twice
+    name = signal.Signals(signum).name
+    raise Interrupted(
+        f"interrupted before start by {name}: nothing was computed or changed; "
+        "run the same command again",
+        EXIT_CODES.get(signum, Interrupted.exit_code),
+    )
+
+
+class Signals:
+    """While installed, SIGTERM/SIGINT/SIGUSR1 only count (``count``, ``last``)."""
+
+    def __init__(self):
+        self.count, self.last, self.first_at, self.last_at, self._old = 0, None, 0.0, 0.0, {}
+
+    def _handle(self, signum, frame):
+        self.count += 1
+        self.last, self.last_at = signum, time.monotonic()
+        if self.count == 1:
+            self.first_at = self.last_at
+
+    @property
+    def insist(self) -> bool:
+        """A second signal a while after the first: abandon now. (A terminal's Ctrl-C can
+        reach a rank twice at once, from the terminal and from mpirun.)"""
+        return self.count >= 2 and self.last_at - self.first_at > INSIST_SECONDS
+
+    def __enter__(self):
+        if _phase["now"] == "starting":
+            _phase["now"] = "running"
+            for signum, when in _kept:  # received before the start, under MPI
+                self.count += 1
+                self.last, self.last_at = signum, when
+                self.first_at = self.first_at or when
+            _kept.clear()
+        for sig in SIGNALS:
+            self._old[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def __exit__(self, *exc):
+        for sig, old in self._old.items():
+            signal.signal(sig, old)

@@ -1,0 +1,276 @@
+"""Fault injection: writers killed at random moments, stores damaged at random places, disks
+that fill up, signals at any moment of a run — every resume must end bitwise identical to
+an uninterrupted run, every damage must be detected, nothing may crash.
+
+Two tiers. The quick one (every CI run) kills writers of synthetic tiles and damages small
+stores a few times per backend. The long one (``-m slow``) kills real ``campar run`` and
+``mpirun -n 2 campar run`` processes many times, damages stores a hundred times per backend
+and fills small disks; its counts are printed in lines starting ``FAULTS`` (run with ``-s``):
+
+    pytest tests/test_faults.py -m slow -s | grep FAULTS
+
+``CAMPAR_FAULT_ROUNDS`` scales the long tier (default 1; 4 gives ~4× as many faults).
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import MPIRUN, assert_same_map, kill_tree, subprocess_env
+from damage import (
+    DAMAGE,
+    assert_synthetic,
+    damage_file,
+    finish,
+    leftovers,
+    small_disk,
+    synthetic_store,
+    zarr_chunks,
+)
+from test_store import make_job
+
+from campar.errors import StoreDamaged
+from campar.sweep.plan import plan_tiles
+from campar.sweep.store import _h5guard, read_store, verify_store
+from campar.sweep.store import _hdf5 as h5
+
+ROUNDS = int(os.environ.get("CAMPAR_FAULT_ROUNDS", "1"))
+BACKENDS = [".zarr", ".h5"]
+STARTUP = 0.2  # seconds before campar's first line runs, with margin (Python's start-up)
+BAD_WORDS = ("Traceback", "Segmentation", "BAD TERMINATION", "Exception ignored", "HDF5-DIAG")
+
+
+@pytest.fixture(autouse=True)
+def short_watchdog(monkeypatch):
+    """A rescue of a damaged HDF5 file that hangs is given up after 3 s, not 20."""
+    monkeypatch.setattr(_h5guard, "WATCHDOG_SECONDS", 3.0)
+    monkeypatch.setenv("CAMPAR_RESCUE_WATCHDOG", "3")
+
+
+def report(**counts) -> None:
+    print("FAULTS " + " ".join(f"{k}={v}" for k, v in counts.items()), flush=True)
+
+
+# -- writers of synthetic tiles killed at random moments (quick) ---------------------------
+
+WRITER = """
+import os, signal, sys, threading, time
+import campar.sweep.store._hdf5 as h5
+h5.CHECKPOINT_TILES = 1  # every tile goes through a checkpoint: kills land inside them too
+from damage import finish
+from test_store import make_job
+job = make_job(**{JOB!r})
+threading.Timer(float(sys.argv[2]), os.kill, (os.getpid(), signal.SIGKILL)).start()
+finish(sys.argv[1], job)
+time.sleep(60)  # finished before the kill: wait for it
+"""
+JOB = {"sweep__zeta__points": 24, "tiles__rows": 1, "sweep__omega__points": 40}
+
+
+def kill_writers(path: Path, kills: int, seed: int, span: float = 0.6) -> int:
+    """Start writers of ``path`` and SIGKILL each at a random moment; returns kills done."""
+    env = {**os.environ, "PYTHONPATH": os.path.dirname(__file__)}
+    script = WRITER.replace("{JOB!r}", repr(JOB))
+    rng = np.random.default_rng(seed)
+    for _ in range(kills):
+        at = rng.uniform(0.25, 0.25 + span)  # imports take ~0.25 s
+        done = subprocess.run([sys.executable, "-c", script, str(path), str(at)], env=env,
+                              capture_output=True, text=True, timeout=120)  # fmt: skip
+        assert done.returncode == -signal.SIGKILL, done.stderr
+    return kills
+
+
+@pytest.mark.parametrize("suffix", BACKENDS)
+def test_writers_killed_at_random_moments_lose_no_committed_tile(tmp_path, suffix):
+    path = tmp_path / f"k{suffix}"
+    kill_writers(path, 1, seed=len(suffix))
+    job = make_job(**JOB)
+    with read_store(path) as reader:
+        assert verify_store(reader).clean  # whatever a kill left is whole, or pending
+    finish(path, job)
+    assert_synthetic(path, job)
+    assert leftovers(tmp_path) == []
+
+
+# -- stores damaged at random places (quick: a few per backend; slow: many) ---------------
+
+
+def damage_at_random(path: Path, job, rng: np.random.Generator) -> tuple[str, int | None]:
+    """Damage one random committed tile's chunk (Zarr), or the file or a journal entry at a
+    random place (HDF5). Returns (what was done or None if nothing changed, the tile hit)."""
+    how = str(rng.choice(DAMAGE))
+    if path.suffix == ".zarr":
+        index = int(rng.integers(len(plan_tiles(job))))
+        files = zarr_chunks(path, job, index)
+        return damage_file(files[int(rng.integers(len(files)))], how, rng), index
+    entries = list(h5.journal_entries(path).values())
+    target = entries[int(rng.integers(len(entries)))] if entries and rng.random() < 0.3 else path
+    if target == path and how == "delete":
+        how = "truncate"  # a store file deleted is no store: nothing to detect
+    return damage_file(target, how, rng), None
+
+
+def damage_and_repair(path: Path, rounds: int, seed: int) -> dict:
+    """Damage a finished store ``rounds`` times; each time verify must see it and a resume
+    must restore every tile. Counts of what happened."""
+    job = make_job()
+    rng = np.random.default_rng(seed)
+    counts = {"damaged": 0, "detected": 0, "repaired": 0, "refused": 0}
+    for _ in range(rounds):
+        if path.exists():
+            finish(path, job)
+        else:
+            synthetic_store(path, job)
+        what, tile = damage_at_random(path, job, rng)
+        if what is None:
+            continue  # zeros written over zeros: no damage
+        counts["damaged"] += 1
+        try:
+            with read_store(path) as reader:
+                report = verify_store(reader)
+            seen = not report.clean or not report.verified.all()
+        except StoreDamaged:
+            seen = True  # the store as a whole is named damaged
+        assert seen, f"{what} went unnoticed"
+        counts["detected"] += 1
+        try:
+            finish(path, job)
+        except StoreDamaged as exc:  # e.g. an HDF5 superblock gone: refused, never deleted
+            assert path.exists(), exc
+            counts["refused"] += 1
+            path.unlink()
+            continue
+        assert_synthetic(path, job)
+        counts["repaired"] += 1
+    return counts
+
+
+@pytest.mark.parametrize("suffix", BACKENDS)
+def test_random_damage_is_detected_and_repaired(tmp_path, suffix):
+    rounds = 4 if suffix == ".zarr" else 2  # an HDF5 rescue starts child processes
+    counts = damage_and_repair(tmp_path / f"d{suffix}", rounds, seed=7 + len(suffix))
+    assert counts["detected"] == counts["damaged"] == rounds
+    report(kind="damage", backend=suffix, **counts)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("suffix", BACKENDS)
+def test_many_random_damages_are_detected_and_repaired(tmp_path, suffix):
+    counts = damage_and_repair(tmp_path / f"d{suffix}", 100 * ROUNDS, seed=11 + len(suffix))
+    assert counts["detected"] == counts["damaged"]
+    assert counts["repaired"] >= 0.9 * counts["damaged"]  # HDF5 metadata damage may be refused
+    report(kind="damage", backend=suffix, **counts)
+
+
+# -- real runs killed and signalled at random moments (slow) -------------------------------
+
+RUNNER = """
+import sys
+from campar.sweep.signals import guard_start
+guard_start()  # as the campar program does in its first line
+from campar.errors import CamparError
+try:  # every tile through a checkpoint: kills land inside checkpoints too
+    import campar.sweep.store._hdf5 as h5
+    h5.CHECKPOINT_TILES = 1
+    from campar.cli import main
+except CamparError as exc:  # a signal during these imports: as main would report it
+    sys.exit(print(f"campar run: {exc}", file=sys.stderr) or exc.exit_code)
+code = main(sys.argv[1:])  # from Python: the caller's handlers are restored, then
+from campar.sweep.signals import finished
+finished()  # as the campar program does once its work is over
+sys.exit(code)
+"""
+
+
+def start_run(job_file: Path, mpi: bool) -> subprocess.Popen:
+    command = [sys.executable, "-c", RUNNER, "run", str(job_file)]
+    if mpi:
+        command = [str(MPIRUN), "-n", "2", *command]
+    return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=subprocess_env(), start_new_session=True)  # fmt: skip
+
+
+def interrupt_until_complete(job_file, job, mpi: bool, rng, how: str) -> dict:
+    """Run the job again and again, each run killed (SIGKILL to every process) or signalled
+    (SIGTERM/SIGINT/SIGUSR1 to the process group) at a random moment, until one completes;
+    then the map must equal the uninterrupted one, bit for bit."""
+    counts = {"runs": 0, "interrupted": 0}
+    for _ in range(60):
+        proc = start_run(job_file, mpi)
+        # Signals from the moment campar's first line runs (Python's own start-up, a few
+        # tens of ms, keeps the system's defaults: signals.py); kills from the first instant.
+        time.sleep(rng.uniform(0.0 if how == "kill" else STARTUP, 4.0 if mpi else 3.0))
+        if proc.poll() is None:
+            if how == "kill":
+                kill_tree(proc.pid)
+            else:
+                sig = [signal.SIGTERM, signal.SIGINT, signal.SIGUSR1][int(rng.integers(3))]
+                os.killpg(proc.pid, sig)
+        out, err = proc.communicate(timeout=300)
+        counts["runs"] += 1
+        bad = [w for w in BAD_WORDS if w in out + err]  # mpirun reports on stdout
+        assert not bad, (out + err)[-3000:]
+        if proc.returncode == 0:
+            break
+        counts["interrupted"] += 1
+        allowed = (-signal.SIGKILL, 137, 1) if how == "kill" else (75, 130)
+        assert proc.returncode in allowed, (proc.returncode, err[-2000:])
+    else:
+        pytest.fail("60 runs did not complete the map")
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+        assert verify_store(reader).clean
+    return counts
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mpi", [False, True], ids=["serial", "mpi"])
+@pytest.mark.parametrize("suffix", BACKENDS)
+@pytest.mark.parametrize("how", ["kill", "signal"])
+def test_runs_interrupted_at_random_moments_resume_bitwise_identical(
+    write_job, tmp_path, suffix, mpi, how
+):
+    if mpi and not MPIRUN.exists():
+        pytest.skip(f"no mpirun at {MPIRUN}")
+    rng = np.random.default_rng([len(suffix), mpi, len(how)])
+    total = {"runs": 0, "interrupted": 0, "campaigns": 0}
+    for campaign in range(2 * ROUNDS):
+        store = tmp_path / f"c{campaign}{suffix}"
+        job_file, job = write_job(name=f"c{campaign}", slow=True, store=str(store))
+        counts = interrupt_until_complete(job_file, job, mpi, rng, how)
+        total = {k: total[k] + counts.get(k, 1) for k in total}
+    report(kind=how, backend=suffix, mpi=mpi, identical=total["campaigns"], **total)
+
+
+# -- full disks (slow; root only) ------------------------------------------------------------
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("suffix", BACKENDS)
+def test_runs_on_a_full_disk_fail_in_one_line_and_resume_identical(write_job, tmp_path, suffix):
+    disk = tmp_path / "disk"
+    counts = {"full": 0, "identical": 0}
+    for size in (48, 96, 160, 240, 320)[: 5 * ROUNDS]:
+        with small_disk(disk, size) as resize:
+            job_file, job = write_job(name=f"f{size}", store=str(disk / f"f{size}{suffix}"))
+            for _ in range(2):  # the first run, then a resume on the still-full disk
+                proc = start_run(job_file, mpi=False)
+                _, err = proc.communicate(timeout=300)
+                assert not [w for w in BAD_WORDS if w in err], err[-3000:]
+                if proc.returncode == 0:
+                    break
+                assert proc.returncode == 74, err[-2000:]
+                assert "No space left on device" in err.splitlines()[-1]
+                assert leftovers(disk) == [], leftovers(disk)
+                counts["full"] += 1
+            resize(16384)
+            assert start_run(job_file, mpi=False).wait(300) == 0
+            with read_store(job.store) as reader:
+                assert_same_map(reader, job)
+            counts["identical"] += 1
+    report(kind="full-disk", backend=suffix, **counts)
