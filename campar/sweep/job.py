@@ -120,9 +120,8 @@ class InitialState(Settings):
 
 class IntegratorSettings(Settings):
     method: Literal["dp54", "dop853", "rk4"] = "dop853"
-    """dop853: Dormand–Prince 8(5,3), the default (a map in ~0.7× the time of dp54 at
-    agreement at least as good: benchmarks/RESULTS.md); dp54: Dormand–Prince 5(4) (use
-    rtol 1e-8 with it); rk4: fixed-step RK4, the paper's method."""
+    """dop853: Dormand–Prince 8(5,3), the default; dp54: Dormand–Prince 5(4) (use rtol
+    1e-8 with it); rk4: fixed-step RK4, the paper's method."""
     rtol: Annotated[float, Field(gt=1e-15, lt=1.0)] = 1e-7
     atol: Annotated[float, Field(gt=0.0, lt=1.0)] = 1e-10
     rk4_steps: Annotated[int, Field(ge=6, le=10_000_000)] = 600
