@@ -219,7 +219,9 @@ CANDIDATES = {
     # ones (integrator.method, integrator.rtol and transient.chaos_after, all three stated)
     "previous default": integration("dp54", 1e-8, 64),
     **{
-        f"{method} rtol {rtol:g} chaos after {after}": integration(method, rtol, after)
+        f"{method} rtol {rtol:g} chaos after {after}".replace("e-0", "e-"): integration(
+            method, rtol, after
+        )
         for method, rtol, after in [
             ("dp54", 1e-8, 96),
             ("dop853", 1e-9, 64),
