@@ -120,3 +120,51 @@ def leftovers(folder: Path) -> list[str]:
     """Temporary files a writer must never leave behind."""
     marks = (".tmp", ".partial", ".creating-", ".checkpoint-", ".deleting-", ".lock")
     return sorted(str(p) for p in folder.rglob("*") if any(m in p.name for m in marks))
+
+
+def plausible_tile(job: Job, tile, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """Random arrays of a tile with valid codes (kinds, status 0, small n and p): a store of
+    these reads like a computed map, for measuring the views on large grids."""
+    from campar.sweep.arrays import array_names, array_spec
+
+    arrays = {}
+    for name in array_names(job):
+        dtype, tail = array_spec(job, name)
+        shape = (tile.n_rows, job.shape[1], *tail)
+        if name == "kind":
+            arrays[name] = rng.choice(np.array([0, 0, 0, 1, 2], np.int8), size=shape)
+        elif name in ("status", "flags"):
+            arrays[name] = np.zeros(shape, dtype)
+        elif dtype.kind == "f":
+            arrays[name] = rng.normal(size=shape).astype(dtype)
+        else:
+            arrays[name] = rng.integers(1, 8, size=shape).astype(dtype)
+    return arrays
+
+
+def plausible_store(path: Path, points: int) -> Job:
+    """A points × points store of ``plausible_tile``s (4000: 16 million cells, ~20 s)."""
+    job = Job.from_dict({"name": "big", "sweep": {
+        "omega": {"from": 6.0, "to": 0.02, "points": points},
+        "mu_cn": {"from": 0.99, "to": 0.5, "points": points}}})  # fmt: skip
+    rng = np.random.default_rng(0)
+    with open_store(path, job) as store:
+        for tile in plan_tiles(job):
+            store.write_tile(tile, plausible_tile(job, tile, rng))
+    return job
+
+
+def peak_rss_mb(*args: str) -> float:
+    """Peak memory (MB) of ``campar ARGS``, measured by a fresh process that runs it."""
+    import sys
+
+    probe = (
+        "import resource, subprocess, sys\n"
+        "done = subprocess.run([sys.executable, '-m', 'campar.cli', *sys.argv[1:]],"
+        " capture_output=True)\n"
+        "assert done.returncode == 0, done.stderr.decode()\n"
+        "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)"
+    )
+    out = subprocess.run([sys.executable, "-c", probe, *args], capture_output=True, text=True,
+                         timeout=600, check=True)  # fmt: skip
+    return int(out.stdout) / 1024

@@ -44,6 +44,14 @@ def setup_logging() -> None:
     """Log lines of a run ("campar: …") on stderr, unless the caller configured logging."""
     if not logging.getLogger().handlers:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s campar: %(message)s")
+        logging.getLogger("asyncio").addFilter(_only_new_news)
+
+
+def _only_new_news(record: logging.LogRecord) -> bool:
+    """Drop asyncio's "Task exception was never retrieved": zarr writes a store's keys as
+    concurrent tasks, raises the first one's error (campar reports it in one line) and
+    leaves the others' — the same error — for the garbage collector to log as a traceback."""
+    return not record.getMessage().startswith("Task exception was never retrieved")
 
 
 def peak_rss_mb() -> float:

@@ -57,7 +57,7 @@ from .budget import check_budget
 from .job import Job
 from .plan import Tile, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
-from .signals import Signals
+from .signals import Signals, early_interruption
 from .store import cell_arrays, open_store
 from .tile import run_tile
 
@@ -496,22 +496,23 @@ def share_outcome(comm):
     except BaseException as exc:
         if comm is not None:
             code = next((i for i, c in enumerate(SHARED_ERRORS) if type(exc) is c), 0)
-            _send_outcome(comm, code, str(exc))
+            _send_outcome(comm, code, str(exc), getattr(exc, "exit_code", 1))
         raise
     if comm is not None:
-        _send_outcome(comm, -1, "")
+        _send_outcome(comm, -1, "", 0)
 
 
-def _send_outcome(comm, code: int, text: str) -> None:
+def _send_outcome(comm, code: int, text: str, exit_code: int) -> None:
+    # The exit code too: mpirun ORs the ranks' codes, so they must agree (130 | 75 = 203).
     data = np.frombuffer(text.encode(), np.uint8).copy()
-    wait(comm.Ibcast(np.array([code, data.size], np.int64), root=0))
+    wait(comm.Ibcast(np.array([code, data.size, exit_code], np.int64), root=0))
     if data.size:
         wait(comm.Ibcast(data, root=0))
 
 
 def receive_outcome(comm) -> None:
     """Worker: raise what the master raised (marked with this rank: the master reports it)."""
-    head = np.empty(2, np.int64)
+    head = np.empty(3, np.int64)
     wait(comm.Ibcast(head, root=0))
     if head[0] < 0:
         return
@@ -519,7 +520,7 @@ def receive_outcome(comm) -> None:
     if data.size:
         wait(comm.Ibcast(data, root=0))
     error = SHARED_ERRORS[int(head[0])](data.tobytes().decode())
-    error.rank = comm.Get_rank()
+    error.rank, error.exit_code = comm.Get_rank(), int(head[2])
     raise error
 
 
@@ -553,6 +554,8 @@ def run_master(job, store, signals, comm, grace) -> RunSummary:
     )  # fmt: skip
     if master.failure:
         raise CamparError(master.failure)
+    if remaining and signals.early and entry["tiles"] == 0:  # under MPI, before the start
+        raise early_interruption(signals.last)
     if remaining:
         why = master.stop_reason or "tiles damaged on disk since they were written (logged above)"
         raise Interrupted(

@@ -77,9 +77,14 @@ def _before_start(signum, frame):
         _kept.append((signum, time.monotonic()))  # for the run's Signals: all ranks stop
         return
     _phase["now"] = "interrupted"  # one exception, even if the signal comes twice
-    name = signal.Signals(signum).name
-    raise Interrupted(
-        f"interrupted before start by {name}: nothing was computed or changed; "
+    raise early_interruption(signum)
+
+
+def early_interruption(signum: int) -> Interrupted:
+    """What a stop signal before the run's start raises (or, under MPI, the run once every
+    rank has stopped): exit 130 for SIGINT, 75 for the others."""
+    return Interrupted(
+        f"interrupted before start by {signal.Signals(signum).name}: no tile was computed; "
         "run the same command again",
         EXIT_CODES.get(signum, Interrupted.exit_code),
     )
@@ -90,6 +95,7 @@ class Signals:
 
     def __init__(self):
         self.count, self.last, self.first_at, self.last_at, self._old = 0, None, 0.0, 0.0, {}
+        self.early = False  # the first signal came before the start (kept under MPI)
 
     def _handle(self, signum, frame):
         self.count += 1
@@ -107,7 +113,7 @@ class Signals:
         if _phase["now"] == "starting":
             _phase["now"] = "running"
             for signum, when in _kept:  # received before the start, under MPI
-                self.count += 1
+                self.count, self.early = self.count + 1, True
                 self.last, self.last_at = signum, when
                 self.first_at = self.first_at or when
             _kept.clear()

@@ -127,6 +127,9 @@ def open_store(path: str | Path, job: Job, *, overwrite: bool = False) -> Store:
         else:
             backend.clean_leftovers(real, job)
             done = _verify_for_resume(path, real, backend, attrs, job)
+        if done is None:  # kept aside, beyond repair: the map starts again
+            backend.create(real, job)
+            done = np.zeros(len(plan_tiles(job)), bool)
         return _STORES[backend](path, job, lock, done, real)
     except OSError as exc:
         lock.release()
@@ -149,14 +152,19 @@ def _read_attrs_for(path: Path, real: Path, backend, job: Job) -> dict | None:
         return None
 
 
-def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job) -> np.ndarray:
-    """Verify every committed tile; repair the damaged ones (pending again) and log why."""
+def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job):
+    """Verify every committed tile; repair the damaged ones (pending again) and log why.
+    None if the store of this job is beyond reading (HDF5) and was kept aside."""
     start = time.monotonic()
     try:
         with _READERS[backend](path, attrs, real) as reader:
             report = verify_store(reader)
     except StoreDamaged as exc:
-        raise StoreDamaged(f"{exc}; --overwrite recomputes the store") from None
+        if not hasattr(backend, "set_store_aside"):
+            raise StoreDamaged(f"{exc}; --overwrite recomputes the store") from None
+        aside = backend.set_store_aside(real)  # its attributes named this job: ours
+        log.warning("%s; kept as %s, the map is computed again", exc, aside.name)
+        return None
     for problem in report.problems:
         log.warning("%s: %s", path, problem)
     for index, why in sorted(report.damaged.items()):

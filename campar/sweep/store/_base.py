@@ -10,6 +10,9 @@ For developers — a backend implements:
   finish any commit it left half done;
 - ``repair(path, job, report)``: make the tiles a verification found damaged
   pending again, their cells the fill value (a resume then recomputes them);
+- ``read_attrs`` raising StoreDamaged with ``sealed_job`` set, and
+  ``set_store_aside(path)``, if the backend can tell the job of a store it
+  cannot read (HDF5's seal): a resume of that job keeps it aside and restarts;
 - a ``Store`` subclass with ``_write_tile``, ``_write_runs`` and ``_close``;
 - a ``StoreReader`` subclass with ``_read_rows``, ``_tile_values``, ``_shapes``
   and ``close`` (and ``journaled``/``journal_problems`` if

@@ -4,10 +4,14 @@ The HDF5 library trusts its file: a damaged one can make it raise, but also
 loop for ever or crash (measured: 4 KiB of zeros in a 120 kB store made
 h5py's attribute iteration spin). So campar never hands HDF5 a store file it
 has not checked. Every file campar writes carries, in its HDF5 user block (512
-bytes HDF5 itself skips; netCDF and h5py read the file as usual), the BLAKE2b
-digest of the rest of the file. The file is only ever replaced whole (written
-aside, renamed), so the digest holds from one write to the next. Before a store
-file is opened, ``file_state`` hashes it (about 1 GB/s) and compares.
+bytes HDF5 itself skips; netCDF and h5py read the file as usual), its seal: the
+BLAKE2b digest of the rest of the file and the hash of the job it holds, the
+rest of the block zeros, so that every byte of the file is checked. The file is
+only ever replaced whole (written aside, renamed), so the seal holds from one
+write to the next. Before a store file is opened, ``file_state`` hashes it
+(about 1 GB/s) and compares. The job hash names the store's job even when HDF5
+cannot read the file at all (a truncated file keeps its first bytes): a resume
+of that job keeps the file aside and starts again, never guessing.
 
 A file that fails the check is read by ``rescue`` in a child process with a
 watchdog: the child opens it, reports its attributes and every committed
@@ -43,6 +47,7 @@ BLOCK = 1 << 20  # hashing reads this much at a time
 # A rescue child silent this long is hung in the HDF5 library (reading a tile takes
 # milliseconds); the environment can shorten it (the fault-injection tests do).
 WATCHDOG_SECONDS = float(os.environ.get("CAMPAR_RESCUE_WATCHDOG", "20"))
+STARTUP_SECONDS = 300.0  # a child still loading Python and h5py after this is hung too
 
 UNSEALED = "unsealed"  # an HDF5 file without campar's digest (formats 1 and 2)
 FOREIGN = "not an HDF5 file"
@@ -51,14 +56,14 @@ _cache: dict[tuple, str | None] = {}  # (path, inode, size, mtime) → state
 _rescued: dict[tuple, "Rescue"] = {}  # the same → what a rescue of the attributes read
 
 
-def file_digest(path: Path) -> str:
-    """BLAKE2b digest (hex) of the file after its user block."""
+def file_digest(path: Path, job_hash: str) -> str:
+    """BLAKE2b digest (hex) of the job hash and the file after its user block."""
     with open(path, "rb") as fh:
-        return _digest(fh)
+        return _digest(fh, job_hash)
 
 
-def _digest(fh) -> str:
-    h = hashlib.blake2b(digest_size=DIGEST_BYTES)
+def _digest(fh, job_hash: str) -> str:
+    h = hashlib.blake2b(job_hash.encode(), digest_size=DIGEST_BYTES)
     fh.seek(USERBLOCK)
     while chunk := fh.read(BLOCK):
         h.update(chunk)
@@ -94,11 +99,15 @@ def release(path: Path) -> None:
 def seal(path: Path, job_hash: str) -> None:
     """Write the digest of a file campar has just written into its user block, with the hash
     of the job it holds (``sealed_job``), and fsync it."""
-    stamp = MAGIC + file_digest(path).encode() + b"\n" + JOB + job_hash.encode() + b"\n"
     with open(path, "r+b") as fh:
-        fh.write(stamp.ljust(USERBLOCK, b"\0"))
+        fh.write(_stamp(file_digest(path, job_hash), job_hash))
         fh.flush()
         os.fsync(fh.fileno())
+
+
+def _stamp(digest: str, job_hash: str) -> bytes:
+    """The whole user block: every byte of it is checked, so every byte of the file is."""
+    return (MAGIC + f"{digest}\n".encode() + JOB + f"{job_hash}\n".encode()).ljust(USERBLOCK, b"\0")
 
 
 def sealed_job(path: Path) -> str | None:
@@ -106,8 +115,10 @@ def sealed_job(path: Path) -> str | None:
     (a truncated file keeps its first bytes); None if the seal is unreadable."""
     with open(path, "rb") as fh:
         head = fh.read(USERBLOCK)
-    if not head.startswith(MAGIC):
-        return None
+    return _job_line(head) if head.startswith(MAGIC) else None
+
+
+def _job_line(head: bytes) -> str | None:
     for line in head.split(b"\n"):
         if line.startswith(JOB) and len(line) == len(JOB) + 16:
             return line[len(JOB) :].decode("ascii", "replace")
@@ -129,6 +140,8 @@ def file_state(path: Path) -> tuple[str | None, int]:
 
 def _check(fh) -> str | None:
     head = fh.read(USERBLOCK)
+    if head and len(head) < len(MAGIC) and MAGIC.startswith(head):
+        return f"it is cut short after {len(head)} bytes of campar's seal"
     if not head.startswith(MAGIC):
         if head.startswith(SIGNATURE):
             return UNSEALED
@@ -137,7 +150,8 @@ def _check(fh) -> str | None:
             return FOREIGN
         return "its user block, which holds campar's digest of the file, is damaged"
     stored = head[len(MAGIC) : len(MAGIC) + 2 * DIGEST_BYTES].decode("ascii", "replace")
-    if _digest(fh) != stored:
+    job_hash = _job_line(head) or ""
+    if head != _stamp(stored, job_hash) or _digest(fh, job_hash) != stored:
         return "its bytes differ from those campar wrote (the digest in its user block disagrees)"
     return None
 
@@ -201,6 +215,8 @@ def rescue(path: Path, into: Path | None = None, attrs_only: bool = False) -> Re
     result, heard = Rescue(), threading.Event()
 
     def watchdog():
+        heard.wait(STARTUP_SECONDS)  # Python and h5py loading: not yet the damaged file
+        heard.clear()
         while child.poll() is None:
             if not heard.wait(WATCHDOG_SECONDS):
                 child.kill()
@@ -215,6 +231,7 @@ def rescue(path: Path, into: Path | None = None, attrs_only: bool = False) -> Re
         heard.set()
         _take(result, json.loads(line))
     code = child.wait()
+    heard.set()  # the watchdog sees the child gone and ends
     if not result.finished and result.failure is None:
         result.failure = f"reading it crashes the HDF5 library (exit {code})"
     return result
@@ -251,6 +268,7 @@ def _child(source: Path, into: Path | str | None) -> None:
     def say(**message):
         print(json.dumps(message, default=str), flush=True)
 
+    say(ready=True)  # loaded: from now on, silence means HDF5 is stuck on the file
     try:
         f = h5py.File(source, "r")
     except Exception as exc:

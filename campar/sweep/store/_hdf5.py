@@ -11,15 +11,20 @@ run never modifies the store file in place:
    and at close) the file is copied, the journal applied to the copy (arrays,
    checksum, then ``done``), the copy flushed, fsynced and renamed over the
    store, and only then are the applied entries deleted. A checkpoint first
-   checks that the disk has room for the copy, and removes the copy if it
-   fails anyway: a full disk leaves the store and the journal as they were.
+   reserves the disk space the copy may need (``_h5guard.reserve``), and
+   removes the copy if anything fails: a full disk leaves the store and the
+   journal as they were, and HDF5 never writes into a full disk.
 
-An entry that cannot be read or fails its checksum (damaged on disk) is never
-applied: it is set aside as ``tile-000012.npz.damaged-<time>`` and its tile
-recomputed. A store whose verification finds damage is rebuilt: a new file
-built aside from the job, every tile that verified copied into it, renamed
-over the store — whatever was damaged, data or the file's own structure, is
-left behind.
+Every file written is sealed (``_h5guard``): its user block holds a digest of
+the file and the job's hash, checked before HDF5 reads the file; a file that
+fails the check is read only by a child process (``rescue``). An entry that
+cannot be read or fails its checksum (``_journal``) is never applied: it is set
+aside as ``tile-000012.npz.damaged-<time>`` and its tile recomputed. A store
+whose verification finds damage is rebuilt: a new file built aside from the
+job, every tile that verified copied into it, renamed over the store —
+whatever was damaged, data or the file's own structure, is left behind. A
+store file HDF5 cannot read at all, whose seal names the job being resumed, is
+kept aside as ``<store>.damaged-<time>`` and the map computed again.
 
 A kill at any point leaves the last checkpoint plus whole journal entries;
 the next ``open_store`` replays them, and readers overlay them, so
@@ -386,7 +391,7 @@ class Hdf5Reader(StoreReader):
                 raw[index] = (entry, exc)
         self._rescue_dir, self._file_problems = None, []
         try:
-            self._file = self._open(real)
+            self._file = self._open(path, real)
         except OSError as exc:
             read_attrs(real)  # StoreDamaged if it is a damaged HDF5 file
             raise StoreDamaged(f"{path} cannot be opened ({describe_exception(exc)})") from None
@@ -423,7 +428,7 @@ class Hdf5Reader(StoreReader):
             self._sums[index] = arrays.pop("checksum")
             self._journal[index] = arrays
 
-    def _open(self, real: Path) -> h5py.File:
+    def _open(self, path: Path, real: Path) -> h5py.File:
         """The store file once it passed its check; else a copy of what can be rescued from it
         (``_h5guard``), with the tiles lost in the rescue counted as damaged."""
         f, state = open_checked(real)
@@ -437,7 +442,7 @@ class Hdf5Reader(StoreReader):
             shutil.rmtree(self._rescue_dir, ignore_errors=True)
             self._rescue_dir = None
             raise StoreDamaged(
-                f"{self.path} is damaged ({state}) and {rescued.failure or 'cannot be read'}: "
+                f"{path} is damaged ({state}) and {rescued.failure or 'cannot be read'}: "
                 "no tile of it can be trusted; move it away and run again"
             )
         self._damage = f"the HDF5 file is damaged ({state})"
