@@ -318,6 +318,20 @@ def run_verify(args) -> int:
 
 
 @subcommand
+def add_warm_up(sub):
+    p = sub.add_parser("warm-up", help="compile the numerical core into numba's on-disk cache "
+                       "once, so that a fresh install's first point or map starts at once")  # fmt: skip
+    p.set_defaults(handler=run_warm_up)
+
+
+def run_warm_up(args) -> int:
+    from .sweep.tile import warm_up
+
+    print(f"campar warm-up: the kernel is compiled and cached ({warm_up():.1f} s)")
+    return 0
+
+
+@subcommand
 def add_bench(sub):
     from .bench import add_parser  # cheap: each benchmark imports its numerics when it runs
 
