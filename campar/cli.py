@@ -111,6 +111,22 @@ def add_tensile_argument(p) -> None:
                    help=f"clamp: no tensile force; allow: the paper's formula ({law})")  # fmt: skip
 
 
+def add_law_options(p) -> None:
+    """--duty-cycle and --cam-velocity: the paper's ambiguities (docs/model.md)."""
+    from .sweep.job import DEFAULT_MODEL, ModelSettings, field_choices
+
+    dc, cam = DEFAULT_MODEL.duty_cycle, DEFAULT_MODEL.cam_velocity
+    p.add_argument(
+        "--duty-cycle",
+        choices=field_choices(ModelSettings, "duty_cycle"),
+        default=dc,
+        help=f"separation: DC counts ε < 0; force: Pn = 0 ({dc})",
+    )
+    p.add_argument("--cam-velocity", choices=field_choices(ModelSettings, "cam_velocity"),
+                   default=cam, help="chain: ẏc = ω dyc/dθ; literal: the paper's eq. 6, "
+                   f"dyc/dθ ({cam})")  # fmt: skip
+
+
 @subcommand
 def add_point(sub):
     from .sweep.job import DEFAULT_INITIAL, DEFAULT_INTEGRATOR, IntegratorSettings, field_choices
@@ -118,6 +134,7 @@ def add_point(sub):
     p = sub.add_parser("point", help="simulate one cell and classify its steady motion")
     p.add_argument("--omega", type=float, required=True, help="cam speed / natural frequency")
     add_model_arguments(p)
+    add_law_options(p)
     p.add_argument("--y0", type=float, default=DEFAULT_INITIAL.y, help="initial y at θ = 0")
     p.add_argument("--v0", type=float, default=DEFAULT_INITIAL.v, help="initial y' at θ = 0")
     rtol, method = DEFAULT_INTEGRATOR.rtol, DEFAULT_INTEGRATOR.method
@@ -139,6 +156,7 @@ POINT_FLAGS = {
     "integrator.rtol": "--rtol", "integrator.method": "--method", "initial.y": "--y0",
     "initial.v": "--v0", "transient.mode": "--transient",
     "transient.max_revolutions": "--revolutions", "model.tensile": "--tensile",
+    "model.duty_cycle": "--duty-cycle", "model.cam_velocity": "--cam-velocity",
 }  # fmt: skip
 
 
@@ -166,7 +184,8 @@ def run_point(args) -> int:
     if args.revolutions < 1:
         raise JobError(f"--revolutions must be ≥ 1, got {args.revolutions}")
     settings = dict(f0=args.f0, mu_kn=args.mu_kn, mu_cn=args.mu_cn, zeta=args.zeta,
-                    tensile=args.tensile, transient=args.transient,
+                    tensile=args.tensile, duty_cycle=args.duty_cycle,
+                    cam_velocity=args.cam_velocity, transient=args.transient,
                     revolutions=args.revolutions, rtol=args.rtol, method=args.method)  # fmt: skip
     if args.attractors is not None:
         return run_attractors(args, settings)
@@ -241,14 +260,45 @@ def add_plot(sub):
     p.add_argument("--omega", metavar="A:B", type=parse_range, help="zoom to ω in [A, B]")
     p.add_argument("--second", metavar="C:D", type=parse_range,
                    help="zoom to the second parameter in [C, D]")  # fmt: skip
+    p.add_argument("--direction", choices=("down", "up"), help="of a store of a "
+                   "chains.direction: both job, the direction to draw (default down); "
+                   "--what hysteresis compares the two")  # fmt: skip
+    p.add_argument("--bifurcations", action="store_true",
+                   help="overlay every boundary between labels as a cell edge typed PD, SN, "
+                   "NS, G, chaos or jump (from the stored multipliers and ε extremes)")  # fmt: skip
+    p.add_argument("--trace", action="store_true", help="with --bifurcations: tell grazing "
+                   "from the orbits traced from the stored states (loads the kernel)")  # fmt: skip
+    p.add_argument("--json", action="store_true", help="with --bifurcations: print one "
+                   "JSON object: counts per type, each typed segment and its evidence")  # fmt: skip
     p.set_defaults(handler=run_plot)
 
 
 def run_plot(args) -> int:
     from .views.plot import plot_store
 
-    path = plot_store(args.store, args.what, args.output, omega=args.omega, second=args.second)
-    print(f"wrote {path}")
+    if (args.json or args.trace) and not args.bifurcations:
+        raise JobError("--json and --trace go with --bifurcations")
+    found = None
+    if args.bifurcations:
+        from .views.boundaries import store_boundaries
+        from .views.output import figure_file
+
+        if args.output:
+            figure_file(args.output)  # before typing the boundaries
+        found = store_boundaries(args.store, omega=args.omega, second=args.second,
+                                 trace=args.trace, direction=args.direction)  # fmt: skip
+    path = plot_store(args.store, args.what, args.output, omega=args.omega, second=args.second,
+                      curves=found, direction=args.direction)  # fmt: skip
+    if args.json:
+        import json
+
+        print(json.dumps({**found.to_dict(), "figure": str(path)}))
+    else:
+        if found is not None:
+            from .views.boundaries import describe_boundaries
+
+            print(describe_boundaries(found, limit=0))
+        print(f"wrote {path}")
     return 0
 
 
@@ -319,8 +369,8 @@ def run_verify(args) -> int:
 
 @subcommand
 def add_warm_up(sub):
-    p = sub.add_parser("warm-up", help="compile the numerical core into numba's on-disk cache "
-                       "once, so that a fresh install's first point or map starts at once")  # fmt: skip
+    text = "compile the numerical core into numba's cache once: a first point or map starts at once"
+    p = sub.add_parser("warm-up", help=text)
     p.set_defaults(handler=run_warm_up)
 
 
@@ -420,8 +470,12 @@ def run_line(args) -> int:
 @subcommand
 def add_gallery(sub):
     p = sub.add_parser("gallery", help="compute and draw the paper's whole figure set")
+    from .sweep.job import ModelSettings, field_choices
+
     p.add_argument("outdir", help="directory for the PNGs, their job files and index.md")
-    add_tensile_argument(p)
+    p.add_argument("--tensile", choices=("both", *field_choices(ModelSettings, "tensile")),
+                   default="both", help="force law(s) to draw: both (default; clamp with plain "
+                   "names, allow with '-allow' names), clamp or allow")  # fmt: skip
     add_plane_arguments(p)
     p.set_defaults(handler=run_gallery)
 

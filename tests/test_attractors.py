@@ -51,12 +51,13 @@ def test_cycles_match_within_the_tolerance_and_not_beyond():
     assert not same_cycle(CYCLE, beyond, tol)
 
 
-def test_cycles_of_other_order_or_length_do_not_match():
+def test_cycles_of_other_order_or_points_do_not_match():
     tol = match_tolerance()
     assert not same_cycle(CYCLE, CYCLE[[0, 2, 1]], tol)  # same points, other order: not a shift
     assert not same_cycle(CYCLE, CYCLE[:2], tol)  # a 2-cycle is not a 3-cycle
     two = np.array([[0.5, 0.1], [0.7, -0.3]])
-    assert not same_cycle(np.vstack([two, two]), two, tol)  # nor is it its own double
+    assert same_cycle(np.vstack([two, two]), two, tol)  # recorded over twice its period: one orbit
+    assert not same_cycle(np.vstack([two, two[::-1]]), two, tol)
 
 
 def test_the_tolerance_follows_from_the_convergence_tolerances():

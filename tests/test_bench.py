@@ -18,6 +18,7 @@ HEADERS = {
     "cells": ["cold ms", "warm revs", "ms/cell", "rev/cell"],
     "map": ["agree %", "adjud. %", "mu_cn     default", "mu_cn     rtol 1e-6", "audit: "],
     "scaling": ["cells/s", "speed-up", "1 process", "mpirun -n 2", "same map"],
+    "directions": ["CPU / down", "both / down", "bit for bit: yes", "hysteretic cells"],
 }
 REPO = Path(__file__).resolve().parents[1]
 

@@ -99,3 +99,26 @@ def test_a_continued_map_under_mpirun_equals_the_serial_one(write_job):
     with read_store(job.store) as reader:
         assert reader.attrs["job"]["chains"]["start"] == "continue"
         assert_same_map(reader, job)
+
+
+def test_a_both_job_runs_each_direction_as_its_one_direction_job_with_its_own_seeds():
+    """``chains.direction: both`` with ``continue``: every up tile starts from the first
+    column solved at the smallest ω (up's start), every down tile from the largest."""
+    both = job_of(merge(CONTINUE, {"chains": {"direction": "both"}}))
+    half = len(plan_tiles(both)) // 2
+    for direction, tiles in (("down", plan_tiles(both)[:half]), ("up", plan_tiles(both)[half:])):
+        one = job_of(
+            merge(CONTINUE, {"chains": {"direction": direction}, "outputs": list(both.outputs)})
+        )
+        np.testing.assert_array_equal(
+            chain_starts(both.one_direction(direction)), chain_starts(one)
+        )
+        for tile, alone in zip(tiles, plan_tiles(one), strict=True):
+            assert tile.direction == direction and tile.rows == alone.rows
+            got, expected = run_tile(both, tile), run_tile(one, alone)
+            for name, values in expected.items():
+                assert np.array_equal(got[name], values, equal_nan=True), (direction, name)
+    assert not np.array_equal(chain_starts(both.one_direction("down")),
+                              chain_starts(both.one_direction("up")))  # fmt: skip
+    with pytest.raises(ValueError, match="take one_direction first"):
+        chain_starts(both)

@@ -2,11 +2,14 @@
 and the line's section points agreeing with single-point simulations."""
 
 import io
+import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
@@ -187,21 +190,122 @@ def test_importing_the_views_stays_light():
     assert done.stdout.split() == ["False", "False"], done.stderr
 
 
-def test_gallery_writes_every_figure_with_its_job_file(tmp_path, monkeypatch):
-    from campar.paper.gallery import make_gallery
+STEMS = ("fig2_omega_f0_labels", "fig2_omega_f0_dc", "fig2_omega_f0_lyapunov",
+         "fig4_mu_kn_labels", "fig4_mu_kn_dc", "fig4_mu_kn_lyapunov", "fig7_mu_cn_labels",
+         "fig7_mu_cn_dc", "fig7_mu_cn_lyapunov", "fig5_lines", "fig6_phase_portraits",
+         "fig3_gap_preload", "fig8_gap_stiffness_damping", "fig9_force", "orbit_point")  # fmt: skip
 
-    monkeypatch.setitem(paper.SIZES, "small", paper.Size(plane=6, line=60))
-    pngs = make_gallery(tmp_path / "g", "small", stores=tmp_path / "stores", log=lambda _: None)
+
+@pytest.fixture(scope="module")
+def gallery(tmp_path_factory):
+    """A tiny gallery under both force laws (6 × 6 planes, 60-cell lines, 4-start
+    censuses), with the title of every figure it saved."""
+    from campar.paper.gallery import make_gallery
+    from campar.views.plot import style
+
+    out = tmp_path_factory.mktemp("gallery")
+    titles = {}
+    save = style.save_figure
+
+    def saving(figure, path, **options):
+        titles[Path(path).name] = figure.get_suptitle()
+        return save(figure, path, **options)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(paper.SIZES, "small", paper.Size(plane=6, line=60))
+        mp.setattr(paper, "FIG6_STARTS", 4)
+        mp.setattr(style, "save_figure", saving)
+        pngs = make_gallery(out / "g", "small", stores=out / "stores", log=lambda _: None)
+    return out / "g", pngs, titles
+
+
+def test_gallery_writes_every_figure_under_both_force_laws_with_its_job_file(gallery):
+    from campar.sweep.job import load_job
+
+    outdir, pngs, _ = gallery
     names = {p.name for p in pngs}
-    for stem in ("fig2_omega_f0_labels", "fig4_mu_kn_dc", "fig7_mu_cn_labels", "fig5_lines",
-                 "fig6_phase_portraits", "fig3_gap_preload", "fig8_gap_stiffness_damping",
-                 "fig9_force", "orbit_point"):  # fmt: skip
-        assert f"{stem}.png" in names
+    for stem in STEMS:
+        assert f"{stem}.png" in names and f"{stem}-allow.png" in names
     for path in pngs:
         assert path.read_bytes().startswith(PNG)
+        assert path.with_suffix(".yaml").exists()
     for job in ("omega_f0", "mu_kn", "mu_cn"):  # the plane jobs, runnable with campar run
-        from campar.sweep.job import load_job
+        for law, name in (("clamp", job), ("allow", f"{job}-allow")):
+            plane = load_job(outdir / f"{name}.yaml")
+            assert plane.shape == (6, 6) and plane.model.tensile == law
+            assert "lyapunov" in plane.outputs
+    index = (outdir / "index.md").read_text()
+    assert "fig9_force.png" in index and "fig9_force-allow.png" in index
+    assert "--tensile both" in index
 
-        assert load_job(tmp_path / "g" / f"{job}.yaml").shape == (6, 6)
-    assert (tmp_path / "g" / "fig5_lines.yaml").exists()
-    assert "fig9_force.png" in (tmp_path / "g" / "index.md").read_text()
+
+UNITS = re.compile(r"\([^()]*(units of|dimensionless)")
+
+
+def test_every_figure_states_force_law_start_direction_and_units(gallery):
+    from campar.paper.gallery import DIRECTION_TEXT, LAW_TEXT, START_TEXT
+
+    outdir, pngs, titles = gallery
+    index = (outdir / "index.md").read_text()
+    for path in pngs:
+        meta = yaml.safe_load(path.with_suffix(".yaml").read_text())
+        law = "allow" if path.stem.endswith("-allow") else "clamp"
+        assert meta["tensile"] == law, path.name
+        assert meta["start"] in ("rest", "continue") and meta["direction"] in DIRECTION_TEXT
+        for text in (LAW_TEXT[law], START_TEXT[meta["start"]], DIRECTION_TEXT[meta["direction"]]):
+            assert text in meta["caption"], (path.name, text)
+        assert meta["caption"] in index
+        title = titles[path.name]
+        assert f"tensile: {law}" in title and f"start: {meta['start']}" in title, title
+        assert "sweep: " in title
+        # every labelled axis carries its units (or says it is dimensionless) …
+        assert meta["axes"], path.name
+        for axis in meta["axes"]:
+            for text in axis.values():
+                assert UNITS.search(text), (path.name, text)
+        # … and each figure labels some x and some y axis
+        assert any("x" in a for a in meta["axes"]) and any("y" in a for a in meta["axes"])
+    for stem in ("fig2_omega_f0_labels", "fig4_mu_kn_dc", "fig7_mu_cn_lyapunov"):
+        meta = yaml.safe_load((outdir / f"{stem}.yaml").read_text())
+        assert (meta["start"], meta["direction"]) == ("continue", "down")  # the jobs' chains
+    for stem in ("fig3_gap_preload", "fig9_force", "orbit_point"):
+        assert yaml.safe_load((outdir / f"{stem}.yaml").read_text())["direction"] == "none"
+
+
+def test_label_maps_palettes_are_pairwise_distinct(gallery):
+    from campar.views.plot.colour import pairwise_delta_e00
+    from campar.views.plot.labels import GAP_STYLE, MIN_DELTA_E00
+
+    outdir, pngs, _ = gallery
+    maps = [p for p in pngs if "_labels" in p.stem]
+    assert len(maps) == 6
+    for path in maps:
+        palette = yaml.safe_load(path.with_suffix(".yaml").read_text())["palette"]
+        solid = {k: v for k, v in palette.items() if k not in GAP_STYLE}
+        colours = list(solid.values()) + (["#ffffff"] if set(palette) & set(GAP_STYLE) else [])
+        d = pairwise_delta_e00(colours)
+        np.fill_diagonal(d, np.inf)
+        assert d.min() >= MIN_DELTA_E00, (path.name, palette)
+
+
+def test_fig6_follows_the_planes_path_and_fig9_shades_the_clamp(gallery):
+    outdir, _, _ = gallery
+    for law, suffix in (("clamp", ""), ("allow", "-allow")):
+        fig6 = yaml.safe_load((outdir / f"fig6_phase_portraits{suffix}.yaml").read_text())
+        assert [cell["omega"] for cell in fig6["cells"]] == [w for w, _ in paper.FIG6_CLAIMS]
+        for cell in fig6["cells"]:
+            job = cell["path_job"]
+            assert job["chains"]["start"] == "continue" and job["chains"]["direction"] == "down"
+            assert job["model"]["tensile"] == law
+            assert job["sweep"]["omega"]["from"] == 6.0
+            assert job["sweep"]["omega"]["to"] == cell["omega"]
+            assert (job["sweep"]["mu_kn"]["from"], job["sweep"]["mu_kn"]["to"]) == (0.95, 0.91)
+            attractors = cell["attractors"]
+            assert attractors[0]["on_path"] and not any(a["on_path"] for a in attractors[1:])
+            assert cell["census_starts"] == 4
+        fig9 = yaml.safe_load((outdir / f"fig9_force{suffix}.yaml").read_text())
+        clamped = fig9["clamped_fraction_of_revolution"]
+        if law == "clamp":
+            assert max(clamped.values()) > 0 and "shaded orange" in fig9["caption"]
+        else:
+            assert max(clamped.values()) == 0

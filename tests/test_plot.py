@@ -26,11 +26,13 @@ from campar.views.plot.labels import (
     NOT_COMPUTED,
     category_of,
     delta_e,
+    distinct_categories,
     fallback_colour,
     label_colour,
     legend_text,
     map_kinds,
     map_labels,
+    order_key,
 )
 from campar.views.plot.maps import (
     LEGEND_MAX,
@@ -39,7 +41,6 @@ from campar.views.plot.maps import (
     cell_edges,
     cell_runs,
     computed_mask,
-    legend_entries,
     plot_map,
     plot_store,
     quantity_scale,
@@ -80,6 +81,7 @@ def random_map(rows, cols, seed=0):
         "pn_max": 10 ** rng.uniform(0, 3, dc.shape),
         "revolutions": rng.integers(2, 500, dc.shape),
         "lyapunov": rng.normal(size=dc.shape),
+        "hysteresis": (kind == P) & (rng.random(dc.shape) < 0.3),  # of a both-direction map
     }
     return {"kind": kind, "n": n, "p": p, **values}
 
@@ -206,13 +208,14 @@ def test_cells_not_computed_have_their_own_category():
 
 def test_a_crowded_legend_keeps_kinds_and_the_largest_labels():
     cells = [[(P, n, p) for n in range(1, 10) for p in range(6)] * 2 + [(CH, 0, 0), (FA, 0, 0)]]
-    cells[0] += [(P, 1, 1)] * 50
+    cells[0] += [(P, 1, 1)] * 50 + [(P, 7, 3)] * 9  # the largest rare label
     entries = map_labels(arrays_of(cells)).entries
-    shown, hidden = legend_entries(entries, LEGEND_MAX)
-    assert len(shown) + 1 == LEGEND_MAX
-    assert {"1-1", "chaos", "failed"} <= {e.label for e in shown}
-    assert {e.label for e in shown} | {e.label for e in hidden} == {e.label for e in entries}
-    assert [e.label for e in shown] == [e.label for e in entries if e in shown]  # order kept
+    shown = distinct_categories(map_labels(arrays_of(cells)), LEGEND_MAX).entries
+    assert len(shown) == LEGEND_MAX
+    assert {"1-1", "chaos", "failed", "7-3", "other"} <= {e.label for e in shown}
+    hidden = next(e for e in shown if e.label == "other").members
+    assert {e.label for e in shown} - {"other"} | set(hidden) == {e.label for e in entries}
+    assert [e.label for e in shown] == sorted((e.label for e in shown), key=order_key)
 
 
 # -- gaps: failed and not computed cells ----------------------------------------
@@ -337,7 +340,7 @@ def test_every_view_renders_headless(what):
 
 
 def test_views_and_quantities_agree():
-    assert set(MAP_VIEWS) == {"labels", "kind", *QUANTITIES}
+    assert set(MAP_VIEWS) == {"labels", "kind", "hysteresis", *QUANTITIES}
     with pytest.raises(PlotError, match="choose one of"):
         plot_map(grid_of(2, 2), random_map(2, 2), "steps")
     with pytest.raises(PlotError, match="needs the arrays n, p"):

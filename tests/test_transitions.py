@@ -101,6 +101,17 @@ def test_chaos_names_its_route_and_a_doubled_cycles_plus_one_is_not_a_fold():
     assert kind == "unknown" and "daughter" in reason
 
 
+def test_an_even_cycle_is_called_a_fold_only_when_its_points_are_seen_apart():
+    fold = dict(label="2-1", n=2, p=1, multipliers=(0.99, 0.01))
+    other = side("3-2", n=3, p=2, multipliers=(0.2, 0.1))
+    kind, reason, _ = classify_boundary(side(**fold), other)  # σn points not stored (a map)
+    assert kind == "unknown" and "pairing unseen" in reason
+    apart = side(**fold, half_gap=0.3, half_gap_farther=0.2)  # not pairing up: a fold
+    assert classify_boundary(apart, other)[0] == "SN"
+    pairing = side(**fold, half_gap=0.1, half_gap_farther=0.2)
+    assert "pairing up" in classify_boundary(pairing, other)[1]
+
+
 def test_graze_distance_refines_the_extremum_nearest_zero():
     t = np.sort(np.r_[np.linspace(0.0, 1.0, 41), 0.413, 0.6071])  # uneven, as at events
     dip = 0.5 * (t - 0.4093) ** 2 + 2e-3  # a contact dip: its minimum 2e-3 between samples

@@ -169,6 +169,14 @@ def _scaling_arguments(p):
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
+@benchmark("directions", "a map of both sweep directions against one direction (down, up)")
+def _directions_arguments(p):
+    p.add_argument("--job", default="jobs/mu_cn.yaml", help="plane (jobs/mu_cn.yaml)")
+    p.add_argument("--size", type=int, default=60, help="N of the N × N sub-plane (60)")
+    p.add_argument("--repeat", type=int, default=2, help="alternating runs of each; fastest (2)")
+    p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
+
+
 @benchmark("master", "the single writer's capacity: tiles/s, latency to disk, idle ranks")
 def _master_arguments(p):
     p.add_argument("--ranks", type=ints, default=[16, 64, 128],

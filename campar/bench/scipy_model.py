@@ -5,6 +5,13 @@ campar's model, integrator or kernel, or it stops being a check): solve_ivp
 (DOP853) integrates piecewise between cam phase boundaries and exact contact
 events (terminal events, restarted in the new contact mode), as the reference
 cells were made.
+
+The paper's two ambiguities (docs/model.md) are options here too, written from
+that page: ``cam_velocity="literal"`` takes the cam's velocity in the force's
+damping term as dyc/dθ (the paper's eq. 6 without ω) instead of ω dyc/dθ, while
+ε = yc(ωt) − y and its events stay as they are; ``integrate(..., mode_time=…)``
+sums the time spent in each contact mode, from which ``duty_cycle`` counts
+either the separated time (ε < 0) or the time without force (Pn = 0).
 """
 
 import math
@@ -22,15 +29,21 @@ def cam(theta):
 
 
 class Model:
-    def __init__(self, omega, f0=0.5, mu_kn=0.8, mu_cn=0.8, zeta=0.2, clamp=True):
+    def __init__(self, omega, f0=0.5, mu_kn=0.8, mu_cn=0.8, zeta=0.2, clamp=True,
+                 cam_velocity="chain"):  # fmt: skip
         self.omega, self.f0, self.zeta, self.clamp = omega, f0, zeta, clamp
         self.k = mu_kn / (1 - mu_kn)
         self.c = 2 * zeta * mu_cn / (1 - mu_cn)
+        if cam_velocity not in ("chain", "literal"):
+            raise ValueError(f"cam_velocity must be chain or literal, got {cam_velocity!r}")
+        self.literal = cam_velocity == "literal"
 
     def gap(self, t, y, theta_mid):
+        """ε and the ε' the force law uses (the cam velocity as the option reads it)."""
         # evaluate the cam with the formula of the phase containing theta_mid
         yc, dyc, _ = cam_in_phase(self.omega * t, theta_mid)
-        return yc - y[0], self.omega * dyc - y[1]
+        cam_speed = dyc if self.literal else self.omega * dyc
+        return yc - y[0], cam_speed - y[1]
 
     def force(self, eps, deps):
         if eps <= 0:
@@ -96,7 +109,7 @@ def cam_in_phase(theta, theta_mid):
 
 
 def integrate(model, x0, revolutions, *, rtol=1e-12, atol=1e-14, with_divergence=False,
-              max_step=np.inf):  # fmt: skip
+              max_step=np.inf, mode_time=None):  # fmt: skip
     """Integrate from (y, y') at θ = 0 over whole revolutions.
 
     solve_ivp looks for events only as sign changes between step ends, so a
@@ -104,7 +117,8 @@ def integrate(model, x0, revolutions, *, rtol=1e-12, atol=1e-14, with_divergence
     ``max_step`` bounds the step to catch such contacts.
 
     Returns (final state, list of (t, kind) events with kind in {"impact",
-    "detachment", "force zero", "force resumes"}, ∫ div f dt if asked).
+    "detachment", "force zero", "force resumes"}, ∫ div f dt if asked). A list
+    ``mode_time`` of three numbers gets the time spent FREE, PUSH and SLACK added.
     """
     w = model.omega
     x = np.array([x0[0], x0[1], 0.0] if with_divergence else list(x0[:2]), dtype=float)
@@ -125,11 +139,17 @@ def integrate(model, x0, revolutions, *, rtol=1e-12, atol=1e-14, with_divergence
                 )  # fmt: skip
                 if sol.status == 1:
                     which = next(j for j, te in enumerate(sol.t_events) if len(te))
+                    if mode_time is not None:
+                        mode_time[mode] += float(sol.t_events[which][0]) - t
                     t = float(sol.t_events[which][0])
                     x = sol.y_events[which][0].copy()
                     if mode == FREE:
                         events.append((t, "impact"))
-                        mode = PUSH
+                        # the literal cam velocity can leave 1 + c ε' ≤ 0 at an impact
+                        mode = model.mode_of(t, x, theta_mid)
+                        if mode == FREE:  # at ε = 0 exactly: contact begins
+                            _, deps = model.gap(t, x, theta_mid)
+                            mode = SLACK if model.clamp and 1 + model.c * deps <= 0 else PUSH
                     elif which == 0:
                         events.append((t, "detachment"))
                         mode = FREE
@@ -140,8 +160,23 @@ def integrate(model, x0, revolutions, *, rtol=1e-12, atol=1e-14, with_divergence
                         events.append((t, "force resumes"))
                         mode = PUSH
                 else:
+                    if mode_time is not None:
+                        mode_time[mode] += t_end - t
                     t = t_end
                     x = sol.y[:, -1].copy()
         mode = None  # campar decides the mode from the state at each θ = 0 as well
     divergence = x[2] if with_divergence else None
     return x[:2], events, divergence
+
+
+def duty_cycle(model, x0, revolutions, by="separation", **options):
+    """Fraction of ``revolutions`` revolutions from x0 (at θ = 0) spent separated (ε < 0,
+    ``by="separation"``) or without force (Pn = 0: separated, or SLACK under the clamp,
+    ``by="force"``). ``options``: those of ``integrate``."""
+    if by not in ("separation", "force"):
+        raise ValueError(f"by must be separation or force, got {by!r}")
+    times = [0.0, 0.0, 0.0]
+    integrate(model, x0, revolutions, mode_time=times, **options)
+    total = revolutions * 2 * math.pi / model.omega
+    released = times[FREE] + (times[SLACK] if by == "force" else 0.0)
+    return released / total

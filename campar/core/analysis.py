@@ -265,7 +265,8 @@ def cubic_extremes(g0, d0, g1, d1):
 
 @hot
 def add_step_stats(row, h, free, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
-    """Fold one step into a revolution's statistics (ε and Pn with rates at both ends).
+    """Fold one step into a revolution's statistics (ε and Pn with rates at both ends);
+    ``free``: the step's time counts towards the duty cycle (model.released).
 
     Extremes inside the step come from cubic Hermite models, accurate to O(h⁴).
     """

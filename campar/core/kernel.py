@@ -402,22 +402,29 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     return OK, final
 
 
-def run_chain(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out):
+def run_chain(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out):
     """Compute a continuation chain of cells in order; outputs are filled in place.
 
-    Cell i has parameters (omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i]). Cell 0
+    Cell i has parameters (omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i]); ``law`` holds
+    the force law's options as model.LAW_* bits (``model.law_flags``; a bool: the clamp
+    alone), passed as one integer so every option runs the same compiled code. Cell 0
     starts from x_init, every later cell from the final state of the one before
     (extrapolated through the cycles of the cells before: extrapolation_order),
     and the cell after a failure from x_init again, its step control restarted
     as for cell 0. Releases the GIL, so a thread can compute while another one
     talks MPI.
     """
-    chain_compiled(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out,
+    chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law_bits(law), x_init, solver, cs, out,
                    make_chain_work(cs))  # fmt: skip
 
 
+def law_bits(law) -> np.int64:
+    """The kernel's ``law`` argument: always int64 (a bool would compile a second kernel)."""
+    return np.int64(int(law))
+
+
 @njit(cache=True, nogil=True)
-def chain_compiled(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out, cw):
+def chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out, cw):
     """run_chain's compiled body, with the chain's buffers ``cw`` (make_chain_work)."""
     x_start = cw.x_start
     prev = cw.prev
@@ -425,7 +432,7 @@ def chain_compiled(omega, zeta, f0, mu_kn, mu_cn, clamp, x_init, solver, cs, out
     prev_n = 0
     h_started = False
     for i in range(omega.shape[0]):
-        p = make_params(omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i], clamp)
+        p = make_params(omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i], law)
         opt = scale_solver_options(solver, omega[i], cs.rk4_steps)
         flags = 0
         order = min(extrapolation_order(prev, streak), cs.extrapolate)
@@ -498,8 +505,9 @@ def close(a, b):
     return abs(a[0] - b[0]) + abs(a[1] - b[1]) < EXTRAPOLATE_MAX
 
 
-def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, clamp, x0, solver, cs, revolutions, rec):
-    """Integrate ``revolutions`` revolutions from x0 (at θ = 0), recording into rec.
+def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions, rec):
+    """Integrate ``revolutions`` revolutions from x0 (at θ = 0), recording into rec
+    (``law`` as run_chain's).
 
     Returns (status, final y, final y'). For figures of a steady orbit: start
     from a cell's final state and trace its period.
@@ -507,15 +515,15 @@ def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, clamp, x0, solver, cs, revolution
     x = np.array(x0, dtype=np.float64)
     w = make_work(N_STATE, MAX_EVENTS, 0.0)
     buffers = (np.zeros(N_STATE), np.zeros(2, dtype=np.int64), np.zeros(N_REV_STATS))
-    return trace_compiled(omega, zeta, f0, mu_kn, mu_cn, clamp, x, solver, cs, revolutions, rec,
-                          w, *buffers)  # fmt: skip
+    return trace_compiled(omega, zeta, f0, mu_kn, mu_cn, law_bits(law), x, solver, cs,
+                          revolutions, rec, w, *buffers)  # fmt: skip
 
 
 @njit(cache=True)
-def trace_compiled(omega, zeta, f0, mu_kn, mu_cn, clamp, x, solver, cs, revolutions, rec, w, f,
+def trace_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x, solver, cs, revolutions, rec, w, f,
                    mode, row):  # fmt: skip
     """trace_orbit's compiled body: integrates in place on x with the buffers w, f, mode, row."""
-    p = make_params(omega, zeta, f0, mu_kn, mu_cn, clamp)
+    p = make_params(omega, zeta, f0, mu_kn, mu_cn, law)
     opt = scale_solver_options(solver, omega, cs.rk4_steps)
     eps, deps = gap(0.0, x, p, RISE)
     mode[1] = contact_mode(eps, deps, p)

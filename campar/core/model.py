@@ -15,6 +15,14 @@ and its own event functions g_i, positive while the mode holds; the integrator
 ends a step where a g_i reaches zero and the kernel switches mode there
 (Hunt & Crossley 1975 for the force law; the field is continuous across every
 switching surface, so the variational equations need no saltation).
+
+Two readings of the paper are runtime options (``law`` bits, so one compiled
+kernel serves all of them, docs/model.md): the duty cycle counted by separation
+(ε < 0, default) or by force (Pn = 0, which under the clamp adds the SLACK
+time), and the cam velocity in the force's ε' by the chain rule (ω dyc/dθ,
+default) or as the paper's eq. 6 prints it (dyc/dθ). The literal velocity
+changes only the force: ε itself, and so every event time and rate of ε, is
+yc(ωt) − y either way.
 """
 
 import math
@@ -45,6 +53,32 @@ MAX_EVENTS = 2  # event functions per contact mode, at most
 N_STATE = 2
 N_STATE_VARIATIONAL = 6
 
+# Bits of a force law (``law_flags``, the kernel's ``law`` argument).
+LAW_CLAMP = 1  # no tensile force, Pn = max(0, …) (a bool True means this bit alone)
+LAW_DC_FORCE = 2  # duty cycle: time with Pn = 0, not only with ε ≤ 0
+LAW_CAM_LITERAL = 4  # the force's cam velocity dyc/dθ (paper eq. 6), not ω dyc/dθ
+
+# The job's ModelSettings values of each option, in bit order (False, True).
+TENSILE_CHOICES = ("allow", "clamp")
+DUTY_CYCLE_CHOICES = ("separation", "force")
+CAM_VELOCITY_CHOICES = ("chain", "literal")
+
+
+def law_flags(tensile: str = "clamp", duty_cycle: str = "separation",
+              cam_velocity: str = "chain") -> int:  # fmt: skip
+    """The LAW_* bits of the job's model settings (ValueError for an unknown value)."""
+    bits = 0
+    for value, choices, bit in (
+        (tensile, TENSILE_CHOICES, LAW_CLAMP),
+        (duty_cycle, DUTY_CYCLE_CHOICES, LAW_DC_FORCE),
+        (cam_velocity, CAM_VELOCITY_CHOICES, LAW_CAM_LITERAL),
+    ):
+        if value not in choices:
+            raise ValueError(f"{value!r} is not one of {', '.join(choices)}")
+        if value == choices[1]:
+            bits |= bit
+    return bits
+
 
 class ModelParams(NamedTuple):
     """Parameters of one grid cell, in the form the vector field uses."""
@@ -55,14 +89,22 @@ class ModelParams(NamedTuple):
     k: float  # contact stiffness μkn / (1 − μkn)
     c: float  # contact damping 2 ζ μcn / (1 − μcn)
     clamp: bool  # True: no tensile force, Pn = max(0, …)
+    vcam: float  # cam velocity in the force's ε' per unit dyc/dθ: ω (chain rule) or 1
+    dc_force: bool  # True: the duty cycle counts the time with Pn = 0 (ε ≤ 0 or SLACK)
 
 
 @hot
-def make_params(omega, zeta, f0, mu_kn, mu_cn, clamp):
-    """Pack the physical parameters (μkn, μcn ∈ (0, 1)) into ModelParams."""
+def make_params(omega, zeta, f0, mu_kn, mu_cn, law):
+    """Pack the physical parameters (μkn, μcn ∈ (0, 1)) into ModelParams.
+
+    ``law``: LAW_* bits (``law_flags``); a bool is the clamp bit alone.
+    """
+    bits = int(law)
     k = mu_kn / (1.0 - mu_kn)
     c = 2.0 * zeta * mu_cn / (1.0 - mu_cn)
-    return ModelParams(omega, zeta, f0, k, c, clamp)
+    vcam = 1.0 if bits & LAW_CAM_LITERAL else omega
+    return ModelParams(omega, zeta, f0, k, c, (bits & LAW_CLAMP) != 0, vcam,
+                       (bits & LAW_DC_FORCE) != 0)  # fmt: skip
 
 
 @hot
@@ -118,9 +160,17 @@ def contact_force(eps, deps, p):
 
 @hot
 def gap(t, y, p, phase):
-    """Penetration ε = yc − y and its rate ε' = ẏc − y' at time t."""
+    """Penetration ε = yc − y and the force law's ε' = ẏc − y' at time t (ẏc = p.vcam
+    dyc/dθ: the time rate of ε by the chain rule, dyc/dθ with the literal cam velocity)."""
     yc, dyc, _ = cam(p.omega * t, phase)
-    return yc - y[0], p.omega * dyc - y[1]
+    return yc - y[0], p.vcam * dyc - y[1]
+
+
+@hot
+def released(contact, p):
+    """True while the time counts towards the duty cycle: separated (contact mode FREE),
+    or, with the duty cycle by force, any mode without force (FREE or SLACK)."""
+    return contact == FREE or (p.dc_force and contact == SLACK)
 
 
 @hot
@@ -143,7 +193,7 @@ def rhs(t, y, p, mode, dy):
     if mode[1] == PUSH:  # only a pushing contact needs the cam
         yc, dyc, _ = cam(p.omega * t, mode[0])
         eps = yc - y[0]
-        deps = p.omega * dyc - v
+        deps = p.vcam * dyc - v
         if eps < 0.0:  # a stage point just past an event: extend by zero force
             eps = 0.0
         s = math.sqrt(eps)
@@ -179,20 +229,23 @@ def events(t, y, f, p, mode, g, dg):
     Each g_i is positive while the mode holds; the mode ends where one reaches 0.
     FREE: g0 = −ε (impact). PUSH: g0 = ε (detachment), g1 = 1 + c ε' (force
     reaches zero, clamp only). SLACK: g0 = ε (detachment), g1 = −(1 + c ε').
-    Rates use f = rhs(t, y). Returns the number of event functions.
+    Rates use f = rhs(t, y): the rate of ε is its time derivative ω dyc/dθ − y', that
+    of the force's ε' (p.vcam dyc/dθ − y') is p.vcam ω d²yc/dθ² − y''. Returns the
+    number of event functions.
     """
     yc, dyc, d2yc = cam(p.omega * t, mode[0])
     eps = yc - y[0]
-    deps = p.omega * dyc - y[1]
-    d2eps = p.omega * p.omega * d2yc - f[1]
+    rate = p.omega * dyc - y[1]
     if mode[1] == FREE:
         g[0] = -eps
-        dg[0] = -deps
+        dg[0] = -rate
         return 1
     g[0] = eps
-    dg[0] = deps
+    dg[0] = rate
     if not p.clamp:
         return 1
+    deps = p.vcam * dyc - y[1]
+    d2eps = p.vcam * p.omega * d2yc - f[1]
     sign = 1.0 if mode[1] == PUSH else -1.0
     g[1] = sign * (1.0 + p.c * deps)
     dg[1] = sign * p.c * d2eps
@@ -201,12 +254,23 @@ def events(t, y, f, p, mode, g, dg):
 
 @hot
 def mode_after_event(contact, which):
-    """Contact mode after event ``which`` of mode ``contact`` fired."""
+    """Contact mode after event ``which`` of mode ``contact`` fired (an impact: see
+    ``impact_mode``, which the kernel uses)."""
     if contact == FREE:
-        return PUSH  # impact: ε' ≥ 0 there, so 1 + c ε' > 0
+        return PUSH  # impact: ε' ≥ 0 there, so 1 + c ε' > 0 (with the chain rule)
     if which == 0:
         return FREE  # detachment
     return SLACK if contact == PUSH else PUSH
+
+
+@hot
+def impact_mode(deps, p):
+    """Contact mode at an impact where the force law's ε' is ``deps`` (``gap``). ε rises
+    there, so with the chain rule ε' ≥ 0 and the follower pushes; the literal cam
+    velocity's ε' can be below −1/c, and the clamp then holds Pn = 0 from the impact on."""
+    if p.clamp and 1.0 + p.c * deps <= 0.0:
+        return SLACK
+    return PUSH
 
 
 @hot
@@ -217,19 +281,20 @@ def is_detachment(contact, which):
 
 @hot
 def contact_kinematics(t, y, f, p, mode):
-    """ε, ε', Pn and dPn/dt at a state with field value f, in the current mode.
+    """ε, dε/dt, Pn and dPn/dt at a state with field value f, in the current mode.
 
     Pn is the force of the mode's own field (zero unless pushing), so its rate
     is continuous inside a step.
     """
     yc, dyc, d2yc = cam(p.omega * t, mode[0])
     eps = yc - y[0]
-    deps = p.omega * dyc - y[1]
+    rate = p.omega * dyc - y[1]
     if mode[1] != PUSH or eps <= 0.0:
-        return eps, deps, 0.0, 0.0
-    d2eps = p.omega * p.omega * d2yc - f[1]
+        return eps, rate, 0.0, 0.0
+    deps = p.vcam * dyc - y[1]  # the force law's ε'
+    d2eps = p.vcam * p.omega * d2yc - f[1]
     s = math.sqrt(eps)
     bracket = 1.0 + p.c * deps
     pn = p.k * eps * s * bracket
-    dpn = p.k * (1.5 * s * deps * bracket + eps * s * p.c * d2eps)
-    return eps, deps, pn, dpn
+    dpn = p.k * (1.5 * s * rate * bracket + eps * s * p.c * d2eps)
+    return eps, rate, pn, dpn

@@ -28,8 +28,10 @@ from .model import (
     contact_kinematics,
     contact_mode,
     gap,
+    impact_mode,
     is_detachment,
     mode_after_event,
+    released,
 )
 
 MAX_STUCK_EVENTS = 8  # zero-length events in a row before a cell is declared stuck
@@ -74,7 +76,7 @@ def record_sample(rec, t, y0, y1, p, mode):
     row[2] = y1
     row[3] = yc
     row[4] = eps
-    row[5] = contact_force(eps, p.omega * dyc - y1, p)
+    row[5] = contact_force(eps, p.vcam * dyc - y1, p)
     row[6] = mode[1]
     rec.count[0] = i + 1
 
@@ -153,9 +155,8 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                     record_step(rec, opt.method, w, t_prev, t, x, p, mode)
                 if want_stats:
                     e1, de1, pn1, dpn1 = contact_kinematics(t, x, f, p, mode)
-                    add_step_stats(
-                        row, t - t_prev, contact == FREE, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1
-                    )
+                    dc_time = released(contact, p)
+                    add_step_stats(row, t - t_prev, dc_time, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1)
                     e0, de0, pn0, dpn0 = e1, de1, pn1, dpn1
                     fresh = True
             elif which >= 0:
@@ -167,7 +168,11 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                     row[REV_DETACH] += 1.0
                 if recording:
                     record_event(rec, t, x, contact, which)
-                mode[1] = mode_after_event(contact, which)
+                if contact == FREE:
+                    _, deps = gap(t, x, p, mode[0])
+                    mode[1] = impact_mode(deps, p)
+                else:
+                    mode[1] = mode_after_event(contact, which)
                 model.rhs(t, x, p, mode, f)
                 w.counts[2] += 1
                 fresh = False

@@ -87,14 +87,18 @@ def dc_trend_speed(ev: Evidence) -> Verdict:
 
 
 def rest_region(ev: Evidence) -> Verdict:
+    """M6: n-0 at very small ω or small μkn. That n-0 cells lie at ω ≤ 1 is M1 again (every
+    plane rests at low speed), so the test is on the rest: the n-0 cells at ω > 1 must exist
+    and lie at μkn < 0.8 (≥ 90 % of them)."""
     pl = ev.plane("mu_kn")
     w, mu = pl.grid()
     a = pl.arrays
     rest = pl.periodic & (a["p"] == 0)
-    where = rest & ((w <= LOW_OMEGA) | (mu < 0.8))
-    share = where.sum() / max(rest.sum(), 1)
-    return Verdict(f"{rest.sum()} n-0 cells, {share:.0%} at ω ≤ 1 or μkn < 0.8",
-                   bool(rest.any() and share >= 0.9))  # fmt: skip
+    fast = rest & (w > LOW_OMEGA)
+    share = (fast & (mu < 0.8)).sum() / max(fast.sum(), 1)
+    text = (f"{rest.sum()} n-0 cells, {(rest & (w <= LOW_OMEGA)).sum()} of them at ω ≤ 1; "
+            f"{fast.sum()} at ω > 1, {share:.0%} of those at μkn < 0.8")  # fmt: skip
+    return Verdict(text, bool(fast.any() and share >= 0.9))
 
 
 def subharmonic_rest(ev: Evidence) -> Verdict:

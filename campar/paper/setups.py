@@ -11,9 +11,12 @@ leaves them open says what was chosen, and computes them:
   400 × 400 (size "full") or on a coarser grid (size "small"), through the
   sweep runner into a store (which resumes, so a second command reuses it);
 - lines: one continuation chain each (``campar.views.line``), ω from 6.0 down;
-- orbits of Fig. 6 and of the point claims: reached as the paper reaches them,
-  by continuation from ω = 6.0 (``continued_state``), then traced with
-  ``simulate_point`` from that state;
+- orbits of the point claims: reached by continuation along ω from 6.0
+  (``continued_state``), then traced with ``simulate_point`` from that state;
+- orbits of Fig. 6: reached along the paper's path, the (ω, μkn) plane's 2-D
+  continuation from its corner (6.0, 0.95) (``plane_path_job``: the plane's grid
+  spacing, ending exactly at the cell), traced from that state, together with every
+  attractor an attractor census (``campar.views.attractors``) finds at the cell;
 - ε(t) and Pn(t) (Figs. 3, 8, 9): ``simulate_point`` from rest, (y, y') = (0, 0)
   at θ = 0 (the paper's initial state; it does not say more).
 
@@ -68,6 +71,8 @@ FIG6_CLAIMS = (
     (3.208583, "QP"),
 )
 CLOUD_REVOLUTIONS = 1500  # σn points of a non-periodic orbit's Poincaré section
+FIG6_PLANE = "mu_kn"  # the plane whose 2-D continuation is the paper's path to Fig. 6
+FIG6_STARTS = 16  # starts of the attractor census at each Fig. 6 cell
 
 # Figs. 3, 8, 9: time series at three cam speeds. The paper names neither the three
 # preloads of Fig. 3 nor the stiffness and damping ratios of Fig. 8; these are chosen
@@ -94,7 +99,8 @@ def jobs_dir() -> Path:
 def plane_job(name: str, size: str = "full", tensile: str = LAW,
               jobs: Path | None = None) -> Job:  # fmt: skip
     """The job of a plane at a size: ``jobs/<name>.yaml``, its grid coarsened for "small",
-    its force law set to ``tensile``; named "<name>" or "<name>-allow", store unset."""
+    its force law set to ``tensile``, the ``lyapunov`` output added (the gallery draws it);
+    named "<name>" or "<name>-allow", store unset."""
     if name not in PLANES:
         raise JobError(f"unknown plane {name!r}; the paper's planes are {', '.join(PLANES)}")
     path = (jobs or jobs_dir()) / f"{name}.yaml"
@@ -104,6 +110,8 @@ def plane_job(name: str, size: str = "full", tensile: str = LAW,
         for axis in data["sweep"].values():
             axis["points"] = points
     data["model"]["tensile"] = tensile
+    if "lyapunov" not in data["outputs"]:  # the gallery's Lyapunov map (≈ 1.4× the cost)
+        data["outputs"] = [*data["outputs"], "lyapunov"]
     data["name"] = name if tensile == LAW else f"{name}-{tensile}"
     data["store"] = None
     return Job.from_dict(data, source=f"{path} at size {size}")
@@ -181,3 +189,98 @@ def steady_point(omega: float, tensile: str = LAW, **params):
     from ..views.point import simulate_point
 
     return simulate_point(omega, tensile=tensile, trace=True, **params)
+
+
+def plane_path_job(omega: float, second: float, tensile: str = LAW, plane: str = FIG6_PLANE) -> Job:
+    """The paper's path to one cell of a plane: the plane's job (its full grid's spacing,
+    ``chains: {start: continue, direction: down}``) cut to end exactly at (ω, second).
+
+    Its first column is the chain along the second axis at the plane's first ω from the
+    plane's starting corner; its last row, the chain along ω at ``second`` started from
+    that column's last state, ends at the cell: the state the 2-D continuation reaches.
+    """
+    base = plane_job(plane, "full", tensile)
+    data = base.to_dict()
+    name = base.second
+    for axis, target in (("omega", omega), (name, second)):
+        grid = data["sweep"][axis]
+        start, stop, points = grid["from"], grid["to"], grid["points"]
+        step = abs(stop - start) / (points - 1)
+        if not min(start, stop) <= target <= max(start, stop):
+            raise JobError(f"{axis} = {target:g} is outside the {plane} plane")
+        count = max(2, int(np.ceil(abs(target - start) / step - 1e-9)) + 1)
+        data["sweep"][axis] = {"from": start, "to": target, "points": count}
+    data["chains"] = {"start": "continue", "direction": "down"}
+    data["outputs"] = ["label", "dc", "eps"]
+    data["tiles"] = {"rows": 1}
+    data["name"] = f"path_{plane}_{omega:g}_{second:g}"
+    return Job.from_dict(data, source=f"the {plane} plane's path to ({omega:g}, {second:g})")
+
+
+def plane_path_state(job: Job) -> tuple[float, float]:
+    """(y, y') at θ = 0 after the last cell of ``plane_path_job``'s last row."""
+    from ..sweep.plan import Tile
+    from ..sweep.tile import run_tile
+
+    rows = job.shape[0]
+    cells = run_tile(job, Tile(0, rows - 1, rows))
+    y, v = cells["state"][0, -1]
+    return float(y), float(v)
+
+
+@dataclass(frozen=True)
+class Portrait:
+    """One attractor at a Fig. 6 cell, traced, with its σn cloud when not periodic."""
+
+    result: object  # PointResult with trace, multipliers, Lyapunov exponent
+    cloud: object  # (m, 2) σn points
+    fraction: float  # share of the census' starts that reached it (NaN: not in the census)
+    on_path: bool  # the attractor the paper's path (the plane's continuation) reaches
+
+
+@dataclass(frozen=True)
+class PathCell:
+    """A Fig. 6 cell: the path's job and state, and every attractor found there."""
+
+    omega: float
+    job: Job  # plane_path_job
+    state: tuple[float, float]  # where the path arrives
+    portraits: tuple[Portrait, ...]  # the path's attractor first
+    starts: int  # census starts
+    unsettled: int  # starts that settled on no attractor
+
+
+def path_cell(omega: float, second: float = FIG6_MU_KN, tensile: str = LAW,
+              starts: int | None = None, plane: str = FIG6_PLANE) -> PathCell:  # fmt: skip
+    """Reach (ω, second) along the plane's path, trace the attractor there, and run an
+    attractor census of ``starts`` (default FIG6_STARTS) starts: rest, the path's state,
+    Halton points."""
+    starts = FIG6_STARTS if starts is None else starts
+    from ..views.attractors import find_attractors
+    from ..views.point import simulate_point
+
+    job = plane_path_job(omega, second, tensile, plane)
+    state = plane_path_state(job)
+    params = {**{k: job.parameter(k) for k in ("f0", "mu_kn", "mu_cn", "zeta")
+                 if k != job.second}, job.second: second}  # fmt: skip
+
+    def traced(y, v):
+        result = simulate_point(omega, y0=y, v0=v, tensile=tensile, multipliers=True,
+                                lyapunov=True, trace=True, **params)  # fmt: skip
+        cloud = np.asarray(result.sections)
+        if result.kind != "periodic":
+            cloud = section_cloud(omega, (y, v), tensile=tensile, **params)
+        return result, cloud
+
+    census = find_attractors(omega, count=starts, given=[state], tensile=tensile, **params)
+    given = 1 if state != (0.0, 0.0) else 0  # spread_starts: rest, then the given state
+    on_path = int(census.basin[given])
+    path_result, path_cloud = traced(*state)
+    fraction = census.attractors[on_path].fraction if on_path >= 0 else float("nan")
+    portraits = [Portrait(path_result, path_cloud, fraction, True)]
+    for i, attractor in enumerate(census.attractors):
+        if i != on_path:
+            result, cloud = traced(*attractor.state)
+            portraits.append(Portrait(result, cloud, attractor.fraction, False))
+    return PathCell(omega, job, state, tuple(portraits), len(census.starts),
+                    len(census.unsettled))  # fmt: skip

@@ -43,8 +43,8 @@ def estimate(job: Job) -> Estimate:
         dtype, tail = array_spec(job, name)
         cell_bytes += dtype.itemsize * int(np.prod(tail, dtype=np.int64))
     n_second, n_omega = job.shape
-    cells = n_second * n_omega
-    n_tiles = -(-n_second // job.tiles.rows)
+    cells = n_second * n_omega * len(job.directions)
+    n_tiles = -(-n_second // job.tiles.rows) * len(job.directions)
     tile_bytes = min(job.tiles.rows, n_second) * n_omega * cell_bytes
     rank = BASE_MEMORY + TILE_COPIES * tile_bytes + BYTES_PER_TILE * n_tiles
     return Estimate(cells, cell_bytes, cells * cell_bytes + 16 * n_tiles, rank)
@@ -55,7 +55,9 @@ def check_budget(job: Job, *, max_store: int | None = None, max_memory: int | No
     max_store = DEFAULT_MAX_STORE if max_store is None else max_store
     max_memory = DEFAULT_MAX_MEMORY if max_memory is None else max_memory
     e = estimate(job)
-    grid = f"{job.shape[0]} {job.second} × {job.shape[1]} omega"
+    grid = f"{job.shape[0]} {job.second} × {job.shape[1]} omega" + (
+        " × 2 directions" if len(job.directions) > 1 else ""
+    )
     if e.store_bytes > max_store:
         raise JobError(
             f"job {job.name}: its store would hold up to {format_size(e.store_bytes)} "

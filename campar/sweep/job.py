@@ -26,6 +26,10 @@ PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 # fix. Points, lines, the CLI, the benchmarks and the paper's set-ups take them from here.
 PAPER_VALUES = {"f0": 0.5, "mu_kn": 0.8, "mu_cn": 0.8, "zeta": 0.2}
 
+# The sweep directions of a ``chains.direction: both`` job, in the order of the store's
+# ``direction`` dimension (its tiles: every row range down, then every one up).
+DIRECTIONS = ("down", "up")
+
 OUTPUT_NAMES = ("label", "dc", "eps", "pn", "sections", "multipliers", "lyapunov")
 DEFAULT_OUTPUTS = ("label", "dc", "eps", "pn")
 
@@ -101,9 +105,40 @@ class Axis(Settings):
         return np.linspace(self.start, self.stop, self.points)
 
 
+def cell_edges(centres) -> np.ndarray:
+    """Edges (n+1) of grid cells with the given centres (n), in the same order: midpoints
+    between neighbours, the outer edges half a spacing beyond the end centres (a single
+    cell: ±1 % of its value). How maps draw cells and where their boundaries lie."""
+    c = np.asarray(centres, float)
+    if c.size == 1:
+        half = 0.5 * max(abs(c[0]) * 0.02, 1e-6)
+        return np.array([c[0] - half, c[0] + half])
+    mid = 0.5 * (c[1:] + c[:-1])
+    return np.concatenate([[2 * c[0] - mid[0]], mid, [2 * c[-1] - mid[-1]]])
+
+
 class ModelSettings(Settings):
     tensile: Literal["clamp", "allow"] = "clamp"
     """clamp: Pn = max(0, …), contact cannot pull (default); allow: the paper's literal formula."""
+    duty_cycle: Literal["separation", "force"] = "separation"
+    """separation: DC is the time with ε < 0 (default); force: the time with Pn = 0, the
+    paper's other word for detachment (under the clamp it adds the time the follower is
+    ahead of the cam without force; under allow the two are the same)."""
+    cam_velocity: Literal["chain", "literal"] = "chain"
+    """chain: the force's ε' uses ẏc = ω dyc/dθ, the chain rule (default); literal: ẏc =
+    dyc/dθ, the paper's eq. 6 as printed (without the factor ω)."""
+
+    @property
+    def law(self) -> int:
+        """The kernel's ``law`` bits of these settings (campar.core.model.law_flags)."""
+        from ..core.model import law_flags  # here: numba only for those who compute
+
+        return law_flags(self.tensile, self.duty_cycle, self.cam_velocity)
+
+
+# Model options whose default leaves a job's hash as it was before the option existed,
+# so stores computed then stay valid (``job_digest``).
+MODEL_OPTION_DEFAULTS = {"duty_cycle": "separation", "cam_velocity": "chain"}
 
 
 class InitialState(Settings):
@@ -194,9 +229,12 @@ class ChainSettings(Settings):
     attractor found at the first cell of the previous chain, from the plane's starting
     corner on (the paper's 2-D continuation: the first column is one chain along the
     second axis, from ``initial`` at its first value)."""
-    direction: Literal["down", "up"] = "down"
-    """down: every chain runs ω decreasing (the paper's direction); up: increasing. The
-    store keeps the job's ω order either way."""
+    direction: Literal["down", "up", "both"] = "down"
+    """down: every chain runs ω decreasing (the paper's direction); up: increasing; both:
+    every chain both ways, each from the same start, the store's per-cell arrays gaining
+    a ``direction`` dimension (down, up). The store keeps the job's ω order either way.
+    A ``both`` job always stores ``sections`` (added to its outputs if not listed): the
+    two directions' cycles are compared by their section points (``hysteresis``)."""
 
 
 # Every default of a job, as the settings a job without that section gets: code that
@@ -288,6 +326,31 @@ class Job(Settings):
             outputs = ("label", *outputs)
         return tuple(dict.fromkeys(outputs))
 
+    @model_validator(mode="before")
+    @classmethod
+    def both_directions_store_sections(cls, data):
+        # The two directions' cycles are compared by their σn points (views.dataset):
+        # a ``both`` job stores them whether or not its outputs list them.
+        if not isinstance(data, dict) or not isinstance(data.get("chains"), dict):
+            return data
+        if data["chains"].get("direction") != "both":
+            return data
+        outputs = data.get("outputs", DEFAULT_OUTPUTS)
+        if isinstance(outputs, (list, tuple)) and "sections" not in outputs:
+            data = {**data, "outputs": (*outputs, "sections")}
+        return data
+
+    @model_validator(mode="after")
+    def whole_cycles_for_both(self):
+        sections, n_max = self.classify.sections, self.classify.n_max
+        if self.chains.direction == "both" and sections is not None and sections < n_max:
+            raise ValueError(
+                f"classify.sections: chains.direction both compares whole cycles of up to "
+                f"classify.n_max = {n_max} section points; sections must be ≥ n_max "
+                f"or unset, got {sections}"
+            )
+        return self
+
     @model_validator(mode="after")
     def sweep_and_fixed_disjoint(self):
         both = set(self.sweep) & set(self.fixed)
@@ -320,6 +383,19 @@ class Job(Settings):
         return self.fixed[name]
 
     @property
+    def directions(self) -> tuple[str, ...]:
+        """The sweep directions the job computes: ("down", "up") for ``both``, else one."""
+        return DIRECTIONS if self.chains.direction == "both" else (self.chains.direction,)
+
+    def one_direction(self, direction: str) -> "Job":
+        """This job with every chain run one way only: a ``both`` job's tiles of that
+        direction compute exactly what this job computes (same start rule, settings)."""
+        if direction not in DIRECTIONS:
+            raise ValueError(f"direction must be one of {', '.join(DIRECTIONS)}, got {direction!r}")
+        chains = self.chains.model_copy(update={"direction": direction})
+        return self.model_copy(update={"chains": chains})
+
+    @property
     def n_sections(self) -> int:
         return self.classify.sections or self.classify.n_max
 
@@ -349,6 +425,10 @@ def job_digest(data: dict) -> str:
     """``Job.digest`` of a normalised job as ``to_dict`` gives it, or as a store holds it
     (so a store can check its job against its hash without this campar's defaults)."""
     data = {key: value for key, value in data.items() if key != "store"}
+    if isinstance(data.get("model"), dict):
+        data["model"] = {key: value for key, value in data["model"].items()
+                         if key not in MODEL_OPTION_DEFAULTS
+                         or MODEL_OPTION_DEFAULTS[key] != value}  # fmt: skip
     text = json.dumps(data, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 

@@ -7,13 +7,23 @@ along the second axis, the plane's first column. A tile is ``tiles.rows``
 consecutive chains. Tiles are fixed by the job alone, so the numbers never
 depend on how many ranks ran it or where it was interrupted; a tile is the unit
 of work, of storage (one chunk) and of the ``done`` commit flag.
+
+A ``chains.direction: both`` job has every tile twice: tiles 0 … T−1 run their
+chains down, tiles T … 2T−1 the same rows up (``Tile.direction``), each exactly
+as the tile of a one-direction job (``Job.one_direction``) would. Its per-cell
+arrays carry a leading ``direction`` axis (``DIRECTIONS`` order) and a tile is
+one chunk of one layer of it (``Tile.region``). One tile plan, one ``done`` and
+one ``checksum`` per tile, so resume, verification, repair, ``campar status``
+and the MPI runner treat the two directions' tiles alike, with no new commit
+protocol; tiles of one-direction jobs have no direction and stores of them are
+laid out as before.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from .job import Job
+from .job import DIRECTIONS, Job
 
 
 @dataclass(frozen=True)
@@ -21,10 +31,21 @@ class Tile:
     index: int
     row_start: int  # first chain (index along the second axis)
     row_stop: int  # one past the last
+    direction: str | None = None  # of a ``both`` job's tile; None: the job's one direction
 
     @property
     def rows(self) -> slice:
         return slice(self.row_start, self.row_stop)
+
+    @property
+    def layer(self) -> int | None:
+        """Index of the tile's direction along the store's ``direction`` axis (None: none)."""
+        return None if self.direction is None else DIRECTIONS.index(self.direction)
+
+    @property
+    def region(self) -> tuple:
+        """The tile's part of a per-cell array of the store: (rows,) or (layer, rows)."""
+        return (self.rows,) if self.direction is None else (self.layer, self.rows)
 
     @property
     def n_rows(self) -> int:
@@ -32,11 +53,15 @@ class Tile:
 
 
 def plan_tiles(job: Job) -> list[Tile]:
-    """Every tile of the job, in index order; together they cover each cell once."""
+    """Every tile of the job, in index order; together they cover each cell once (each
+    cell of each direction, for a ``both`` job: every row range down, then up)."""
     n_rows, _ = job.shape
     size = job.tiles.rows
+    ranges = [(start, min(start + size, n_rows)) for start in range(0, n_rows, size)]
+    layers = DIRECTIONS if job.chains.direction == "both" else (None,)
     return [
-        Tile(i, start, min(start + size, n_rows)) for i, start in enumerate(range(0, n_rows, size))
+        Tile(i, start, stop, direction)
+        for i, (direction, (start, stop)) in enumerate((d, r) for d in layers for r in ranges)
     ]
 
 
@@ -50,7 +75,10 @@ def pending_tiles(job: Job, done: np.ndarray) -> list[Tile]:
 
 def chain_order(job: Job) -> np.ndarray:
     """Indices into the job's ω axis in the order every chain runs (``chains.direction``):
-    down, ω decreasing, or up, increasing; equal values keep the axis order."""
+    down, ω decreasing, or up, increasing; equal values keep the axis order. A ``both``
+    job has two: ask its ``one_direction`` jobs."""
+    if job.chains.direction not in DIRECTIONS:
+        raise ValueError(f"chains.direction {job.chains.direction}: take one_direction first")
     omega = job.omega
     return np.argsort(-omega if job.chains.direction == "down" else omega, kind="stable")
 

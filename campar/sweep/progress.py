@@ -161,7 +161,7 @@ def summarize(reader) -> dict:
     cells_run = sum(r.get("cells", 0) for r in runs)
     return {
         "tiles": (int(report.verified.sum()), report.tiles),
-        "cells": (tally.cells, job.shape[0] * job.shape[1]),
+        "cells": (tally.cells, job.shape[0] * job.shape[1] * len(job.directions)),
         "failed": {status_message(int(s)): c for s, c in sorted(tally.failed.items())},
         "kinds": {_kind_name(k): c for k, c in sorted(tally.kinds.items())},
         "labels": dict(tally.labels.most_common()),
@@ -182,7 +182,8 @@ def describe(reader, max_labels: int = 12) -> str:
     failed = sum(s["failed"].values())
     lines = [
         f"store   {reader.path}  (job {job.name}, hash {reader.attrs.get('job_hash')})",
-        f"grid    {job.shape[0]} {job.second} × {job.shape[1]} omega, {job.tiles.rows} rows a tile",
+        f"grid    {job.shape[0]} {job.second} × {job.shape[1]} omega, {job.tiles.rows} rows a tile"
+        + (", each chain down and up" if len(job.directions) > 1 else ""),
         f"tiles   {s['tiles'][0]}/{s['tiles'][1]} done" + _damage(s["damaged"]),
         f"cells   {s['cells'][0]}/{s['cells'][1]} done, {failed} failed (status ≠ 0)",
     ]

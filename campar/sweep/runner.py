@@ -58,7 +58,7 @@ from .job import Job
 from .plan import Tile, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
 from .signals import Signals, early_interruption
-from .store import cell_arrays, open_store
+from .store import cell_arrays, open_store, tile_shape
 from .tile import run_tile
 
 log = logging.getLogger("campar.run")
@@ -146,7 +146,7 @@ class ThreadLane:
 
 def tile_layout(job: Job, tile: Tile) -> list[tuple[str, np.dtype, tuple[int, ...]]]:
     """(name, dtype, shape) of each array of a tile, in ``array_names`` order."""
-    return [(a.name, a.dtype, (tile.n_rows, *a.shape[1:])) for a in cell_arrays(job)]
+    return [(a.name, a.dtype, tile_shape(a, tile)) for a in cell_arrays(job)]
 
 
 def pack(header: list[int], arrays: list[np.ndarray]) -> np.ndarray:
@@ -529,7 +529,8 @@ def run_master(job, store, signals, comm, grace) -> RunSummary:
     all_tiles = plan_tiles(job)
     n_rows, n_omega = job.shape
     done_cells = sum(t.n_rows for t in all_tiles if store.done[t.index]) * n_omega
-    progress = Progress(len(all_tiles), n_rows * n_omega, len(all_tiles) - len(tiles), done_cells)
+    total_cells = n_rows * n_omega * len(job.directions)
+    progress = Progress(len(all_tiles), total_cells, len(all_tiles) - len(tiles), done_cells)
     master = Master(job, store, tiles, progress, grace, comm)
     if not tiles:
         log.info("%s: all %d tiles are done already", store.path, len(all_tiles))

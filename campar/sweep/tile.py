@@ -115,8 +115,13 @@ def allocate_outputs(n_cells: int, bits: int, n_sections: int) -> CellOutputs:
 
 def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     """Compute every chain of a tile; arrays shaped (tile rows, ω points, …) in the job's
-    ω order, whichever way the chains ran."""
+    ω order, whichever way the chains ran. A ``both`` job's tile is computed as its
+    direction's one-direction job computes it (same starts, settings and outputs)."""
     ensure_fresh_cache()
+    if tile.direction is not None:
+        job = job.one_direction(tile.direction)
+    elif job.chains.direction == "both":
+        raise ValueError(f"tile {tile.index} of a both-direction job names no direction")
     _, n_omega = job.shape
     names = array_names(job)
     result = {}
@@ -127,13 +132,13 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     settings = cell_settings(job)
     starts = chain_starts(job)
     order = chain_order(job)
-    clamp = job.model.tensile == "clamp"
+    law = job.model.law  # force law and its options, as the kernel's LAW_* bits
     for r, row in enumerate(range(tile.row_start, tile.row_stop)):
         par = chain_parameters(job, row)
         out = allocate_outputs(n_omega, settings.output_bits, job.n_sections)
         run_chain(
             par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-            clamp, starts[row], solver, settings, out,
+            law, starts[row], solver, settings, out,
         )  # fmt: skip
         for name in names:
             result[name][r][order] = getattr(out, name)
@@ -163,7 +168,7 @@ def chain_starts(job: Job) -> np.ndarray:
         out = allocate_outputs(n_rows, 0, job.n_sections)
         run_chain(
             par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-            job.model.tensile == "clamp", x_init, solver_options(job), settings, out,
+            job.model.law, x_init, solver_options(job), settings, out,
         )  # fmt: skip
         ok = np.all(np.isfinite(out.state), axis=1)[:, None]
         _FIRST_COLUMN_STARTS[key] = np.where(ok, out.state, x_init)

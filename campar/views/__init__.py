@@ -7,6 +7,8 @@
 - ``line``: single-parameter bifurcation lines along ω by continuation (``campar line``);
 - ``transitions``: ``find_transitions`` — each boundary between labels of a line typed
   (PD, SN, NS, G, chaos, jump) from its multipliers and extrema of ε;
+- ``boundaries``: ``store_boundaries`` — the same typing for every edge between labels of
+  a map, along both axes (``campar plot --bifurcations``);
 - ``dataset``: ``open`` — a result store as a labelled, CF-annotated xarray
   Dataset, either backend, with the n-p labels as strings (``campar.open``);
 - ``output``: output files checked before anything is computed (``figure_file``);

@@ -33,6 +33,8 @@ import numpy as np
 
 from ..core.codes import KIND_NAMES, Kind
 from ..sweep.job import DEFAULT_CLASSIFY, DEFAULT_TRANSIENT
+from .cycles import match_tolerance as cycle_match_tolerance
+from .cycles import same_cycles
 from .point import PointResult, simulate_point
 
 DEFAULT_STARTS = 16
@@ -43,9 +45,6 @@ DEFAULT_STARTS = 16
 BOX_Y = (-1.0, 2.0)
 CAM_PEAK_SPEED = 1.5  # max dyc/dθ of the cosine-acceleration law, stroke 1
 HALTON_BASES = (2, 3)
-# Cycles match within this many times the distance of two records of one cycle (see
-# match_tolerance), for the step-history spread that a multiplier near 1 amplifies.
-MATCH_FACTOR = 5.0
 CLOUD_POINTS = DEFAULT_CLASSIFY.window_revolutions  # σn points kept of a non-periodic start
 # Chaos is called only at the end of the budget: the kernel's early verdict (after
 # transient.chaos_after revolutions) also takes transient chaos for an attractor, e.g. at
@@ -151,29 +150,18 @@ def match_tolerance(
     window_tol: float = DEFAULT_TRANSIENT.window_tol,
     period_tol: float = DEFAULT_CLASSIFY.period_tol,
 ) -> float:
-    """∞-norm distance within which σn points of two converged cycles are one point.
-
-    A cell has converged when the Newton estimate z of its cycle lies within
-    transient.conv_tol (1e-8) of the last section point and within window_tol (1e-6)
-    of the one n revolutions earlier (campar.core.analysis); the stored σn points lie
-    between, so each is within about window_tol of the cycle, and the kernel itself
-    calls points within classify.period_tol (1e-6) one point of σn. Two records of one
-    cycle thus differ by up to about 2·window_tol; MATCH_FACTOR covers the spread of
-    the computed cycle with the integrator's step history (rtol-level, amplified by
-    1/(1 − λ) for a multiplier λ near 1). Measured: ≤ 1.4e-7 over 2447 starts of 80
-    cells; distinct coexisting cycles of one period lay ≥ 1.6 apart.
-    """
-    return MATCH_FACTOR * max(2.0 * window_tol, period_tol)
+    """∞-norm distance within which σn points of two converged cycles are one point
+    (``cycles.match_tolerance``, the rule of a map's hysteresis too)."""
+    return cycle_match_tolerance(window_tol, period_tol)
 
 
 def same_cycle(a: np.ndarray, b: np.ndarray, tol: float) -> bool:
-    """True when the cycles with σn points a and b (each (n, 2), in time order) are one:
-    as many points, equal within tol (∞-norm) after some cyclic shift of b."""
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    if a.shape != b.shape or a.size == 0:
+    """True when the cycles with σn points a and b (each (n, 2), in time order) are one
+    orbit: equal within tol (∞-norm) after some cyclic shift (``cycles.same_cycles``)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if a.size == 0 or b.size == 0:
         return False
-    return any(np.abs(a - np.roll(b, s, axis=0)).max() <= tol for s in range(len(b)))
+    return bool(same_cycles([len(a)], a[None], [len(b)], b[None], tol)[0])
 
 
 def clouds_overlap(a: np.ndarray, b: np.ndarray, factor: float = CLOUD_FACTOR) -> bool:

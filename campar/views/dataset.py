@@ -15,6 +15,16 @@ h5netcdf engine for HDF5) and both backends give the same Dataset, with:
 - text as numpy ``str`` arrays and flag attributes as arrays of their
   variable's type, whichever backend.
 
+A ``chains.direction: both`` store has a ``direction`` dimension (down, up) on
+every per-cell array and ``label``, and one more variable, ``hysteresis``
+(second, omega): True where the two directions end on different converged
+cycles (``hysteresis_cells``). It is derived here, when the store is opened,
+not stored: it is a function of stored arrays alone (the two directions'
+``kind``, ``status``, ``n`` and ``sections``), so it needs no commit or checksum
+of its own, is never stale after a repaired tile, and the raw ``xr.open_zarr``
+or ``xr.open_dataset`` of the store holds everything it is computed from
+(``hysteresis(ds)`` computes it on such a Dataset).
+
 A store of format 1 (before the CF metadata) is read through ``read_store``
 and given the current format's variables and attributes, built from its job:
 its numbers are laid out alike. The Dataset reads lazily; close it (or use
@@ -30,6 +40,7 @@ from ..core.codes import KIND_LABELS, cell_label
 from ..errors import StoreDamaged
 from ..sweep.plan import plan_tiles
 from ..sweep.store import FORMAT, backend_name, read_store, store_arrays, upgraded_attrs
+from .cycles import hysteresis_cells, match_tolerance
 
 NOT_COMPUTED = -1  # the integer arrays' fill value
 TYPED_ATTRS = ("_FillValue", "flag_values", "flag_masks")  # CF: the variable's own type
@@ -46,7 +57,7 @@ def open(path: str | Path) -> xr.Dataset:
     ds = _normalise(ds)
     c = job.classify.chatter_p
     ds["label"] = (
-        (job.second, "omega"),
+        ds["kind"].dims,
         cell_labels(ds["kind"].values, ds["n"].values, ds["p"].values, c),
         {
             "long_name": "n-p label",
@@ -55,6 +66,8 @@ def open(path: str | Path) -> xr.Dataset:
             "empty where not computed",
         },
     )
+    if "direction" in ds.dims:
+        ds["hysteresis"] = hysteresis(ds, job)
     return ds
 
 
@@ -95,9 +108,8 @@ def _open_current(path: Path, reader) -> xr.Dataset:
         ds.load()
         tiles, sums = plan_tiles(reader.job), reader.tile_checksums()[0]
         for index, arrays in reader.journaled.items():
-            rows = {reader.job.second: tiles[index].rows}
             for name, values in arrays.items():
-                ds[name][rows] = values
+                ds[name][tiles[index].region] = values  # positional: ([layer,] rows)
             ds["checksum"][index] = sums[index]
             ds["done"][index] = 1
     return ds
@@ -135,4 +147,59 @@ def _normalise(ds: xr.Dataset) -> xr.Dataset:
     text = [name for name, var in ds.variables.items() if var.dtype.kind in "OT"]
     return ds.assign_coords(
         {name: ds[name].copy(data=np.array(ds[name].values.tolist(), str)) for name in text}
+    )
+
+
+# -- hysteresis: the two sweep directions on different attractors ----------------------
+
+BLOCK_ROWS = 64  # chains compared at once: ~26 MB of σn points for 400 ω values
+
+
+def cycle_tolerance(job) -> float:
+    """``cycles.match_tolerance`` with a job's settings (1e-5 with the defaults)."""
+    return match_tolerance(job.transient.window_tol, job.classify.period_tol, job.integrator.rtol)
+
+
+def hysteresis(ds: xr.Dataset, job=None) -> xr.DataArray:
+    """The ``hysteresis`` variable of a ``both`` store's Dataset (``campar.open``'s, or
+    the raw ``xr.open_zarr``/``xr.open_dataset`` one: then ``job`` is read from its
+    attributes). Computed BLOCK_ROWS chains at a time: memory does not grow with the map."""
+    if job is None:
+        import json
+
+        from ..sweep.job import Job
+
+        job = Job.from_dict(json.loads(ds.attrs["job"]), source="job of the Dataset")
+    if "direction" not in ds.dims:
+        raise ValueError("hysteresis needs a store of a chains.direction: both job")
+    tol = cycle_tolerance(job)
+    second = job.second
+    out = np.zeros((ds.sizes[second], ds.sizes["omega"]), bool)
+    block = job.tiles.rows * max(1, BLOCK_ROWS // job.tiles.rows)  # whole chunks at a time
+    for start in range(0, out.shape[0], block):
+        rows = slice(start, start + block)
+        sides = [
+            {
+                name: _integers(ds[name].isel({"direction": layer, second: rows}).values)
+                if name != "sections"
+                else ds[name].isel({"direction": layer, second: rows}).values
+                for name in ("kind", "status", "n", "sections")
+            }
+            for layer in (0, 1)
+        ]
+        out[rows] = hysteresis_cells(*sides, tol)
+    return xr.DataArray(
+        out,
+        dims=(second, "omega"),
+        coords={second: ds[second], "omega": ds["omega"]},
+        attrs={
+            "long_name": "hysteresis: the two sweep directions end on different cycles",
+            "comment": "True where both directions (down, up) converged to periodic motions "
+            "(kind periodic, status ok) whose stroboscopic section points differ: not "
+            f"equal within {tol:.3g} (infinity norm) after any cyclic shift, cycles of "
+            "different n compared over their common multiple of revolutions; False "
+            "elsewhere, also where either direction is not periodic, not converged, "
+            "failed or not computed (never NaN)",
+            "tolerance": tol,
+        },
     )

@@ -119,6 +119,8 @@ def point_job(
     *,
     omega: float,
     tensile: str = DEFAULT_MODEL.tensile,
+    duty_cycle: str = DEFAULT_MODEL.duty_cycle,
+    cam_velocity: str = DEFAULT_MODEL.cam_velocity,
     y0: float = DEFAULT_INITIAL.y,
     v0: float = DEFAULT_INITIAL.v,
     transient: str = DEFAULT_TRANSIENT.mode,
@@ -134,7 +136,8 @@ def point_job(
     """A one-cell job (validated like any job) from (y0, v0) at θ = 0.
 
     ``parameters``: f0, mu_kn, mu_cn, zeta; those not given take the paper's base values.
-    Every setting defaults to the job model's (``campar.sweep.job``): the force law, the
+    Every setting defaults to the job model's (``campar.sweep.job``): the force law and
+    its options (``duty_cycle``: separation or force; ``cam_velocity``: chain or literal), the
     transient (``revolutions`` is its budget when converged, its length when fixed;
     ``chaos_after`` the earliest chaotic verdict, 0: only at the budget), the integrator
     and the σn points kept of a non-periodic cell (``sections``, None: n_max).
@@ -154,7 +157,7 @@ def point_job(
             "f0": {"from": f0, "to": f0, "points": 1},
         },
         "fixed": values,
-        "model": {"tensile": tensile},
+        "model": {"tensile": tensile, "duty_cycle": duty_cycle, "cam_velocity": cam_velocity},
         "initial": {"y": y0, "v": v0},
         "integrator": {"method": method, "rtol": rtol, "atol": atol},
         "transient": {
@@ -170,9 +173,12 @@ def point_job(
 
 
 def point_parameters(job: Job) -> dict:
-    """The model parameters of a one-cell job (ω first, as PARAMETERS) and its force law."""
+    """The model parameters of a one-cell job (ω first, as PARAMETERS), its force law and the
+    law's options (duty_cycle, cam_velocity)."""
     values = {"omega": float(job.omega[0]), job.second: float(job.second_values[0]), **job.fixed}
-    return {**{name: values[name] for name in PARAMETERS}, "tensile": job.model.tensile}
+    model = job.model
+    return {**{name: values[name] for name in PARAMETERS}, "tensile": model.tensile,
+            "duty_cycle": model.duty_cycle, "cam_velocity": model.cam_velocity}  # fmt: skip
 
 
 def simulate_point(
@@ -185,11 +191,12 @@ def simulate_point(
 ) -> PointResult:
     """Simulate one cell from (y0, v0) at θ = 0 and classify its steady motion.
 
-    ``settings`` are the keywords of ``point_job`` (f0, mu_kn, mu_cn, zeta, tensile, y0,
-    v0, transient, revolutions, chaos_after, rtol, atol, method, sections), each defaulting to the
-    paper's base value or the job model's default. With ``trace``, the steady orbit (its
-    period, or up to 64 revolutions when not periodic) is integrated once more from the
-    final state and recorded. Raises JobError for a parameter unknown or out of range.
+    ``settings`` are the keywords of ``point_job`` (f0, mu_kn, mu_cn, zeta, tensile,
+    duty_cycle, cam_velocity, y0, v0, transient, revolutions, chaos_after, rtol, atol,
+    method, sections), each defaulting to the paper's base value or the job model's
+    default. With ``trace``, the steady orbit (its period, or up to 64 revolutions when
+    not periodic) is integrated once more from the final state and recorded. Raises
+    JobError for a parameter unknown or out of range.
     """
     outputs = [*POINT_OUTPUTS]
     if multipliers:
@@ -249,7 +256,7 @@ def trace_steady(job: Job, parameters: dict, state, revolutions: int,
     rec = make_trace(max_samples, 64 * revolutions + 64, SAMPLES_PER_STEP)
     status, _, _ = trace_orbit(
         par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-        par["tensile"] == "clamp", np.array(state, dtype=float), solver_options(job),
+        job.model.law, np.array(state, dtype=float), solver_options(job),
         cell_settings(job), revolutions, rec,
     )  # fmt: skip
     if status != 0:

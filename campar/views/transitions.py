@@ -31,6 +31,11 @@ linear approach (PD, NS, grazing) and at most 1/(√2 − 1) ≈ 2.41 for the sq
 approach of a fold, hence STEPS. Only stable cycles are observed (a line follows
 attractors), so the evidence is always on the side the attractor comes from.
 
+``campar.views.boundaries`` applies ``classify_boundary`` to every edge of a map, along ω
+and along the second parameter (a ``Side`` then also carries its second parameter, its
+stored Lyapunov exponent, and whether its graze distance is only the bound that the
+stored extrema of ε give).
+
 A multiplier → +1 on a cycle of period 2m whose σn points pair up towards the
 boundary (or beside a period-m cycle) is also what the period-doubled daughter of
 a period-m cycle shows; without a multiplier → −1 on the other side that boundary is
@@ -88,6 +93,19 @@ class Side:
     # cycle merges into one of half its period), at the last cell and the next one away
     half_gap: float | None = None
     half_gap_farther: float | None = None
+    # on a map (campar.views.boundaries): the cell's second parameter (name, value)
+    second: tuple[str, float] | None = None
+    lyapunov: float | None = None  # largest Lyapunov exponent, if stored
+    # True when graze is only an upper bound of the graze distance (a map's stored
+    # global extrema of ε, not every extremum of a traced orbit): no grazing is excluded
+    graze_bound: bool = False
+
+    @property
+    def where(self) -> str:
+        """The cell's position in text: "ω 2.38" or "ω 2.38, mu_cn 0.8"."""
+        if self.second is None:
+            return f"ω {self.omega:.6g}"
+        return f"ω {self.omega:.6g}, {self.second[0]} {self.second[1]:.6g}"
 
     @property
     def halving(self) -> bool:
@@ -106,6 +124,8 @@ class Side:
             "multipliers_farther": pairs(self.farther), "graze": finite(self.graze),
             "graze_farther": finite(self.graze_farther), "half_gap": finite(self.half_gap),
             "half_gap_farther": finite(self.half_gap_farther),
+            **({} if self.second is None else {self.second[0]: self.second[1]}),
+            **({} if self.lyapunov is None else {"lyapunov": finite(self.lyapunov)}),
         }  # fmt: skip
 
 
@@ -129,7 +149,7 @@ class Approach:
         shown = f"{value.real:+.4f}{value.imag:+.4f}j" if isinstance(value, complex) \
             else f"{value:.3g}"  # fmt: skip
         rate = "" if self.steps is None else f", {self.steps:.2f} spacings away at its rate"
-        return (f"{side.label} at ω {side.omega:.6g}: {CRITICAL[self.critical][0]} "
+        return (f"{side.label} at {side.where}: {CRITICAL[self.critical][0]} "
                 f"({shown}, distance {self.distance:.3g}{rate})")  # fmt: skip
 
     def to_dict(self) -> dict:
@@ -233,30 +253,43 @@ def first_approach(sides: dict[str, Side], criticals) -> Approach | None:
     return None
 
 
-def classify_boundary(before: Side, after: Side) -> tuple[str, str, Approach | None]:
-    """(type, reason, evidence) of the boundary between two sides (module docstring).
+def classify_boundary(before: Side, after: Side, direction: str = "ω decreasing"
+                      ) -> tuple[str, str, Approach | None]:  # fmt: skip
+    """(type, reason, evidence) of the boundary between two sides (module docstring);
+    ``direction`` says which way "before" → "after" goes, for the text.
 
-    Precedence: a side without attractor (unknown), chaos on one side, the multiplier
-    approaches PD, NS, SN in this order, grazing, jump; anything else is unknown.
+    Precedence: a side without attractor (unknown), chaos on one side (unknown if its
+    stored Lyapunov exponent is not > 0), the multiplier approaches PD, NS, SN in this
+    order, grazing, jump; anything else is unknown.
     """
     sides = {"before": before, "after": after}
     for side in (before, after):
         if side.kind in UNSETTLED_NAMES:
-            return "unknown", f"{side.label} at ω {side.omega:.6g}: no attractor there", None
+            return "unknown", f"{side.label} at {side.where}: no attractor there", None
     local = first_approach(sides, ("-1", "circle", "+1"))
     if (before.kind == CHAOTIC_NAME) != (after.kind == CHAOTIC_NAME):
+        chaotic = before if before.kind == CHAOTIC_NAME else after
+        if chaotic.lyapunov is not None and not chaotic.lyapunov > 0.0:
+            return "unknown", (f"chaos at {chaotic.where} with a largest Lyapunov exponent "
+                               f"{chaotic.lyapunov:.3g} ≤ 0 stored"), None  # fmt: skip
         begins = "ends" if before.kind == CHAOTIC_NAME else "begins"
+        exponent = "" if chaotic.lyapunov is None else f", λ1 {chaotic.lyapunov:.3g}"
         route = f"; route {local.type}: {local.describe(sides[local.side])}" if local else ""
-        return "chaos", f"chaos {begins} (ω decreasing){route}", local
+        return "chaos", f"chaos {begins} ({direction}{exponent}){route}", local
     if local is not None:
         side = sides[local.side]
         other = after if side is before else before
         doubled = other.kind == PERIODIC_NAME and side.n == 2 * other.n
-        if local.critical == "+1" and (doubled or side.halving):
+        # an even cycle whose σn points were not kept (a map without sections) may be
+        # pairing up unseen
+        unseen = side.n % 2 == 0 and side.half_gap is None
+        if local.critical == "+1" and (doubled or side.halving or unseen):
             parent = other.label if doubled else f"a period-{side.n // 2} cycle"
-            return "unknown", (f"{local.describe(side)}, its points pairing up: the "
-                               f"period-doubled daughter of {parent}, or a fold; no multiplier "
-                               "→ −1 on the other side"), local  # fmt: skip
+            pairing = "its points pairing up" if doubled or side.halving else \
+                "its σn points not stored (pairing unseen)"  # fmt: skip
+            return "unknown", (f"{local.describe(side)}, {pairing}: the period-doubled "
+                               f"daughter of {parent}, or a fold; no multiplier → −1 on the "
+                               "other side"), local  # fmt: skip
         return local.type, local.describe(side), local
     if before.kind != PERIODIC_NAME or after.kind != PERIODIC_NAME:
         return "unknown", (f"{before.label} → {after.label}: no multiplier approaches its "
@@ -265,6 +298,11 @@ def classify_boundary(before: Side, after: Side) -> tuple[str, str, Approach | N
         graze = first_approach(sides, ("graze",))
         if graze is not None:
             return "G", graze.describe(sides[graze.side]), graze
+        if before.graze_bound or after.graze_bound:  # only the global extrema were seen
+            reason = (f"{before.label} → {after.label}: detachments per revolution change, "
+                      "no stored extremum of ε approaches 0; a grazing at another extremum "
+                      "is not excluded (trace the orbits)")  # fmt: skip
+            return "unknown", reason, None
     if before.multipliers is None or after.multipliers is None:
         return "unknown", "multipliers not computed on both sides", None
     radius = max(abs(m) for s in (before, after) for m in s.multipliers)

@@ -52,6 +52,7 @@ from ._schema import (
     fill_value,
     job_differences,
     store_arrays,
+    tile_shape,
     upgraded_attrs,
 )
 
@@ -70,6 +71,7 @@ __all__ = [
     "read_store",
     "store_arrays",
     "tile_checksum",
+    "tile_shape",
     "upgraded_attrs",
     "verify_store",
 ]

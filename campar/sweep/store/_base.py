@@ -104,15 +104,26 @@ class StoreReader(ABC):
         return self._tile_values("checksum")
 
     def read(self, name: str) -> np.ndarray:
-        """A per-cell array over (second, omega[, tail]); uncomputed cells hold the fill.
-        The whole array in memory: views of large stores read ``read_rows`` by tiles."""
+        """A per-cell array over ([direction,] second, omega[, tail]); uncomputed cells hold
+        the fill. The whole array in memory: views of large stores read ``read_tile``."""
         self._known(name)
-        return self._read_rows(name, slice(None))
+        return self._read_rows(name, slice(None), None)
 
-    def read_rows(self, name: str, rows: slice) -> np.ndarray:
-        """A per-cell array over the chains ``rows``; raises on damaged bytes."""
+    def read_rows(self, name: str, rows: slice, layer: int | None = None) -> np.ndarray:
+        """A per-cell array over the chains ``rows`` (of direction ``layer`` of a ``both``
+        store; None: every direction); raises on damaged bytes."""
         self._known(name)
-        return self._read_rows(name, rows)
+        return self._read_rows(name, rows, layer)
+
+    def read_tile(self, name: str, tile: Tile) -> np.ndarray:
+        """A per-cell array's part in ``tile``, as ``run_tile`` returned it."""
+        return self.read_rows(name, tile.rows, tile.layer)
+
+    def selection(self, rows: slice, layer: int | None) -> tuple:
+        """Index of chains ``rows`` of direction ``layer`` (None: all) in a per-cell array."""
+        if self.job.chains.direction != "both":
+            return (rows,)
+        return (slice(None) if layer is None else layer, rows)
 
     def _known(self, name: str) -> None:
         if name not in self.names:
@@ -145,7 +156,7 @@ class StoreReader(ABC):
         be read}: ``tile_values`` does it for a backend."""
 
     @abstractmethod
-    def _read_rows(self, name: str, rows: slice) -> np.ndarray: ...
+    def _read_rows(self, name: str, rows: slice, layer: int | None) -> np.ndarray: ...
 
     @abstractmethod
     def _shapes(self) -> dict[str, tuple]: ...

@@ -41,6 +41,17 @@ FORCE_LAWS = {
     "allow": "Hunt–Crossley Pn = k ε^1.5 (1 + c ε') for ε > 0, as printed in the paper",
 }
 
+DUTY_CYCLES = {
+    "separation": "duty cycle dc: fraction of the steady window's time with ε < 0 (separated)",
+    "force": "duty cycle dc: fraction of the steady window's time with Pn = 0 (separated, "
+    "or in contact with the force clamped to zero)",
+}
+CAM_VELOCITIES = {
+    "chain": "cam velocity in the force's ε': ẏc = ω dyc/dθ (chain rule)",
+    "literal": "cam velocity in the force's ε': ẏc = dyc/dθ, the paper's eq. 6 as printed "
+    "(without the factor ω; ε itself is yc(ω t) − y)",
+}
+
 
 def words(name: str) -> str:
     """A CF flag meaning: one word of letters, digits, '_', '-', '.', '+', '@'."""
@@ -102,6 +113,12 @@ def coordinate_attrs(job: Job, name: str) -> dict:
             "comment": f"tiles.rows = {job.tiles.rows} consecutive chains: a unit of work, "
             "of storage (one chunk of every array) and of commit (done)",
         },
+        "direction": {
+            "long_name": "sweep direction of the chains",
+            "comment": "down: every chain ran omega decreasing (the paper's direction); up: "
+            "omega increasing; each from the job's chain start (chain_start), the same way",
+        },
+        "tile_direction": {"long_name": "sweep direction of the tile's chains"},
         "tile_row_start": {"long_name": "first chain of the tile", "comment": rows},
         "tile_row_stop": {"long_name": "one past the last chain of the tile", "comment": rows},
     }[name]
@@ -142,6 +159,10 @@ def global_attrs(job: Job, created: str) -> dict:
         "cam, one degree of freedom, nonlinear (Hunt–Crossley) contact",
         "force_law": FORCE_LAWS[job.model.tensile],
         "tensile": job.model.tensile,
+        "duty_cycle": job.model.duty_cycle,
+        "duty_cycle_definition": DUTY_CYCLES[job.model.duty_cycle],
+        "cam_velocity": job.model.cam_velocity,
+        "cam_velocity_definition": CAM_VELOCITIES[job.model.cam_velocity],
         "chain_start": job.chains.start,
         "chain_start_state": f"y = {start.y:g}, ydot = {start.v:g} at θ = 0"
         + (

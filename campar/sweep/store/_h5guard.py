@@ -294,7 +294,7 @@ def _child(source: Path, into: Path | str | None) -> None:
                 try:
                     if int(f["done"][tile.index]) == 0:
                         continue
-                    arrays = {name: f[name][tile.rows] for name in names}
+                    arrays = {name: f[name][tile.region] for name in names}
                     stored = int(f["checksum"][tile.index])
                     why = (
                         None
@@ -305,7 +305,7 @@ def _child(source: Path, into: Path | str | None) -> None:
                     why, arrays = f"unreadable ({describe_exception(exc)})", None
                 if why is None and out is not None:
                     for name, values in arrays.items():
-                        out[name][tile.rows] = values
+                        out[name][tile.region] = values
                     out["checksum"][tile.index] = np.uint64(stored)
                     out["done"][tile.index] = 1
                 say(tile=tile.index, why=why)

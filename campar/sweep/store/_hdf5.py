@@ -251,9 +251,9 @@ def repair(path: Path, job: Job, report: Verification) -> None:
                 new.attrs[key] = value
             sums = old.tile_checksums()[0]
             for index in keep:
-                rows = old._tiles[index].rows
+                tile = old._tiles[index]
                 for name in old.names:
-                    new[name][rows] = old.read_rows(name, rows)
+                    new[name][tile.region] = old.read_tile(name, tile)
                 new["checksum"][index] = sums[index]
                 new["done"][index] = 1
     for index, entry in journal_entries(path).items():
@@ -304,7 +304,7 @@ def apply_journal(path: Path, job: Job, runs: list[dict] | None = None) -> list[
                 elif arrays is not None:
                     f["checksum"][index] = arrays.pop("checksum")
                     for name, values in arrays.items():
-                        f[name][tiles[index].rows] = values
+                        f[name][tiles[index].region] = values
                     applied.append(entry)
             for entry in applied:  # the flags last
                 f["done"][int(ENTRY.match(entry.name).group(1))] = 1
@@ -480,16 +480,17 @@ class Hdf5Reader(StoreReader):
             problems.pop(index, None)
         return values, problems
 
-    def _read_rows(self, name: str, rows: slice) -> np.ndarray:
-        data = self._file[name][rows]
+    def _read_rows(self, name: str, rows: slice, layer: int | None) -> np.ndarray:
+        data = self._file[name][self.selection(rows, layer)]
         first, stop, _ = rows.indices(self.job.shape[0])
         for index, arrays in self._journal.items():
             tile = self._tiles[index]
             lo, hi = max(tile.row_start, first), min(tile.row_stop, stop)
-            if lo < hi:
-                data[lo - first : hi - first] = arrays[name][
-                    lo - tile.row_start : hi - tile.row_start
-                ]
+            if lo >= hi or (layer is not None and tile.layer != layer):
+                continue
+            # of a both store read whole (layer None): the tile's own direction
+            into = data if layer is not None or tile.layer is None else data[tile.layer]
+            into[lo - first : hi - first] = arrays[name][lo - tile.row_start : hi - tile.row_start]
         return data
 
     def close(self) -> None:

@@ -128,14 +128,15 @@ def verify_store(reader, visit: Callable[[TileCheck], None] | None = None) -> Ve
 
 def _row_bytes(reader, name: str) -> int:
     shape, dtype = reader.array_shapes[name], reader.array_dtypes[name]
-    return int(np.prod(shape[1:], dtype=np.int64)) * dtype.itemsize
+    lead = 2 if reader.job.chains.direction == "both" else 1  # a row of one direction
+    return int(np.prod(shape[lead:], dtype=np.int64)) * dtype.itemsize
 
 
 def _batches(tiles: list[Tile], rows_per_batch: int) -> Iterator[list[Tile]]:
     """Runs of adjacent tiles of at most ``rows_per_batch`` rows (or one tile)."""
     batch: list[Tile] = []
     for tile in tiles:
-        adjacent = batch and batch[-1].row_stop == tile.row_start
+        adjacent = batch and batch[-1].row_stop == tile.row_start and batch[-1].layer == tile.layer
         if batch and (not adjacent or tile.row_stop - batch[0].row_start > rows_per_batch):
             yield batch
             batch = []
@@ -146,9 +147,9 @@ def _batches(tiles: list[Tile], rows_per_batch: int) -> Iterator[list[Tile]]:
 
 def _read_batch(reader, batch: list[Tile]):
     """(tile, arrays, problem) of each tile of a batch; tile by tile if the batch fails."""
-    rows = slice(batch[0].row_start, batch[-1].row_stop)
+    rows, layer = slice(batch[0].row_start, batch[-1].row_stop), batch[0].layer
     try:
-        whole = {name: reader.read_rows(name, rows) for name in reader.names}
+        whole = {name: reader.read_rows(name, rows, layer) for name in reader.names}
     except Exception:  # some chunk of the batch is damaged: find which tile's
         whole = None
     for tile in batch:
@@ -159,7 +160,7 @@ def _read_batch(reader, batch: list[Tile]):
         arrays, problem = {}, None
         for name in reader.names:
             try:
-                arrays[name] = reader.read_rows(name, tile.rows)
+                arrays[name] = reader.read_tile(name, tile)
             except Exception as exc:  # zarr, numcodecs and h5py raise many kinds
                 problem = f"{name} unreadable ({describe_exception(exc)})"
                 break

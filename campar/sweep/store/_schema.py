@@ -6,6 +6,13 @@ killed writer can only leave whole chunks behind. ``done`` has one element per
 tile and one chunk per element: the commit flag of a tile never shares a chunk
 with a neighbour's. Nor does its ``checksum`` (of the tile's arrays, ``_integrity``),
 which is written between the arrays and the flag.
+
+A ``chains.direction: both`` job's per-cell arrays lie over (direction, second,
+omega[, tail]), chunked one tile of one direction: a tile is still one chunk
+(``Tile.region``), its arrays as ``run_tile`` returns them have no direction
+axis (``tile_shape``), and coordinates ``direction`` (down, up) and
+``tile_direction`` label the new axis and the tiles. One-direction stores are
+laid out exactly as before (same format, no direction axis).
 """
 
 import json
@@ -19,7 +26,7 @@ import numpy as np
 from ... import __version__
 from ...errors import StoreError, StoreMismatch
 from ..arrays import COMPONENTS, PARTS, TAIL_DIMS, array_names, array_spec
-from ..job import Job, job_digest
+from ..job import DIRECTIONS, Job, job_digest
 from ..plan import Tile, plan_tiles
 from ._cf import cell_attrs, checksum_attrs, coordinate_attrs, done_attrs, global_attrs, history
 
@@ -66,32 +73,61 @@ def fill_value(dtype: np.dtype):
 
 
 def cell_arrays(job: Job) -> list[ArraySchema]:
-    """Per-cell arrays of a job, in ``arrays.array_names`` order."""
+    """Per-cell arrays of a job, in ``arrays.array_names`` order (a ``both`` job's with a
+    leading ``direction`` axis, chunked one direction at a time)."""
     n_second, n_omega = job.shape
+    both = job.chains.direction == "both"
+    lead, lead_chunks, lead_dims = (
+        ((len(DIRECTIONS),), (1,), ("direction",)) if both else ((), (), ())
+    )
     arrays = []
     for name in array_names(job):
         dtype, tail = array_spec(job, name)
         fill = fill_value(dtype)
         arrays.append(
             ArraySchema(
-                name, dtype, (n_second, n_omega, *tail), (job.tiles.rows, n_omega, *tail),
-                (job.second, "omega", *TAIL_DIMS.get(name, ())), fill,
+                name, dtype, (*lead, n_second, n_omega, *tail),
+                (*lead_chunks, job.tiles.rows, n_omega, *tail),
+                (*lead_dims, job.second, "omega", *TAIL_DIMS.get(name, ())), fill,
                 cell_attrs(job, name, dtype, fill),
             )
         )  # fmt: skip
     return arrays
 
 
+def tile_shape(array: ArraySchema, tile: Tile) -> tuple[int, ...]:
+    """Shape of a per-cell array's part in ``tile`` as ``run_tile`` returns it: (tile rows,
+    omega[, tail]), without a direction axis."""
+    lead = 1 if array.dims[0] == "direction" else 0
+    return (tile.n_rows, *array.shape[lead + 1 :])
+
+
+def chunk_coords(job: Job, tile: Tile, array: ArraySchema) -> tuple[int, ...]:
+    """Chunk grid coordinates of a per-cell array's chunk holding ``tile``."""
+    row_chunk = tile.row_start // job.tiles.rows
+    lead = () if tile.layer is None else (tile.layer,)
+    return (*lead, row_chunk) + (0,) * (len(array.shape) - len(lead) - 1)
+
+
 def done_array(job: Job) -> ArraySchema:
     """The commit flag per tile: int8 (netCDF has no bool), 0 pending, 1 committed."""
     n_tiles, dtype = len(plan_tiles(job)), np.dtype(np.int8)
-    return ArraySchema("done", dtype, (n_tiles,), (1,), ("tile",), 0, done_attrs(dtype))
+    attrs = _tile_coordinates(job, done_attrs(dtype))
+    return ArraySchema("done", dtype, (n_tiles,), (1,), ("tile",), 0, attrs)
 
 
 def checksum_array(job: Job) -> ArraySchema:
     """The checksum of each committed tile's arrays (``_integrity``): uint64, 0 none."""
     n_tiles, dtype = len(plan_tiles(job)), np.dtype(np.uint64)
-    return ArraySchema("checksum", dtype, (n_tiles,), (1,), ("tile",), 0, checksum_attrs(dtype))
+    attrs = _tile_coordinates(job, checksum_attrs(dtype))
+    return ArraySchema("checksum", dtype, (n_tiles,), (1,), ("tile",), 0, attrs)
+
+
+def _tile_coordinates(job: Job, attrs: dict) -> dict:
+    """A per-tile array's attributes, naming ``tile_direction`` too where there is one."""
+    if job.chains.direction == "both":
+        attrs = {**attrs, "coordinates": attrs["coordinates"] + " tile_direction"}
+    return attrs
 
 
 # Arrays with one element per tile, one chunk each, uncompressed: the commit of a tile.
@@ -113,12 +149,15 @@ def coordinate_arrays(job: Job) -> list[ArraySchema]:
         "section_point": np.arange(sizes.get("section_point", 0), dtype=np.int32),
         "multiplier": np.arange(sizes.get("multiplier", 0), dtype=np.int32),
         "part": np.array(PARTS),
+        "direction": np.array(DIRECTIONS),
         "tile": np.arange(len(tiles), dtype=np.int32),
     }
     values = {name: (v, (name,)) for name, v in labels.items() if name in sizes or name == "tile"}
     for end in ("start", "stop"):
         rows = np.array([getattr(t, f"row_{end}") for t in tiles], np.int32)
         values[f"tile_row_{end}"] = (rows, ("tile",))
+    if "direction" in sizes:
+        values["tile_direction"] = (np.array([t.direction for t in tiles]), ("tile",))
     for name in sorted(job.fixed):
         values[name] = (np.array(job.fixed[name], np.float64), ())
     arrays = []
@@ -219,7 +258,7 @@ def check_tile_arrays(job: Job, tile: Tile, arrays: dict[str, np.ndarray]) -> No
         extra = sorted(set(arrays) - set(expected))
         raise ValueError(f"tile {tile.index}: arrays missing {missing}, unexpected {extra}")
     for name, schema in expected.items():
-        shape = (tile.n_rows, *schema.shape[1:])
+        shape = tile_shape(schema, tile)
         got = arrays[name]
         if got.shape != shape or got.dtype != schema.dtype:
             raise ValueError(

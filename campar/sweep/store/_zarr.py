@@ -42,6 +42,7 @@ from ._lock import StoreLock
 from ._schema import (
     TILE_ARRAYS,
     cell_arrays,
+    chunk_coords,
     decode_attrs,
     initial_attrs,
     run_attrs,
@@ -142,12 +143,14 @@ def repair(path: Path, job: Job, report: Verification) -> None:
     """Make the damaged tiles pending: unset the flag, then delete the checksum's and the
     arrays' chunks (read as the fill from then on)."""
     group = zarr.open_group(path, mode="r+")
-    names = ["done", "checksum", *(a.name for a in cell_arrays(job))]  # the flag first
+    tiles = plan_tiles(job)
     for index in sorted(report.damaged):
-        for name in names:
-            array = group[name]
-            key = array.metadata.encode_chunk_key((index,) + (0,) * (array.ndim - 1))
+        for name in TILE_ARRAYS[::-1]:  # the flag first
+            key = group[name].metadata.encode_chunk_key((index,))
             group.store.delete_sync(f"{name}/{key}")
+        for a in cell_arrays(job):
+            key = group[a.name].metadata.encode_chunk_key(chunk_coords(job, tiles[index], a))
+            group.store.delete_sync(f"{a.name}/{key}")
 
 
 class ZarrStore(Store):
@@ -156,6 +159,7 @@ class ZarrStore(Store):
         super().__init__(path, job, lock, decode_attrs(group.attrs.asdict())["runs"], real)
         self._group = group
         self._arrays = {a.name: group[a.name] for a in cell_arrays(job)}
+        self._schemas = cell_arrays(job)
         self._checksums = group["checksum"]
         self._flags = group["done"]
         self._done = np.array(done, bool)
@@ -164,10 +168,11 @@ class ZarrStore(Store):
     def _clear(self, tiles) -> None:
         """Delete the chunks of pending tiles that a killed or failed write left: outside the
         committed tiles the store holds only the fill, never numbers no flag vouches for."""
-        for name, array in self._arrays.items():
-            tail = (0,) * (array.ndim - 1)
+        for a in self._schemas:
+            array = self._arrays[a.name]
             for index in tiles:
-                key = f"{name}/{array.metadata.encode_chunk_key((int(index), *tail))}"
+                coords = chunk_coords(self.job, self.tiles[int(index)], a)
+                key = f"{a.name}/{array.metadata.encode_chunk_key(coords)}"
                 if (self.real / key).exists():
                     self._group.store.delete_sync(key)
 
@@ -179,7 +184,7 @@ class ZarrStore(Store):
         try:
             # Every array's chunk of the tile in one call of zarr's event loop: one call per
             # array costs each its own round trip through the loop (docs/scaling.md).
-            sync(_all_at_once(self._arrays[k].async_array.setitem(tile.rows, v)
+            sync(_all_at_once(self._arrays[k].async_array.setitem(tile.region, v)
                               for k, v in arrays.items()))  # fmt: skip
             self._checksums[tile.index] = checksum
             self._flags[tile.index] = 1  # the commit: after every array chunk and the checksum
@@ -221,8 +226,8 @@ class ZarrReader(StoreReader):
         array = self._group[name]
         return tile_values(array.__getitem__, len(plan_tiles(self.job)), array.dtype, name)
 
-    def _read_rows(self, name: str, rows: slice) -> np.ndarray:
-        return self._group[name][rows]
+    def _read_rows(self, name: str, rows: slice, layer: int | None) -> np.ndarray:
+        return self._group[name][self.selection(rows, layer)]
 
     def metadata_problems(self) -> list[str]:
         """Arrays whose own metadata document is damaged (campar and xarray read the

@@ -6,10 +6,12 @@ Figures are headless (Agg) and returned, so a caller can adjust or save them.
 
 - ``labels``: n-p categories and their fixed colours (``label_colour``, ``map_labels``).
 - ``maps``: two-parameter maps (``MapGrid``, ``plot_map``, ``select_cells``, ``plot_store``).
+- ``hysteresis``: maps of a two-direction store (which direction; down against up).
 - ``style``: fonts, the field's notation, ``save_figure``.
 - ``orbit``: one steady orbit (``plot_orbit``; ``plot_phase``, ``plot_gap``, ``plot_force``).
 - ``bifurcation``: σn points and detachments along ω (``plot_line``, ``plot_lines``).
 - ``transitions``: a line's typed boundaries drawn on its diagram (``mark_transitions``).
+- ``curves``: a map's typed boundaries drawn as bifurcation curves (``draw_curves``).
 - ``figures``: the paper's composite figures (phase-portrait grid, ε(t) families, Pn rows).
 
 For developers: a new view (bifurcation diagram, phase portrait, time series) is
@@ -32,7 +34,9 @@ class PlotError(CamparError):
 
 
 # What ``plot_map`` / ``campar plot --what`` can draw.
-MAP_VIEWS = ("labels", "kind", "dc", "eps_max", "eps_min", "pn_max", "revolutions", "lyapunov")
+MAP_VIEWS = (
+    "labels", "kind", "dc", "eps_max", "eps_min", "pn_max", "revolutions", "lyapunov", "hysteresis",
+)  # fmt: skip
 
 _EXPORTS = {
     "label_colour": "labels",

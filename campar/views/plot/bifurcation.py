@@ -89,8 +89,8 @@ def plot_line(line, axes=None, *, title: str | None = None, legend: bool = True,
         bottom.yaxis.set_major_locator(MaxNLocator(integer=True, nbins=5, min_n_ticks=2))
         bottom.set_ylim(-0.6, max(1, int(p.max()) if p.size else 1) + 0.6)
         if y_label:
-            top.set_ylabel(r"$\sigma_n$ points $y$ ($h$)")
-            bottom.set_ylabel("detachments $p$")
+            top.set_ylabel(r"$\sigma_n$: $y$ (units of $h$)")
+            bottom.set_ylabel("$p$ (dimensionless)")
         if legend:
             top.figure.legend(handles=label_handles(categories), loc="outside lower center",
                               ncols=min(len(categories), 8))  # fmt: skip

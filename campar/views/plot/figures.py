@@ -4,7 +4,8 @@
   Poincaré sections of the non-periodic ones (the paper's Fig. 6);
 - ``plot_gap_family``: ε(t) at several cam speeds, one curve per value of a
   parameter (Figs. 3 and 8);
-- ``plot_force_row``: Pn(t) with yc(t), impacts and detachments (Fig. 9).
+- ``plot_force_row``: Pn(t) with yc(t), impacts and detachments, the clamp's
+  intervals of Pn = 0 while ε > 0 shaded (Fig. 9).
 
 Inputs are results with orbit traces (``simulate_point(..., trace=True)``);
 nothing is computed here. Each panel states what campar found (its n-p
@@ -14,8 +15,16 @@ label), and, where the paper claims a label, the paper's too.
 import numpy as np
 from matplotlib import colormaps
 
-from .orbit import SECTION_COLOUR, force_legend, phase_legend, plot_force, plot_gap, plot_phase
-from .style import SYMBOLS, figure_style, new_figure
+from .orbit import (
+    SECTION_COLOUR,
+    clamped_intervals,
+    force_legend,
+    phase_legend,
+    plot_force,
+    plot_gap,
+    plot_phase,
+)
+from .style import SYMBOLS, V_LABEL, Y_LABEL, figure_style, new_figure
 
 LETTERS = "abcdefghijklmnopqrstuvwxyz"
 
@@ -65,8 +74,8 @@ def draw_cloud(ax, cloud) -> None:
     cloud = np.asarray(cloud).reshape(-1, 2)
     size = 4.5 if len(cloud) <= 64 else 1.2
     ax.plot(cloud[:, 0], cloud[:, 1], "o", ms=size, color=SECTION_COLOUR, mew=0, ls="none")
-    ax.set_xlabel(r"displacement $y$ (stroke $h$)")
-    ax.set_ylabel(r"velocity $\dot y$")
+    ax.set_xlabel(Y_LABEL)
+    ax.set_ylabel(V_LABEL)
     ax.margins(0.15)
 
 
@@ -114,7 +123,8 @@ def common_revolutions(results, cap: int = 4):
 
 
 def plot_force_row(results, *, title: str | None = None):
-    """Pn(t) with yc(t) for several orbits side by side (the paper's Fig. 9)."""
+    """Pn(t) with yc(t) for several orbits side by side (the paper's Fig. 9); where the
+    clamp holds Pn = 0 while ε > 0 the interval is shaded (said in the legend)."""
     with figure_style():
         figure = new_figure(2.6 * len(results), 2.5)
         axes = figure.subplots(1, len(results), squeeze=False)[0]
@@ -125,7 +135,9 @@ def plot_force_row(results, *, title: str | None = None):
             omega = result.parameters["omega"]
             ax.set_title(f"({LETTERS[i]}) {SYMBOLS['omega']} = {omega:g}: {result.label}",
                          loc="left", pad=11)  # fmt: skip
-        figure.legend(handles=force_legend(), loc="outside lower center", ncols=4)
+        clamped = any(clamped_intervals(result.trace) for result in results)
+        handles = force_legend(clamped)
+        figure.legend(handles=handles, loc="outside lower center", ncols=len(handles))
         if title:
             figure.suptitle(title, x=0.01, ha="left", fontsize=9)
     return figure

@@ -1,14 +1,19 @@
-"""Categories of a map's cells (n-p labels, kinds of motion) and their fixed colours.
+"""Categories of a map's cells (n-p labels, kinds of motion) and their colours.
 
-The colour of a label depends on the label alone, never on which other labels a
-map holds, so one motion has one colour in every figure of a paper:
+Any two categories shown on one map differ by CIEDE2000 ΔE00 ≥ MIN_DELTA_E00 (10;
+``colour.ciede2000``), and every category on a map is named in its legend:
 
-- a designed table for the common periodic labels (n ≤ 4, small p), chosen so that
-  any two of them and the greys below differ by CIE76 ΔE ≥ 15;
+- a designed table gives the common periodic labels (n ≤ 4, small p), the grouped
+  chattering ones and the kinds one fixed colour each, the same in every figure;
+  any two colours of the table (white included) are ≥ 10 apart;
 - chattering-impact motions (p ≥ chatter_p, written n-p̃) are grouped per n, as in
-  the paper: every n-p̃ with the same n is one category "n-p~" with one dark colour;
-- any other label gets a colour computed from (n, p) by a fixed rule that keeps it
-  ΔE ≥ 15 from every designed colour (two rare labels may still look alike);
+  the paper: every n-p̃ with the same n is one category "n-p~";
+- any other (rare) label has a preferred colour computed from (n, p) by a fixed
+  rule (``fallback_colour``); on a map (``distinct_categories``) it keeps that colour
+  when it is ≥ 10 from every colour already there, else it takes the first colour of
+  POOL that is (POOL: colours ≥ 11.5 from the table and from each other); labels left
+  without a colour, or beyond the legend's room, are grouped in one hatched class
+  "other" whose members its legend entry lists;
 - the non-periodic kinds are greys: quasi-periodic mid grey, chaos near-black,
   unconverged light grey; cells without a result are gaps, hatched on white
   (failed: dark red cross-hatch; not computed yet: light grey hatch).
@@ -22,6 +27,7 @@ import numpy as np
 from matplotlib.colors import hsv_to_rgb, to_rgba
 
 from ...core.codes import Kind
+from .colour import ciede2000, srgb_to_lab
 
 RGBA = tuple[float, float, float, float]
 
@@ -34,6 +40,7 @@ UNCONVERGED = "unconverged"
 FAILED = "failed"
 NOT_COMPUTED = "not computed"
 PERIODIC = "periodic"  # only in kind maps, where n and p are not shown
+OTHER = "other"  # the rare n-p labels of a map left without a colour of their own, hatched
 NON_PERIODIC = (QUASIPERIODIC, CHAOS, UNCONVERGED, FAILED, NOT_COMPUTED)
 
 KIND_CATEGORY = {
@@ -50,25 +57,38 @@ GAP_STYLE = {
     "failed": {"facecolor": "white", "edgecolor": "#b2182b", "hatch": "xxxxx", "linewidth": 0.0},
     "not computed": {"facecolor": "white", "edgecolor": "0.7", "hatch": "////", "linewidth": 0.0},
 }
+OTHER_STYLE = {"facecolor": "#b1b1de", "edgecolor": "0.15", "hatch": "....", "linewidth": 0.0}
 
 # fmt: off
 DESIGNED = {
     # 1-p: the large regions; Tableau-like hues, 1-0 (no detachment) a pale sand.
     "1-0": "#e9dfb8", "1-1": "#4e79a7", "1-2": "#f28e2b", "1-3": "#59a14f",
-    "1-4": "#e15759", "1-5": "#b07aa1", "1-6": "#9c755f",
+    "1-4": "#e15759", "1-5": "#9c6fc0", "1-6": "#9c755f",
     # 2-2p is the period doubling of 1-p: a light version of its hue.
     "2-0": "#b9e0c9", "2-1": "#499894", "2-2": "#a0cbe8", "2-3": "#86bcb6",
     "2-4": "#ffbe7d", "2-5": "#f1ce63", "2-6": "#8cd17d",
     "3-0": "#f7d6e6", "3-1": "#d37295", "3-2": "#b6992d", "3-3": "#d4a6c8",
     "3-4": "#ff9d9a",
-    "4-0": "#e0c27a", "4-1": "#35c2a0", "4-2": "#c45a3b", "4-3": "#3f8f5f",
+    "4-0": "#bca685", "4-1": "#35c2a0", "4-2": "#c45a3b", "4-3": "#2f7d4f",
     "4-4": "#7c8fcf",
     # chattering n-p̃, grouped per n: dark, but far from the black of chaos.
     "1-p~": "#6b2d5c", "2-p~": "#1f5f5b", "3-p~": "#7a4a12", "4-p~": "#2c3e78",
     QUASIPERIODIC: "#8f8f8f", CHAOS: "#1b1b1b", UNCONVERGED: "#cdcdcd",
     FAILED: "#ffffff", NOT_COMPUTED: "#ffffff", PERIODIC: "#a9b98a",
+    OTHER: OTHER_STYLE["facecolor"],
 }
+# Colours a map gives its rare labels when their own one is too close to a colour already
+# there: greedy max-min picks (most distinct first) from a 24-level sRGB grid with
+# 30 < L* < 88 and 20 < C* < 80, each ≥ 12 ΔE00 from every DESIGNED colour and from the
+# ones before it (≥ 11.5 once rounded to hex; tests/test_palette.py checks it).
+POOL = (
+    "#434e00", "#900b21", "#c80b6f", "#7a7a43", "#7a37bc", "#f47aff", "#00f4ff", "#855964",
+    "#a6bc00", "#a66f0b", "#00a6d3", "#00597a", "#64597a", "#ff7a4e", "#de43bc", "#9b2c00",
+    "#006400", "#2c9bff", "#43f4b1", "#6f4337", "#007a90", "#9b4e90", "#6f64e9", "#645937",
+    "#b190ff", "#b1434e", "#7a9000", "#7a906f", "#375937", "#ffd3bc", "#7a6400",
+)
 # fmt: on
+MIN_DELTA_E00 = 10.0  # CIEDE2000 distance between any two colours shown on one map
 
 GOLDEN = 0.6180339887498949  # hue step of the fallback rule: successive n land far apart
 MIN_DELTA_E = 15.0  # CIE76 distance a fallback colour keeps from every designed one
@@ -152,27 +172,12 @@ def label_name(n: int, p: int | None) -> str:
     return f"{n}-{CHATTER if p is None else p}"
 
 
-def cielab(rgb) -> np.ndarray:
-    """CIE L*a*b* (D65) of sRGB colours in [0, 1], shape (..., 3) → (..., 3)."""
-    rgb = np.asarray(rgb, float)[..., :3]
-    linear = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
-    xyz = linear @ _SRGB_TO_XYZ.T / _D65_WHITE
-    f = np.where(xyz > 0.008856, np.cbrt(xyz), 7.787 * xyz + 16 / 116)
-    return np.stack(
-        [116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]), 200 * (f[..., 1] - f[..., 2])],
-        axis=-1,
-    )
+cielab = srgb_to_lab  # CIE L*a*b* (D65) of sRGB colours in [0, 1], shape (..., 3) → (..., 3)
 
 
 def delta_e(colour_a, colour_b) -> float:
     """CIE76 colour difference ΔE*ab of two colours (≈ 2.3: just noticeable)."""
     return float(np.linalg.norm(cielab(to_rgba(colour_a)) - cielab(to_rgba(colour_b))))
-
-
-_SRGB_TO_XYZ = np.array(
-    [[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]]
-)
-_D65_WHITE = np.array([0.95047, 1.0, 1.08883])
 
 
 @functools.cache
@@ -189,6 +194,12 @@ def legend_text(category: str) -> str:
     return category
 
 
+def members_text(members, per_line: int = 4) -> str:
+    """The labels of an "other" class, a few per line, in the paper's notation."""
+    texts = [legend_text(m) for m in members]
+    return "\n".join(", ".join(texts[i : i + per_line]) for i in range(0, len(texts), per_line))
+
+
 def order_key(category: str) -> tuple:
     """Legend order: n then p (n-p̃ after every n-p of its n), then the other kinds."""
     parsed = parse_label(category)
@@ -197,6 +208,8 @@ def order_key(category: str) -> tuple:
         return (0, n, np.inf if p is None else p)
     if category == PERIODIC:
         return (0, 0, 0)
+    if category == OTHER:
+        return (0, np.inf, np.inf)
     return (1, NON_PERIODIC.index(category), 0)
 
 
@@ -204,12 +217,15 @@ def order_key(category: str) -> tuple:
 class LegendEntry:
     """One category of a map: its label, number of cells and colour."""
 
-    label: str  # "2-2", "1-p~", "QP", "chaos", …
+    label: str  # "2-2", "1-p~", "QP", "chaos", "other", …
     count: int
     colour: RGBA
+    members: tuple[str, ...] = ()  # the labels grouped in "other"
 
     @property
     def text(self) -> str:
+        if self.label == OTHER:
+            return f"other, hatched:\n{members_text(self.members)}"
         return legend_text(self.label)
 
 
@@ -298,3 +314,50 @@ def categorise(key: np.ndarray, category) -> CategoryMap:
     rank[order] = np.arange(len(order))
     entries = tuple(LegendEntry(names[i], int(counts[i]), label_colour(names[i])) for i in order)
     return CategoryMap(rank[inverse.reshape(key.shape)], entries)
+
+
+def distinct_categories(cells: CategoryMap, max_entries: int | None = None) -> CategoryMap:
+    """The map's categories with colours pairwise ≥ MIN_DELTA_E00 apart, every one named.
+
+    Designed categories keep their colour. Rare labels, most cells first, keep their
+    ``fallback_colour`` when it is ≥ MIN_DELTA_E00 from every colour taken so far, else
+    take the first POOL colour that is; those left without one, and with
+    ``max_entries`` (the legend's room) those beyond it, are merged into the hatched
+    category OTHER, whose entry lists them (``members``).
+    """
+    entries = list(cells.entries)
+    fixed = [e for e in entries if e.label in DESIGNED]
+    rare = sorted((e for e in entries if e.label not in DESIGNED),
+                  key=lambda e: (-e.count, order_key(e.label)))  # fmt: skip
+    if not rare:
+        return cells
+    room = len(rare)
+    if max_entries is not None and len(fixed) + len(rare) > max_entries:
+        room = max(max_entries - len(fixed) - 1, 0)  # one line for "other"
+    used = srgb_to_lab(np.array([*(e.colour for e in fixed), to_rgba(DESIGNED[OTHER])]))
+    pool = [to_rgba(c) for c in POOL]
+    coloured, others = {}, []
+    for entry in rare:
+        colour = None
+        if len(coloured) < room:
+            candidates = [entry.colour, *pool]
+            lab = srgb_to_lab(np.array(candidates))
+            far = ciede2000(lab[:, None, :], used[None, :, :]).min(axis=1) >= MIN_DELTA_E00
+            if far.any():
+                k = int(np.argmax(far))
+                colour = candidates[k]
+                used = np.concatenate([used, lab[k : k + 1]])
+        if colour is None:
+            others.append(entry)
+        else:
+            coloured[entry.label] = colour
+    kept = [e for e in entries if e.label in DESIGNED or e.label in coloured]
+    new = [LegendEntry(e.label, e.count, coloured.get(e.label, e.colour)) for e in kept]
+    if others:
+        members = tuple(sorted((e.label for e in others), key=order_key))
+        new.append(LegendEntry(OTHER, sum(e.count for e in others),
+                               to_rgba(DESIGNED[OTHER]), members))  # fmt: skip
+    new.sort(key=lambda e: order_key(e.label))
+    index = {e.label: i for i, e in enumerate(new)}
+    remap = np.array([index.get(e.label, index.get(OTHER, -1)) for e in entries], np.intp)
+    return CategoryMap(remap[cells.codes], tuple(new))

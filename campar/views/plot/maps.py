@@ -20,24 +20,27 @@ from matplotlib.colors import ListedColormap, LogNorm, Normalize, TwoSlopeNorm
 from matplotlib.patches import Patch, Rectangle
 from matplotlib.ticker import FuncFormatter, MaxNLocator
 
-from ...sweep.job import PARAMETERS, Job
+from ...sweep.job import PARAMETERS, Job, cell_edges
 from ...sweep.plan import plan_tiles
 from . import MAP_VIEWS, PlotError
+from .hysteresis import HYSTERESIS_ARRAYS, draw_hysteresis, drawn_layer, store_hysteresis
 from .labels import (
     FAILED,
     GAP_STYLE,
     NOT_COMPUTED,
+    OTHER,
+    OTHER_STYLE,
     CategoryMap,
     computed_cells,
+    distinct_categories,
     map_kinds,
     map_labels,
-    parse_label,
 )
 from .style import axis_label, figure_style, new_figure, parameter_text, save_figure
 
 NICE_TICKS = MaxNLocator(4, steps=[1, 2, 2.5, 5, 10])
 LEGEND_ROWS = 16  # entries per legend column before a new column starts
-LEGEND_MAX = 24  # entries a legend shows; rarer n-p are summed in one line
+LEGEND_MAX = 32  # entries a legend shows; rarer n-p are grouped in "other" (listed)
 EDGE = "0.45"  # outline of legend swatches, so white and pale ones show
 MAX_DRAWN = 1000  # cells per axis a map of a store draws at most (more do not show at 300 dpi)
 
@@ -60,15 +63,17 @@ LOG_SPAN = 30.0  # max/min ratio from which an "auto" quantity is drawn on a log
 
 # ε and y are in units of the stroke h, forces in units of K1·h, time in units of 1/ωn.
 QUANTITIES = {
-    "dc": Quantity("duty cycle DC (fraction of time separated)", "viridis", vmin=0.0, vmax=1.0),
-    "eps_max": Quantity(r"intrusion depth max $\varepsilon$ (stroke $h$)", "plasma"),
-    "eps_min": Quantity(
-        r"min $\varepsilon$ (< 0: detachment height; stroke $h$)", "RdBu_r", "diverging"
+    "dc": Quantity(
+        "duty cycle DC (dimensionless: fraction of time separated)", "viridis", vmin=0.0, vmax=1.0
     ),
-    "pn_max": Quantity(r"max contact force $P_n$ ($K_1 h$)", "inferno", "auto"),
-    "revolutions": Quantity("revolutions computed per cell (cost)", "cividis", "auto"),
+    "eps_max": Quantity(r"intrusion depth max $\varepsilon$ (units of stroke $h$)", "plasma"),
+    "eps_min": Quantity(
+        r"min $\varepsilon$ (< 0: detachment height; units of stroke $h$)", "RdBu_r", "diverging"
+    ),
+    "pn_max": Quantity(r"max contact force $P_n$ (units of $K_1 h$)", "inferno", "auto"),
+    "revolutions": Quantity("revolutions computed per cell (dimensionless)", "cividis", "auto"),
     "lyapunov": Quantity(
-        r"largest Lyapunov exponent $\lambda_1$ (per unit $\omega_n t$)", "RdBu_r", "diverging"
+        r"largest Lyapunov exponent $\lambda_1$ (units of $\omega_n$)", "RdBu_r", "diverging"
     ),
 }
 
@@ -91,17 +96,6 @@ class MapGrid:
     @property
     def shape(self) -> tuple[int, int]:
         return len(self.second), len(self.omega)
-
-
-def cell_edges(centres) -> np.ndarray:
-    """Edges (n+1) of cells with the given centres (n), in the same order: midpoints
-    between neighbours, the outer edges half a spacing beyond the end centres."""
-    c = np.asarray(centres, float)
-    if c.size == 1:
-        half = 0.5 * max(abs(c[0]) * 0.02, 1e-6)
-        return np.array([c[0] - half, c[0] + half])
-    mid = 0.5 * (c[1:] + c[:-1])
-    return np.concatenate([[2 * c[0] - mid[0]], mid, [2 * c[-1] - mid[-1]]])
 
 
 def centre_range(centres: np.ndarray, bounds, name: str) -> slice:
@@ -170,17 +164,20 @@ def plot_map(
     log: bool | None = None,
     vmin: float | None = None,
     vmax: float | None = None,
+    curves=None,
 ):
     """Draw a map and return its Figure.
 
     grid: a MapGrid or the Job that made the arrays.
     arrays: name → array (second, omega): "kind", "n", "p" for labels and kind, the
         quantity itself otherwise; optional "computed" (bool) marks computed cells.
-    what: "labels" (n-p), "kind", or a quantity of QUANTITIES.
+    what: "labels" (n-p), "kind", "hysteresis" (bool "hysteresis", optional bool
+        "compared": both directions periodic), or a quantity of QUANTITIES.
     omega, second: (a, b) ranges to zoom into, like the paper's detail panels.
     ax: draw into this axes instead of a new figure.
     title: text above the map; None states the fixed parameters, "" none.
     log, vmin, vmax: colour scale of a quantity (log None: the quantity's default).
+    curves: typed bifurcation edges to overlay (``campar.views.boundaries``; ``curves``).
     """
     if isinstance(grid, Job):
         grid = MapGrid.from_job(grid)
@@ -188,26 +185,36 @@ def plot_map(
     missing = [name for name in needed if name not in arrays]
     if missing:
         raise PlotError(f"a {what} map needs the arrays {', '.join(missing)}")
-    keep = {name: arrays[name] for name in (*needed, "computed") if name in arrays}
+    keep = {name: arrays[name] for name in (*needed, "computed", "compared") if name in arrays}
     grid, arrays = select_cells(grid, keep, omega, second)
+    height = 3.4 if curves is None else 4.9  # room for the curves' legend under the map
     with figure_style():
         xe, ye = cell_edges(grid.omega), cell_edges(grid.second)
         gaps_legend = False  # a one-line legend of the gaps above a quantity map
         if what in ("labels", "kind"):
             cells = map_labels(arrays, grid.chatter_p) if what == "labels" else map_kinds(arrays)
-            shown, hidden = legend_entries(cells.entries, LEGEND_MAX if legend else 0)
-            columns = -(-(len(shown) + bool(hidden)) // LEGEND_ROWS)
+            cells = distinct_categories(cells, LEGEND_MAX if legend else None)
+            lines = sum(1 + e.text.count("\n") for e in cells.entries)
+            columns = -(-lines // LEGEND_ROWS)
             if ax is None:
-                ax = new_figure(4.3 + 1.25 * columns, 3.4).add_subplot()
+                ax = new_figure(4.3 + 1.25 * columns, height).add_subplot()
             draw_categories(ax, xe, ye, cells)
             if legend:
                 heading = "n-p (cells)" if what == "labels" else "kind (cells)"
-                draw_legend(ax, shown, hidden, heading, columns)
+                draw_legend(ax, cells.entries, heading, columns)
+        elif what == "hysteresis":
+            if ax is None:
+                ax = new_figure(4.3 + 2.0 * legend, height).add_subplot()
+            draw_hysteresis(ax, xe, ye, arrays, legend=legend)
         else:
             if ax is None:
-                ax = new_figure(4.9, 3.4).add_subplot()
+                ax = new_figure(4.9, height).add_subplot()
             gaps_legend = draw_quantity(ax, xe, ye, arrays, what, legend=legend, log=log,
                                         vmin=vmin, vmax=vmax)  # fmt: skip
+        if curves is not None:
+            from .curves import draw_curves
+
+            draw_curves(ax, curves, legend=legend)
         ax.set_xlim(xe.min(), xe.max())
         ax.set_ylim(ye.min(), ye.max())
         ax.set_xlabel(axis_label("omega"))
@@ -230,28 +237,18 @@ def draw_categories(ax, xe, ye, cells: CategoryMap) -> None:
         xe, ye, codes, cmap=ListedColormap(colours), vmin=-0.5, vmax=len(colours) - 0.5,
         shading="flat", rasterized=True,
     )  # fmt: skip
+    if OTHER in cells.labels_present:  # the hatch over the rare labels grouped in "other"
+        hatch = {**OTHER_STYLE, "facecolor": "none"}
+        for (c0, c1), (r0, r1) in cell_runs(cells.codes == cells.labels_present.index(OTHER)):
+            x0, x1 = sorted((xe[c0], xe[c1]))
+            y0, y1 = sorted((ye[r0], ye[r1]))
+            ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, zorder=1.5, **hatch))
 
 
-def legend_entries(entries, max_entries: int):
-    """Entries a legend shows (every non-n-p kind, then the largest n-p, in legend order)
-    and the n-p left out, when there are more than max_entries."""
-    if len(entries) <= max_entries:
-        return list(entries), []
-    kinds = [e for e in entries if parse_label(e.label) is None]
-    by_size = sorted((e for e in entries if parse_label(e.label) is not None),
-                     key=lambda e: -e.count)  # fmt: skip
-    room = max(max_entries - len(kinds) - 1, 0)  # one line tells what was left out
-    keep = {e.label for e in (*kinds, *by_size[:room])}
-    return [e for e in entries if e.label in keep], by_size[room:]
-
-
-def draw_legend(ax, shown, hidden, title: str, columns: int) -> None:
-    """Legend right of the map; the n-p left out are summed in a last, swatch-less line."""
-    handles = [swatch(e.label, f"{e.text} ({e.count})", e.colour) for e in shown]
-    if hidden:
-        cells = sum(e.count for e in hidden)
-        text = f"+ {len(hidden)} rarer n-p ({cells})"
-        handles.append(Patch(facecolor="none", edgecolor="none", label=text))
+def draw_legend(ax, entries, title: str, columns: int) -> None:
+    """Legend right of the map: every category with its cell count ("other" lists its
+    labels)."""
+    handles = [swatch(e.label, f"{e.text} ({e.count})", e.colour) for e in entries]
     ax.legend(handles=handles, title=title, loc="upper left", bbox_to_anchor=(1.03, 1.0),
               ncols=columns, alignment="left")  # fmt: skip
 
@@ -359,16 +356,25 @@ def swatch(category: str, text: str, colour) -> Patch:
     """Legend handle of a category (gaps hatched like the map)."""
     if category in GAP_STYLE:
         return Patch(label=text, **GAP_STYLE[category])
+    if category == OTHER:
+        return Patch(label=text, **{**OTHER_STYLE, "linewidth": 0.4})
     return Patch(facecolor=colour, edgecolor=EDGE, linewidth=0.4, label=text)
 
 
-def plot_store(path, what: str = "labels", output=None, omega=None, second=None) -> Path:
+def plot_store(
+    path, what: str = "labels", output=None, omega=None, second=None, curves=None, direction=None
+) -> Path:
     """Draw a map of a result store into an image file; returns the file's path.
+
+    direction: of a ``chains.direction: both`` store, the direction whose map is drawn
+    ("down", the default, or "up"); its "hysteresis" map draws both (``hysteresis``).
 
     omega, second: (a, b) zoom ranges. output defaults to "<store name>-<what>.png"
     in the current directory; it is checked before the store is read. Tiles not
     committed yet are drawn as "not computed", and so are tiles that fail their
-    checksum (with a warning). The store is read tile by tile and at most
+    checksum (with a warning). ``curves``: typed bifurcation edges to overlay
+    (``campar.views.boundaries.store_boundaries``), computed on the full grid.
+    The store is read tile by tile and at most
     ``MAX_DRAWN`` cells are drawn along each axis (every k-th, said in the title),
     so memory does not grow with the grid.
     """
@@ -378,7 +384,9 @@ def plot_store(path, what: str = "labels", output=None, omega=None, second=None)
     output = figure_file(output or f"{Path(path).stem}-{what}.png")
     needed = arrays_for(what)
     with read_store(path) as store:
-        missing = [name for name in needed if name not in store.names]
+        layer = drawn_layer(store.job, what, direction)
+        stored = HYSTERESIS_ARRAYS if what == "hysteresis" else needed
+        missing = [name for name in stored if name not in store.names]
         if missing:
             raise PlotError(
                 f"{path} holds no {', '.join(missing)} (it has {', '.join(store.names)}); "
@@ -388,12 +396,15 @@ def plot_store(path, what: str = "labels", output=None, omega=None, second=None)
         rows = drawn_indices(full.second, second, full.second_name)
         cols = drawn_indices(full.omega, omega, "omega")
         shape = (len(rows), len(cols))
-        arrays = {n: np.full(shape, fill_value(store.array_dtypes[n])) for n in needed}
+        dtypes = {**store.array_dtypes, "hysteresis": np.dtype(bool)}
+        arrays = {n: np.full(shape, fill_value(dtypes[n])) for n in needed}
         arrays["computed"] = np.zeros(shape, bool)
         slot = np.full(full.shape[0], -1)
         slot[rows] = np.arange(len(rows))
 
-        def take(check):  # one verified tile: its drawn cells
+        def take(check):  # one verified tile (of the drawn direction): its drawn cells
+            if check.tile.layer != layer or what == "hysteresis":
+                return
             local = slot[check.tile.rows]
             keep = local >= 0
             for name in needed:
@@ -401,6 +412,8 @@ def plot_store(path, what: str = "labels", output=None, omega=None, second=None)
             arrays["computed"][local[keep]] = True
 
         report = verify_store(store, take)
+        if what == "hysteresis":
+            arrays.update(store_hysteresis(store, report.verified, rows, cols))
     if report.damaged:
         log.warning(
             "%s: %d damaged tiles drawn as not computed (`campar verify %s` says why)",
@@ -411,7 +424,9 @@ def plot_store(path, what: str = "labels", output=None, omega=None, second=None)
     title = None if step == (1, 1) else (
         f"{parameter_text(grid.fixed)}   (every {step[0]}th × {step[1]}th cell drawn)"
     )  # fmt: skip
-    return save_figure(plot_map(grid, arrays, what, title=title), output)
+    if layer is not None:  # one direction of a both store: say which
+        title = f"{title or parameter_text(grid.fixed)}   (ω swept {direction or 'down'})"
+    return save_figure(plot_map(grid, arrays, what, title=title, curves=curves), output)
 
 
 def drawn_indices(centres: np.ndarray, bounds, name: str) -> np.ndarray:

@@ -9,8 +9,11 @@ detachments) and the cam phases of a revolution. Nothing is recomputed here.
 Marks follow the paper (its Figs. 6 and 9): σn points (the stroboscopic section
 at θ = 0) blue, detachment points (the section σp, ε crossing 0 downwards)
 red; in force plots impacts are open circles and detachments stars; Pn is red
-on the left axis and the cam input yc blue on the right one. Units: y, yc, ε
-in strokes h, Pn in K1·h, t in 1/ωn (dimensionless, θ = ω t).
+on the left axis and the cam input yc blue on the right one. Where the force
+law's clamp holds Pn = 0 while ε > 0 (the follower ahead of the cam without
+force: contact mode 2 of the trace, between a "force zero" event and the next
+"force resumes" or detachment) the force plot shades the interval. Units: y, yc,
+ε in strokes h, ẏ in h·ωn, Pn in K1·h, t in 1/ωn (dimensionless, θ = ω t).
 """
 
 import dataclasses
@@ -18,9 +21,20 @@ import math
 
 import numpy as np
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from . import PlotError
-from .style import figure_style, new_figure, parameter_text
+from .style import (
+    EPS_LABEL,
+    PN_LABEL,
+    T_LABEL,
+    V_LABEL,
+    Y_LABEL,
+    YC_LABEL,
+    figure_style,
+    new_figure,
+    parameter_text,
+)
 
 SECTION_COLOUR = "#1f5fbf"  # σn points (blue, as in the paper)
 DETACH_COLOUR = "#d62728"  # σp points, detachment instants (red)
@@ -28,6 +42,8 @@ FORCE_COLOUR = "#d62728"  # Pn(t): red, left axis (the paper's Fig. 9)
 CAM_COLOUR = "#1f5fbf"  # yc(t): blue, right axis
 ORBIT_COLOUR = "0.15"
 PHASE_SHADE = "0.93"  # background of the cam's rise and fall (the dwells stay white)
+CLAMP_SHADE = "#f6c27a"  # where the clamp holds Pn = 0 while ε > 0 (contact mode 2)
+CLAMPED = 2  # the trace's contact mode "in contact without force"
 
 # The cam phases come with the trace (``trace.cam_phases``: name, start and end angle θ,
 # as the model defines them); these are drawn on PHASE_SHADE.
@@ -38,8 +54,6 @@ MAX_NAMED_REVOLUTIONS = 3  # more revolutions on one axis leave no room for phas
 TIME_REVOLUTIONS = 6  # time panels of plot_orbit show at most the last 6 revolutions
 TRACE_SAMPLES = ("t", "y", "v", "yc", "eps", "pn", "contact")
 
-T_LABEL = r"time $t$ ($1/\omega_n$)"
-EPS_LABEL = r"penetration $\varepsilon = y_c - y$"
 ORBIT_PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 
 
@@ -100,8 +114,8 @@ def plot_phase(result, ax=None, *, legend: bool = True, title: str | None = None
         detach = trace.events_named("detachment")
         ax.plot(detach[:, 1], detach[:, 2], "o", ms=4.5, color=DETACH_COLOUR,
                 mec="white", mew=0.5, zorder=5)  # fmt: skip
-        ax.set_xlabel(r"displacement $y$ (stroke $h$)")
-        ax.set_ylabel(r"velocity $\dot y$")
+        ax.set_xlabel(Y_LABEL)
+        ax.set_ylabel(V_LABEL)
         if legend:
             ax.legend(handles=phase_legend(len(sections), len(detach)), loc="best")
         if title is not None:
@@ -163,6 +177,8 @@ def plot_force(result, ax=None, *, phases: bool = True, names: bool = True,
             ax = new_figure(3.6, 2.4).add_subplot()
         if phases:
             shade_cam_phases(ax, trace, names=names)
+        for t0, t1 in clamped_intervals(trace):
+            ax.axvspan(t0, t1, color=CLAMP_SHADE, alpha=0.55, lw=0, zorder=0.7)
         ax.plot(trace.t, trace.pn, color=FORCE_COLOUR, lw=0.9, zorder=3)
         ax.axhline(0.0, color="0.3", lw=0.5, zorder=1)
         impacts = trace.events_named("impact")[:, 0]
@@ -172,7 +188,7 @@ def plot_force(result, ax=None, *, phases: bool = True, names: bool = True,
         ax.plot(detach, np.zeros_like(detach), "*", ms=6.5, color="black", zorder=5)
         ax.set_xlim(trace.t[0], trace.t[-1])
         ax.set_xlabel(T_LABEL)
-        ax.set_ylabel(r"contact force $P_n$ ($K_1 h$)", color=FORCE_COLOUR)
+        ax.set_ylabel(PN_LABEL, color=FORCE_COLOUR)
         ax.tick_params(axis="y", colors=FORCE_COLOUR)
         cam = ax.twinx()
         cam.plot(trace.t, trace.yc, color=CAM_COLOUR, lw=0.9, zorder=2)
@@ -180,18 +196,44 @@ def plot_force(result, ax=None, *, phases: bool = True, names: bool = True,
         cam.set_yticks([0.0, 0.5, 1.0])
         cam.tick_params(axis="y", colors=CAM_COLOUR)
         if right_label:
-            cam.set_ylabel(r"cam input $y_c$ ($h$)", color=CAM_COLOUR)
+            cam.set_ylabel(YC_LABEL, color=CAM_COLOUR)
         ax.cam_axis = cam
     return ax.figure
 
 
-def force_legend() -> list:
-    return [
+def clamped_intervals(trace) -> list[tuple[float, float]]:
+    """(t0, t1) of every interval in which the clamp holds Pn = 0 while ε > 0.
+
+    From the trace's events: a "force zero" event (code 3: pushing → without force)
+    opens one, the next "force resumes" (5) or detachment from that mode (4) closes
+    it; a trace that starts (ends) in that mode opens (closes) one at its first
+    (last) sample. Empty under the paper's literal law, where the force may pull.
+    """
+    intervals = []
+    start = float(trace.t[0]) if len(trace.contact) and trace.contact[0] == CLAMPED else None
+    for t, code in trace.events[:, [0, 3]]:
+        if code == 3 and start is None:
+            start = float(t)
+        elif code in (4, 5) and start is not None:
+            intervals.append((start, float(t)))
+            start = None
+    if start is not None:
+        intervals.append((start, float(trace.t[-1])))
+    return intervals
+
+
+def force_legend(clamped: bool = False) -> list:
+    """Legend of a force plot; ``clamped`` adds the shading of the clamp's intervals."""
+    handles = [
         Line2D([], [], color=FORCE_COLOUR, lw=0.9, label=r"$P_n$"),
         Line2D([], [], color=CAM_COLOUR, lw=0.9, label=r"$y_c$"),
         Line2D([], [], marker="o", ls="none", mfc="white", mec="black", label="impact"),
         Line2D([], [], marker="*", ls="none", color="black", ms=6.5, label="detachment"),
     ]
+    if clamped:
+        handles.append(Patch(facecolor=CLAMP_SHADE, alpha=0.55, lw=0,
+                             label=r"clamp: $P_n = 0$ while $\varepsilon > 0$"))  # fmt: skip
+    return handles
 
 
 def plot_orbit(result, *, title: str | None = None):
@@ -214,8 +256,8 @@ def plot_orbit(result, *, title: str | None = None):
                           fontsize=7, color="0.4")  # fmt: skip
         gap.set_xlabel("")
         gap.tick_params(labelbottom=False)
-        force.legend(handles=force_legend(), loc="lower right", ncols=4,
-                     bbox_to_anchor=(1.0, 1.01))  # fmt: skip
+        handles = force_legend(bool(clamped_intervals(force_trace(result, last))))
+        figure.legend(handles=handles, loc="outside lower center", ncols=len(handles))
         for ax, letter in ((phase, "a"), (gap, "b"), (force, "c")):
             panel_letter(ax, letter)
         figure.suptitle(orbit_title(result) if title is None else title, x=0.01, ha="left",
@@ -230,6 +272,11 @@ def panel_letter(ax, letter: str) -> None:
 
 
 # -- parts of a trace ------------------------------------------------------------------
+
+
+def force_trace(result, last: int | None = None):
+    """The part of a result's trace a force plot draws (its last ``last`` revolutions)."""
+    return recent(trace_of(result), last)
 
 
 def recent(trace, revolutions: int | None):

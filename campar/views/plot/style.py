@@ -59,9 +59,27 @@ MEANINGS = {
 }
 
 
+# Every model parameter is dimensionless (docs/model.md): ω is the cam speed in units of
+# the natural frequency ωn, f0 the preload in units of K1·h, the others are ratios.
+UNITS = {
+    "omega": r"dimensionless, units of $\omega_n$",
+    "f0": r"dimensionless, units of $K_1 h$",
+    "mu_kn": "dimensionless",
+    "mu_cn": "dimensionless",
+    "zeta": "dimensionless",
+}
+# Axis titles of the orbit quantities: y, yc, ε in strokes h, ẏ in h·ωn, t in 1/ωn, Pn in K1·h.
+Y_LABEL = r"displacement $y$ (units of stroke $h$)"
+V_LABEL = r"velocity $\dot y$ (units of $h\,\omega_n$)"
+T_LABEL = r"time $t$ (units of $1/\omega_n$)"
+EPS_LABEL = r"penetration $\varepsilon$ (units of $h$)"  # ε = yc − y
+PN_LABEL = r"contact force $P_n$ (units of $K_1 h$)"
+YC_LABEL = r"cam input $y_c$ (units of $h$)"
+
+
 def axis_label(name: str) -> str:
-    """Axis title of a model parameter: "cam speed ω", "contact damping μcn", …"""
-    return f"{MEANINGS[name]} {SYMBOLS[name]}"
+    """Axis title of a model parameter with its units: "cam speed ω (dimensionless, …)"."""
+    return f"{MEANINGS[name]} {SYMBOLS[name]} ({UNITS[name]})"
 
 
 def parameter_text(values: dict[str, float]) -> str:
