@@ -68,6 +68,7 @@ def real_job():
             "classify": {"window_revolutions": 16, "sections": 4},
             "outputs": ALL_OUTPUTS,
             "tiles": {"rows": 2},
+            "attractors": {"starts": 2, "cap": 2},  # every array a store can hold
         }
     )
 

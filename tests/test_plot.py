@@ -82,6 +82,7 @@ def random_map(rows, cols, seed=0):
         "revolutions": rng.integers(2, 500, dc.shape),
         "lyapunov": rng.normal(size=dc.shape),
         "hysteresis": (kind == P) & (rng.random(dc.shape) < 0.3),  # of a both-direction map
+        "n_attractors": rng.integers(-1, 6, dc.shape),  # of a census (-1: not computed)
     }
     return {"kind": kind, "n": n, "p": p, **values}
 
@@ -340,7 +341,7 @@ def test_every_view_renders_headless(what):
 
 
 def test_views_and_quantities_agree():
-    assert set(MAP_VIEWS) == {"labels", "kind", "hysteresis", *QUANTITIES}
+    assert set(MAP_VIEWS) == {"labels", "kind", "hysteresis", "multistability", *QUANTITIES}
     with pytest.raises(PlotError, match="choose one of"):
         plot_map(grid_of(2, 2), random_map(2, 2), "steps")
     with pytest.raises(PlotError, match="needs the arrays n, p"):

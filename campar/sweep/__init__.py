@@ -5,6 +5,10 @@
 - ``arrays``: what each requested output stores (names, dtypes, shapes);
 - ``tile``: one tile through the kernel (``run_tile``) and the kernel settings
   built from a job, in one place;
+- ``census``: which records of one cell are one attractor (the start spread, the
+  grouping rules; numpy only), for ``campar point --attractors``, maps and hysteresis;
+- ``multistable``: the census of coexisting attractors at every cell of a map (job key
+  ``attractors``), through the kernel;
 - ``runner``: the serial runner and the MPI master/workers;
 - ``signals``: stop signals over a run's whole life (before, during, after it);
 - ``budget``: a job's store size and per-rank memory, estimated, and their limits;

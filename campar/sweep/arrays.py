@@ -20,6 +20,11 @@ OUTPUT_ARRAYS = {
     "multipliers": ("multipliers",),
     "lyapunov": ("lyapunov",),
 }
+# Arrays of a job's ``attractors`` census (campar.sweep.multistable), only with that key.
+CENSUS_ARRAYS = (
+    "n_attractors", "unsettled_starts",
+    "attractor_n", "attractor_p", "attractor_kind", "attractor_fraction",
+)  # fmt: skip
 
 # dtype and trailing shape of every per-cell array (S = sections per cell).
 ARRAY_SPECS = {
@@ -38,6 +43,12 @@ ARRAY_SPECS = {
     "lyapunov": (np.float64, ()),
     "multipliers": (np.float64, (2, 2)),
     "sections": (np.float64, ("S", 2)),
+    "n_attractors": (np.int16, ()),
+    "unsettled_starts": (np.int16, ()),
+    "attractor_n": (np.int32, ("A",)),  # A = attractors.cap
+    "attractor_p": (np.int32, ("A",)),
+    "attractor_kind": (np.int8, ("A",)),
+    "attractor_fraction": (np.float64, ("A",)),
 }
 
 # Names of the trailing dimensions, one per entry of the trailing shape above.
@@ -45,6 +56,7 @@ TAIL_DIMS = {
     "state": ("component",),
     "sections": ("section_point", "component"),
     "multipliers": ("multiplier", "part"),
+    **{name: ("attractor",) for name in CENSUS_ARRAYS[2:]},
 }
 
 # Labels along the trailing dimensions that have names rather than indices.
@@ -104,16 +116,47 @@ ARRAY_DOCS = {
         "stroboscopic section points σn", "1",
         "(y, ydot) at θ = 0 mod 2π over the last revolutions, in order; NaN-padded",
     ),
+    "n_attractors": (
+        "distinct attractors found", None,
+        "of the cell's census: the attractors reached by the job's attractors.starts starts "
+        "(rest, then Halton points over y in [-1, 2], ydot within ±1.5 omega at θ = 0) and "
+        "by the chain's own end state, each run at the cell to its steady motion; periodic "
+        "motions one attractor when their σn points agree up to a cyclic shift",
+    ),
+    "unsettled_starts": (
+        "starts that settled on no attractor", None,
+        "of the census's starts: unconverged or failed within the transient budget",
+    ),
+    "attractor_n": (
+        "period of the attractor", "1",
+        "cam revolutions per period; 0 where not periodic; -1 where the cell has fewer attractors",
+    ),
+    "attractor_p": (
+        "detachments per period of the attractor", "1",
+        "as p; -1 where the cell has fewer attractors",
+    ),
+    "attractor_kind": (
+        "kind of the attractor", None,
+        "attractors by basin fraction, most frequent first; -1 where the cell has fewer",
+    ),
+    "attractor_fraction": (
+        "basin fraction of the attractor", "1",
+        "share of the census's starts that reached it (0: reached by the chain alone); "
+        "NaN where the cell has fewer attractors",
+    ),
 }  # fmt: skip
 
 
 def array_names(job: Job) -> list[str]:
     """Names of the per-cell arrays a job stores, in a fixed order."""
     wanted = {name for output in job.outputs for name in OUTPUT_ARRAYS[output]}
+    if job.attractors is not None:  # the census: a job key, not an output
+        wanted.update(CENSUS_ARRAYS)
     return [name for name in ARRAY_SPECS if name in wanted]
 
 
 def array_spec(job: Job, name: str) -> tuple[np.dtype, tuple[int, ...]]:
     """dtype and per-cell trailing shape of array ``name`` for this job."""
     dtype, tail = ARRAY_SPECS[name]
-    return np.dtype(dtype), tuple(job.n_sections if d == "S" else d for d in tail)
+    sizes = {"S": job.n_sections, "A": job.attractors.cap if job.attractors else 0}
+    return np.dtype(dtype), tuple(sizes.get(d, d) for d in tail)

@@ -237,6 +237,19 @@ class ChainSettings(Settings):
     two directions' cycles are compared by their section points (``hysteresis``)."""
 
 
+class AttractorSettings(Settings):
+    """A census of coexisting attractors at every cell (``campar.sweep.multistable``)."""
+
+    starts: Annotated[int, Field(ge=2, le=4096)]
+    """Starts per cell (K): rest, then Halton points over a box of (y, y') at θ = 0, as
+    ``campar point --attractors K``; the chain's own end state is one more record."""
+    cap: Annotated[int, Field(ge=1, le=64)] = 4
+    """Attractors stored per cell (C), most frequent first (n_attractors counts them all)."""
+
+
+# Job sections whose absence (None) leaves a job's hash as it was before they existed.
+OPTIONAL_SECTIONS = ("attractors",)
+
 # Every default of a job, as the settings a job without that section gets: code that
 # builds jobs by keyword (points, lines, the CLI, benchmarks) reads its defaults here,
 # e.g. DEFAULT_INTEGRATOR.rtol, so each default is the field default above and nowhere else.
@@ -267,6 +280,8 @@ class Job(Settings):
     outputs: tuple[str, ...] = DEFAULT_OUTPUTS
     tiles: TileSettings = DEFAULT_TILES
     chains: ChainSettings = DEFAULT_CHAINS
+    attractors: AttractorSettings | None = None
+    """Coexisting attractors of every cell (None: off, the usual map alone)."""
     store: str | None = None
     """Path of the result store; '.h5'/'.hdf5' selects HDF5, anything else Zarr."""
 
@@ -403,8 +418,10 @@ class Job(Settings):
         return output in self.outputs
 
     def to_dict(self) -> dict:
-        """The normalised job: every field explicit, as stored with the results."""
-        return self.model_dump(mode="json", by_alias=True)
+        """The normalised job: every field explicit, as stored with the results (an optional
+        section that is off is left out, so such a job's store is as before it existed)."""
+        data = self.model_dump(mode="json", by_alias=True)
+        return {k: v for k, v in data.items() if not (k in OPTIONAL_SECTIONS and v is None)}
 
     def digest(self) -> str:
         """Hash of everything that changes the numbers (not the store path)."""
@@ -424,7 +441,8 @@ class Job(Settings):
 def job_digest(data: dict) -> str:
     """``Job.digest`` of a normalised job as ``to_dict`` gives it, or as a store holds it
     (so a store can check its job against its hash without this campar's defaults)."""
-    data = {key: value for key, value in data.items() if key != "store"}
+    data = {key: value for key, value in data.items() if key != "store"
+            and not (key in OPTIONAL_SECTIONS and value is None)}  # fmt: skip
     if isinstance(data.get("model"), dict):
         data["model"] = {key: value for key, value in data["model"].items()
                          if key not in MODEL_OPTION_DEFAULTS
@@ -463,6 +481,8 @@ def allowed_keys(loc: tuple) -> list[str]:
         if typing.get_origin(annotation) is dict:  # sweep: {parameter: Axis}
             next(parts, None)
             annotation = typing.get_args(annotation)[1]
+        if not hasattr(annotation, "model_fields"):  # an optional section: X | None
+            annotation = next(a for a in typing.get_args(annotation) if hasattr(a, "model_fields"))
         node = annotation
     return [field.alias or name for name, field in node.model_fields.items()]
 

@@ -140,9 +140,19 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
             par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
             law, starts[row], solver, settings, out,
         )  # fmt: skip
+        extra = census_of(job, par, out.state)
         for name in names:
-            result[name][r][order] = getattr(out, name)
+            result[name][r][order] = extra[name] if name in extra else getattr(out, name)
     return result
+
+
+def census_of(job: Job, par: dict, state: np.ndarray) -> dict[str, np.ndarray]:
+    """The ``attractors`` census arrays of a chain (``multistable.census_row``); {} if off."""
+    if job.attractors is None:
+        return {}
+    from .multistable import census_row  # it builds on this module's settings and buffers
+
+    return census_row(job, par, state)
 
 
 # Seeds of ``chains.start: continue`` by job digest: every rank computes the same first

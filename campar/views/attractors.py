@@ -21,6 +21,9 @@ Same attractor, decided by the motion itself, never by its label:
   merged, and a cloud is 64 section points at the end of a 500-revolution budget, so a
   transient longer than that is taken for an attractor.
 
+The spread and the grouping are ``campar.sweep.census``'s, which a map's census of every
+cell (a job's ``attractors`` key, ``campar.sweep.multistable``) uses too: one rule.
+
 Starts whose cell is unconverged (no period ≤ n_max and a negative Lyapunov
 exponent: a stable motion not yet reached) or failed are never attractors; they
 are kept apart as ``unsettled`` and count in the denominator of the fractions.
@@ -32,27 +35,28 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.codes import KIND_NAMES, Kind
+from ..sweep import census as rules
+from ..sweep.census import (  # noqa: F401 — the rules' names, re-exported for this view's users
+    BOX_Y,
+    CAM_PEAK_SPEED,
+    CHAOS_AFTER,
+    CLOUD_FACTOR,
+    CLOUD_POINTS,
+    HALTON_BASES,
+    clouds_overlap,
+    group_records,
+    halton,
+    own_spacing,
+    same_cycle,
+    spread_starts,
+)
 from ..sweep.job import DEFAULT_CLASSIFY, DEFAULT_TRANSIENT
-from .cycles import match_tolerance as cycle_match_tolerance
-from .cycles import same_cycles
 from .point import PointResult, simulate_point
 
 DEFAULT_STARTS = 16
-# The start box (y, y') at θ = 0, where the cam is on its base circle (yc = 0, ẏc = 0):
-# y from one stroke h below the base circle to two strokes above it (flights above the
-# cam's lift), y' within ±(3/2) ω h, the cam's peak speed (docs/model.md: ẏc = ω dyc/dθ,
-# max dyc/dθ = 3/2), the speed scale the cam gives the follower.
-BOX_Y = (-1.0, 2.0)
-CAM_PEAK_SPEED = 1.5  # max dyc/dθ of the cosine-acceleration law, stroke 1
-HALTON_BASES = (2, 3)
-CLOUD_POINTS = DEFAULT_CLASSIFY.window_revolutions  # σn points kept of a non-periodic start
-# Chaos is called only at the end of the budget: the kernel's early verdict (after
-# transient.chaos_after revolutions) also takes transient chaos for an attractor, e.g. at
-# ω = 4.5, μkn = 0.91, where rest reaches 1-1 after 135 revolutions.
-CHAOS_AFTER = 0
-CLOUD_FACTOR = 3.0  # cross-cloud distance, in units of the clouds' own point spacing
-# Kinds of steady motion that are attractors (not unconverged, not failed).
-SETTLED_KINDS = frozenset(KIND_NAMES[k] for k in (Kind.PERIODIC, Kind.QUASIPERIODIC, Kind.CHAOTIC))
+# Kinds of steady motion that are attractors (not unconverged, not failed), as text.
+SETTLED_KINDS = frozenset(KIND_NAMES[Kind(k)] for k in rules.SETTLED_KINDS)
+KIND_CODES = {name: int(code) for code, name in KIND_NAMES.items()}
 
 
 @dataclass(frozen=True)
@@ -118,88 +122,19 @@ class AttractorCensus:
         }
 
 
-def halton(index: int, base: int) -> float:
-    """The index-th element (index ≥ 1) of the van der Corput sequence in ``base``, in (0, 1)."""
-    value, scale = 0.0, 1.0
-    while index:
-        scale /= base
-        index, digit = divmod(index, base)
-        value += digit * scale
-    return value
-
-
-def spread_starts(count: int, omega: float, given=()) -> np.ndarray:
-    """(count, 2) starts (y, y') at θ = 0: rest, then the ``given`` ones, then Halton points.
-
-    The Halton points (bases 2, 3, from index 1) fill the box y ∈ BOX_Y,
-    y' ∈ ±CAM_PEAK_SPEED·ω; they are nested, so more starts only add points.
-    ``count`` ≥ 1 + len(given) (the given starts are kept even beyond ``count``).
-    """
-    speed = CAM_PEAK_SPEED * omega
-    fixed = [(0.0, 0.0), *((float(y), float(v)) for y, v in given if (y, v) != (0.0, 0.0))]
-    points = [*fixed]
-    index = 1
-    while len(points) < count:
-        u, w = (halton(index, base) for base in HALTON_BASES)
-        points.append((BOX_Y[0] + u * (BOX_Y[1] - BOX_Y[0]), speed * (2.0 * w - 1.0)))
-        index += 1
-    return np.array(points, dtype=float)
-
-
 def match_tolerance(
     window_tol: float = DEFAULT_TRANSIENT.window_tol,
     period_tol: float = DEFAULT_CLASSIFY.period_tol,
 ) -> float:
     """∞-norm distance within which σn points of two converged cycles are one point
     (``cycles.match_tolerance``, the rule of a map's hysteresis too)."""
-    return cycle_match_tolerance(window_tol, period_tol)
-
-
-def same_cycle(a: np.ndarray, b: np.ndarray, tol: float) -> bool:
-    """True when the cycles with σn points a and b (each (n, 2), in time order) are one
-    orbit: equal within tol (∞-norm) after some cyclic shift (``cycles.same_cycles``)."""
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    if a.size == 0 or b.size == 0:
-        return False
-    return bool(same_cycles([len(a)], a[None], [len(b)], b[None], tol)[0])
-
-
-def clouds_overlap(a: np.ndarray, b: np.ndarray, factor: float = CLOUD_FACTOR) -> bool:
-    """True when one section cloud ((m, 2) each) lies within the other at its sampling scale.
-
-    The median distance from the points of one cloud to the nearest point of the other,
-    in the direction where it is smaller, must be at most ``factor`` times the clouds'
-    own point spacing (the larger median nearest-neighbour distance within a cloud). Two
-    samples of one chaotic set or invariant circle pass, also when one sample covers only
-    part of the set (a slow transient dwelling near a saddle); clouds apart by more than a
-    few spacings do not. Weak: two distinct attractors whose clouds interleave at that
-    scale pass too, and a non-periodic verdict at the end of the budget may still be a
-    long transient.
-    """
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    if len(a) < 2 or len(b) < 2:
-        return False
-    cross = np.abs(a[:, None, :] - b[None, :, :]).max(axis=2)
-    spacing = max(own_spacing(a), own_spacing(b))
-    reach = min(np.median(cross.min(axis=1)), np.median(cross.min(axis=0)))
-    return bool(reach <= factor * spacing)
-
-
-def own_spacing(cloud: np.ndarray) -> float:
-    """Median ∞-norm distance from each point of a cloud to its nearest other point."""
-    d = np.abs(cloud[:, None, :] - cloud[None, :, :]).max(axis=2)
-    np.fill_diagonal(d, np.inf)
-    return float(np.median(d.min(axis=1)))
+    return rules.match_tolerance(window_tol, period_tol)
 
 
 def same_attractor(a: PointResult, b: PointResult, tol: float) -> bool:
-    """Periodic: one cycle (``same_cycle``); otherwise one kind and overlapping clouds."""
-    if a.kind != b.kind:
-        return False
-    if a.kind == KIND_NAMES[Kind.PERIODIC]:
-        return same_cycle(a.sections, b.sections, tol)
-    return clouds_overlap(a.sections, b.sections)
+    """Periodic: one cycle (``same_cycle``); otherwise one kind and overlapping clouds
+    (``campar.sweep.census.same_record``)."""
+    return rules.same_record(KIND_CODES[a.kind], a.sections, KIND_CODES[b.kind], b.sections, tol)
 
 
 def find_attractors(
@@ -230,28 +165,11 @@ def find_attractors(
         for y, v in starts
     ]  # fmt: skip
     tol = match_tolerance()
-    members: list[list[int]] = []
-    basin = np.full(len(starts), -1)
-    unsettled = []
-    for i, result in enumerate(results):
-        if result.kind not in SETTLED_KINDS:
-            unsettled.append((i, result))
-            continue
-        for g, group in enumerate(members):
-            if same_attractor(results[group[0]], result, tol):
-                group.append(i)
-                basin[i] = g
-                break
-        else:
-            basin[i] = len(members)
-            members.append([i])
-    order = sorted(range(len(members)), key=lambda g: (-len(members[g]), members[g][0]))
-    renumber = {old: new for new, old in enumerate(order)}
-    basin = np.array([renumber.get(int(g), -1) for g in basin])
-    attractors = tuple(
-        Attractor(results[members[g][0]], tuple(members[g]), len(members[g]) / len(starts))
-        for g in order
-    )
+    # the grouping a map's census uses too (campar.sweep.multistable): one rule
+    groups, basin = group_records([KIND_CODES[r.kind] for r in results],
+                                  [r.sections for r in results], tol)  # fmt: skip
+    unsettled = [(i, r) for i, r in enumerate(results) if basin[i] < 0]
+    attractors = tuple(Attractor(results[g[0]], tuple(g), len(g) / len(starts)) for g in groups)
     parameters = results[0].parameters if results else {"omega": omega}
     return AttractorCensus(parameters, starts, attractors, basin, tuple(unsettled), tol)
 

@@ -14,6 +14,8 @@ h5netcdf engine for HDF5) and both backends give the same Dataset, with:
   the job's ``classify.chatter_p``;
 - text as numpy ``str`` arrays and flag attributes as arrays of their
   variable's type, whichever backend.
+- ``attractor_label`` (second, omega, attractor), where the job asked for a census of
+  attractors (``attractors``): the n-p label of each stored attractor, as ``label``.
 
 A ``chains.direction: both`` store has a ``direction`` dimension (down, up) on
 every per-cell array and ``label``, and one more variable, ``hysteresis``
@@ -66,6 +68,18 @@ def open(path: str | Path) -> xr.Dataset:
             "empty where not computed",
         },
     )
+    if "attractor_kind" in ds:  # a census of attractors (job key attractors)
+        ds["attractor_label"] = (
+            ds["attractor_kind"].dims,
+            cell_labels(
+                ds["attractor_kind"].values, ds["attractor_n"].values, ds["attractor_p"].values, c
+            ),
+            {
+                "long_name": "n-p label of the attractor",
+                "comment": "as label, of each attractor of the cell's census, most frequent "
+                "first; empty where the cell has fewer attractors or is not computed",
+            },
+        )
     if "direction" in ds.dims:
         ds["hysteresis"] = hysteresis(ds, job)
     return ds

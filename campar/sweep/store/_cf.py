@@ -60,7 +60,7 @@ def words(name: str) -> str:
 
 def flag_attrs(name: str, dtype: np.dtype) -> dict:
     """flag_values/flag_masks and flag_meanings of a code array (typed as the array)."""
-    if name == "kind":
+    if name in ("kind", "attractor_kind"):
         codes = {int(k): words(text) for k, text in KIND_NAMES.items()}
     elif name == "status":
         codes = {int(s): words(s.name) for s in Status}
@@ -107,6 +107,10 @@ def coordinate_attrs(job: Job, name: str) -> dict:
         "component": {"long_name": "state component", "comment": "y: displacement, ydot: velocity"},
         "part": {"long_name": "part of a complex number"},
         "multiplier": {"long_name": "Floquet multiplier", "comment": "by modulus, largest first"},
+        "attractor": {
+            "long_name": "attractor of the cell",
+            "comment": "rank by basin fraction, 1 the most frequent (job key attractors)",
+        },
         "section_point": {"long_name": "section point", "comment": "in revolution order"},
         "tile": {
             "long_name": "tile",

@@ -148,6 +148,7 @@ def coordinate_arrays(job: Job) -> list[ArraySchema]:
         "component": np.array(COMPONENTS),
         "section_point": np.arange(sizes.get("section_point", 0), dtype=np.int32),
         "multiplier": np.arange(sizes.get("multiplier", 0), dtype=np.int32),
+        "attractor": np.arange(1, sizes.get("attractor", 0) + 1, dtype=np.int32),
         "part": np.array(PARTS),
         "direction": np.array(DIRECTIONS),
         "tile": np.arange(len(tiles), dtype=np.int32),

@@ -7,6 +7,7 @@ Figures are headless (Agg) and returned, so a caller can adjust or save them.
 - ``labels``: n-p categories and their fixed colours (``label_colour``, ``map_labels``).
 - ``maps``: two-parameter maps (``MapGrid``, ``plot_map``, ``select_cells``, ``plot_store``).
 - ``hysteresis``: maps of a two-direction store (which direction; down against up).
+- ``multistability``: the number of attractors per cell of a census (job key ``attractors``).
 - ``style``: fonts, the field's notation, ``save_figure``.
 - ``orbit``: one steady orbit (``plot_orbit``; ``plot_phase``, ``plot_gap``, ``plot_force``).
 - ``bifurcation``: σn points and detachments along ω (``plot_line``, ``plot_lines``).
@@ -36,6 +37,7 @@ class PlotError(CamparError):
 # What ``plot_map`` / ``campar plot --what`` can draw.
 MAP_VIEWS = (
     "labels", "kind", "dc", "eps_max", "eps_min", "pn_max", "revolutions", "lyapunov", "hysteresis",
+    "multistability",
 )  # fmt: skip
 
 _EXPORTS = {

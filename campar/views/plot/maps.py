@@ -36,6 +36,7 @@ from .labels import (
     map_kinds,
     map_labels,
 )
+from .multistability import draw_multistability
 from .style import axis_label, figure_style, new_figure, parameter_text, save_figure
 
 NICE_TICKS = MaxNLocator(4, steps=[1, 2, 2.5, 5, 10])
@@ -148,6 +149,8 @@ def arrays_for(what: str) -> tuple[str, ...]:
     """Names of the per-cell arrays a view draws."""
     if what not in MAP_VIEWS:
         raise PlotError(f"cannot draw {what!r}; choose one of {', '.join(MAP_VIEWS)}")
+    if what == "multistability":
+        return ("n_attractors",)
     return ("kind", "n", "p") if what == "labels" else ("kind",) if what == "kind" else (what,)
 
 
@@ -171,7 +174,8 @@ def plot_map(
     grid: a MapGrid or the Job that made the arrays.
     arrays: name → array (second, omega): "kind", "n", "p" for labels and kind, the
         quantity itself otherwise; optional "computed" (bool) marks computed cells.
-    what: "labels" (n-p), "kind", "hysteresis" (bool "hysteresis", optional bool
+    what: "labels" (n-p), "kind", "multistability" (int "n_attractors": attractors per
+        cell), "hysteresis" (bool "hysteresis", optional bool
         "compared": both directions periodic), or a quantity of QUANTITIES.
     omega, second: (a, b) ranges to zoom into, like the paper's detail panels.
     ax: draw into this axes instead of a new figure.
@@ -206,6 +210,10 @@ def plot_map(
             if ax is None:
                 ax = new_figure(4.3 + 2.0 * legend, height).add_subplot()
             draw_hysteresis(ax, xe, ye, arrays, legend=legend)
+        elif what == "multistability":
+            if ax is None:
+                ax = new_figure(4.3 + 1.6 * legend, height).add_subplot()
+            draw_multistability(ax, xe, ye, arrays, legend=legend)
         else:
             if ax is None:
                 ax = new_figure(4.9, height).add_subplot()
@@ -390,7 +398,11 @@ def plot_store(
         if missing:
             raise PlotError(
                 f"{path} holds no {', '.join(missing)} (it has {', '.join(store.names)}); "
-                "add the output to the job's outputs and run it"
+                + (
+                    "give the job an attractors key (attractors: {starts: 8}) and run it"
+                    if what == "multistability"
+                    else "add the output to the job's outputs and run it"
+                )
             )
         full = MapGrid.from_job(store.job)
         rows = drawn_indices(full.second, second, full.second_name)

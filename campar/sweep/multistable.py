@@ -1,0 +1,80 @@
+"""Coexisting attractors of every cell of a map: the census a job's ``attractors`` key asks.
+
+For each cell of a chain, besides the chain's own warm-started result (the usual map),
+the K starts of ``census.spread_starts`` (rest, then Halton points over the start box)
+and the chain's own end state (one more record) are each run at that cell as a
+one-cell chain through the same kernel, with the settings ``campar point --attractors``
+uses (the job's, but chaos called only at the end of the budget, σn clouds of
+``census.CLOUD_POINTS`` points): so a cell's census equals ``find_attractors`` there
+with the same K, start for start. The records are grouped by ``census.group_records``.
+
+Per cell: ``n_attractors`` (distinct attractors of all K + 1 records),
+``unsettled_starts`` (of the K starts) and, for the first ``attractors.cap``
+attractors ranked by basin fraction, their n, p, kind and basin fraction (the share of
+the K starts that reached them; the chain's record is not a sample of the start box,
+so an attractor only it reached has fraction 0 and ranks last). Nothing here changes
+the chain's own arrays. Cost: K + 1 cold one-cell runs per cell (benchmarks/RESULTS.md).
+"""
+
+import numpy as np
+
+from ..core.kernel import OUT_MULTIPLIERS, OUT_SECTIONS, OUT_STATS, run_chain
+from .census import CHAOS_AFTER, CLOUD_POINTS, group_records, match_tolerance, record_points
+from .census import spread_starts as census_starts
+from .job import Job
+from .tile import allocate_outputs, cell_settings, solver_options
+
+# What every start computes: the outputs of ``campar point --attractors`` (its σn cloud,
+# multipliers and window statistics), so its trajectory is that command's, bit for bit.
+CENSUS_BITS = OUT_STATS | OUT_SECTIONS | OUT_MULTIPLIERS
+NO_ATTRACTOR = -1  # n, p, kind of the slots beyond a cell's attractors
+
+
+def census_tolerance(job: Job) -> float:
+    """``census.match_tolerance`` with the job's settings (1e-5 with the defaults)."""
+    tr, cl = job.transient, job.classify
+    return match_tolerance(tr.window_tol, cl.period_tol, job.integrator.rtol)
+
+
+def census_row(job: Job, par: dict[str, np.ndarray], chain_state: np.ndarray) -> dict:
+    """The census arrays of one chain, cells in the order the chain ran (``par``, as
+    ``plan.chain_parameters`` gives it); ``chain_state`` (cells, 2): the chain's final
+    state of each cell (NaN where it failed: then no chain record)."""
+    k, cap = job.attractors.starts, job.attractors.cap
+    n_cells = len(par["omega"])
+    out = {
+        "n_attractors": np.zeros(n_cells, np.int16),
+        "unsettled_starts": np.zeros(n_cells, np.int16),
+        "attractor_n": np.full((n_cells, cap), NO_ATTRACTOR, np.int32),
+        "attractor_p": np.full((n_cells, cap), NO_ATTRACTOR, np.int32),
+        "attractor_kind": np.full((n_cells, cap), NO_ATTRACTOR, np.int8),
+        "attractor_fraction": np.full((n_cells, cap), np.nan),
+    }
+    solver = solver_options(job)
+    settings = cell_settings(job)._replace(chaos_after=CHAOS_AFTER, output_bits=CENSUS_BITS)
+    tol = census_tolerance(job)
+    law = job.model.law
+    for i in range(n_cells):
+        cell = {name: values[i : i + 1] for name, values in par.items()}
+        starts = census_starts(k, float(par["omega"][i]))
+        if np.all(np.isfinite(chain_state[i])):
+            starts = np.vstack([starts, chain_state[i]])
+        kinds, ns, ps, points = [], [], [], []
+        for x0 in starts:  # each start a chain of one cell: a fresh start, as a point is
+            rec = allocate_outputs(1, CENSUS_BITS, CLOUD_POINTS)
+            run_chain(cell["omega"], cell["zeta"], cell["f0"], cell["mu_kn"], cell["mu_cn"],
+                      law, np.array(x0, float), solver, settings, rec)  # fmt: skip
+            kinds.append(int(rec.kind[0]))
+            ns.append(int(rec.n[0]))
+            ps.append(int(rec.p[0]))
+            points.append(record_points(kinds[-1], ns[-1], rec.sections[0]))
+        groups, basin = group_records(kinds, points, tol, counted=k)
+        out["n_attractors"][i] = len(groups)
+        out["unsettled_starts"][i] = int(np.sum(basin[:k] < 0))
+        for slot, group in enumerate(groups[:cap]):
+            first = group[0]
+            out["attractor_n"][i, slot] = ns[first]
+            out["attractor_p"][i, slot] = ps[first]
+            out["attractor_kind"][i, slot] = kinds[first]
+            out["attractor_fraction"][i, slot] = sum(j < k for j in group) / k
+    return out
