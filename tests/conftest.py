@@ -164,3 +164,40 @@ def kill_tree(pid: int) -> None:
     for victim in reversed(doomed):  # the ranks first, so none outlives its launcher
         with contextlib.suppress(ProcessLookupError):
             os.kill(victim, signal.SIGKILL)
+
+
+def stored(path) -> dict[str, np.ndarray]:
+    """Every per-cell array of a store, its checksums and done flags."""
+    from campar.sweep.store import read_store
+
+    with read_store(path) as reader:
+        out = {name: reader.read(name) for name in reader.names}
+        out["checksum"], _ = reader.tile_checksums()
+        out["done"] = reader.done
+    return out
+
+
+def assert_same_store(a: dict, b: dict) -> None:
+    """Two ``stored`` stores hold the same arrays, bit for bit."""
+    assert sorted(a) == sorted(b)
+    for name in a:
+        assert a[name].dtype == b[name].dtype, name
+        assert np.array_equal(a[name], b[name], equal_nan=True), name
+
+
+def assert_mpirun_store_equals(job_data: dict, tmp_path: Path, serial: Path) -> None:
+    """``mpirun -n 2 campar run`` of ``job_data`` into a store beside ``serial`` (same
+    suffix) ran on two ranks and equals ``serial`` bit for bit."""
+    from campar.sweep.store import read_store
+
+    parallel = tmp_path / f"mpi{serial.suffix}"
+    job_file = tmp_path / f"mpi{serial.suffix}.json"
+    job_file.write_text(json.dumps({**job_data, "store": str(parallel)}))
+    result = subprocess.run(
+        [str(MPIRUN), "-n", "2", *CAMPAR, "run", str(job_file)],
+        capture_output=True, text=True, timeout=300, env=subprocess_env(),
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    with read_store(parallel) as reader:
+        assert reader.attrs["runs"][-1]["ranks"] == 2
+    assert_same_store(stored(parallel), stored(serial))

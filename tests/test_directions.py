@@ -8,14 +8,21 @@ cycles themselves. The physical check is a line through a bistable region
 from another start), cross-checked with the independent SciPy model.
 """
 
-import json
 import os
 import signal
 
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import MPIRUN, SMALL_JOB, merge, run_campar
+from conftest import (
+    MPIRUN,
+    SMALL_JOB,
+    assert_mpirun_store_equals,
+    assert_same_store,
+    merge,
+    run_campar,
+    stored,
+)
 
 import campar
 import campar.sweep.runner as runner
@@ -48,22 +55,6 @@ def job_of(direction: str, **extra) -> Job:
     return Job.from_dict(
         merge(GRID, {"name": direction, "chains": {"direction": direction}, **extra})
     )
-
-
-def stored(path) -> dict[str, np.ndarray]:
-    """Every per-cell array of a store, its checksums and done flags."""
-    with read_store(path) as reader:
-        out = {name: reader.read(name) for name in reader.names}
-        out["checksum"], _ = reader.tile_checksums()
-        out["done"] = reader.done
-    return out
-
-
-def assert_same_store(a: dict, b: dict) -> None:
-    assert sorted(a) == sorted(b)
-    for name in a:
-        assert a[name].dtype == b[name].dtype, name
-        assert np.array_equal(a[name], b[name], equal_nan=True), name
 
 
 # -- the job and its tiles ----------------------------------------------------------
@@ -253,24 +244,11 @@ def test_journaled_tiles_of_both_directions_read_in_place_before_a_checkpoint(tm
 @pytest.mark.mpi
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
 def test_a_both_map_under_mpirun_equals_the_serial_one(tmp_path):
-    import subprocess
-
-    from conftest import CAMPAR, subprocess_env
-
     data = merge(GRID, {"name": "mpi", "chains": {"direction": "both", "start": "continue"}})
     for suffix in (".zarr", ".h5"):
-        serial, parallel = tmp_path / f"serial{suffix}", tmp_path / f"mpi{suffix}"
+        serial = tmp_path / f"serial{suffix}"
         runner.run_job(Job.from_dict(data), serial)
-        job_file = tmp_path / "mpi.json"
-        job_file.write_text(json.dumps({**data, "store": str(parallel)}))
-        result = subprocess.run(
-            [str(MPIRUN), "-n", "2", *CAMPAR, "run", str(job_file)],
-            capture_output=True, text=True, timeout=300, env=subprocess_env(),
-        )  # fmt: skip
-        assert result.returncode == 0, result.stderr
-        with read_store(parallel) as reader:
-            assert reader.attrs["runs"][-1]["ranks"] == 2
-        assert_same_store(stored(parallel), stored(serial))
+        assert_mpirun_store_equals(data, tmp_path, serial)
 
 
 # -- the hysteresis rule on constructed cycles ---------------------------------------------

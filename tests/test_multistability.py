@@ -8,15 +8,20 @@ monostable cell, ``find_attractors`` at the same cells, resume, MPI, both direct
 ``campar.open``; a job without the key keeps its hash and its store's layout.
 """
 
-import json
 import os
 import signal
-import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import CAMPAR, MPIRUN, merge, run_campar, subprocess_env
+from conftest import (
+    MPIRUN,
+    assert_mpirun_store_equals,
+    assert_same_store,
+    merge,
+    run_campar,
+    stored,
+)
 
 import campar
 import campar.sweep.runner as runner
@@ -47,21 +52,6 @@ GRID = {
     "attractors": {"starts": K, "cap": CAP},
 }
 BISTABLE, MONOSTABLE = (0, 1), (2, 1)  # (row, column): (0.86, 5.8) and (0.82, 5.8)
-
-
-def stored(path) -> dict[str, np.ndarray]:
-    with read_store(path) as reader:
-        out = {name: reader.read(name) for name in reader.names}
-        out["checksum"], _ = reader.tile_checksums()
-        out["done"] = reader.done
-    return out
-
-
-def assert_same_store(a: dict, b: dict) -> None:
-    assert sorted(a) == sorted(b)
-    for name in a:
-        assert a[name].dtype == b[name].dtype, name
-        assert np.array_equal(a[name], b[name], equal_nan=True), name
 
 
 @pytest.fixture(scope="module")
@@ -279,17 +269,7 @@ def test_a_both_direction_map_has_a_census_per_direction_equal_to_each_one(tmp_p
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
 def test_a_census_map_under_mpirun_equals_the_serial_one(census, tmp_path):
     serial, _ = census
-    parallel = tmp_path / "mpi.zarr"
-    job_file = tmp_path / "mpi.json"
-    job_file.write_text(json.dumps({**GRID, "store": str(parallel)}))
-    result = subprocess.run(
-        [str(MPIRUN), "-n", "2", *CAMPAR, "run", str(job_file)],
-        capture_output=True, text=True, timeout=300, env=subprocess_env(),
-    )  # fmt: skip
-    assert result.returncode == 0, result.stderr
-    with read_store(parallel) as reader:
-        assert reader.attrs["runs"][-1]["ranks"] == 2
-    assert_same_store(stored(parallel), stored(serial))
+    assert_mpirun_store_equals(GRID, tmp_path, serial)
 
 
 def test_the_example_job_is_valid_and_asks_for_a_census():

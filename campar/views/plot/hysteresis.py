@@ -11,14 +11,13 @@ whole store was verified, so memory does not grow with the map.
 """
 
 import numpy as np
-from matplotlib.colors import ListedColormap
 
 from ...sweep.job import DIRECTIONS, Job
 from ...sweep.plan import plan_tiles
 from ..cycles import hysteresis_cells, settled_cycles
 from ..dataset import cycle_tolerance
 from . import PlotError
-from .labels import NOT_COMPUTED, computed_cells
+from .labels import computed_cells
 
 # What the hysteresis of a cell is computed from (per direction).
 HYSTERESIS_ARRAYS = ("kind", "status", "n", "sections")
@@ -84,25 +83,10 @@ def store_hysteresis(store, verified: np.ndarray, rows: np.ndarray, cols: np.nda
 
 def draw_hysteresis(ax, xe, ye, arrays, *, legend: bool) -> None:
     """Hysteretic, one cycle, not compared as flat colours; cells not computed hatched."""
-    from .maps import draw_gaps, swatch  # maps imports this module
+    from .maps import draw_codes  # maps imports this module
 
     hysteretic = np.asarray(arrays["hysteresis"], bool)
     computed = computed_cells(arrays, hysteretic.shape)
     compared = np.asarray(arrays.get("compared", hysteretic), bool)
     codes = np.where(hysteretic, 2, np.where(compared, 1, 0))
-    draw_gaps(ax, xe, ye, None, ~computed)
-    ax.pcolormesh(
-        xe, ye, np.ma.masked_array(codes, ~computed),
-        cmap=ListedColormap([colour for _, _, colour in CATEGORIES]), vmin=-0.5, vmax=2.5,
-        shading="flat", rasterized=True,
-    )  # fmt: skip
-    if not legend:
-        return
-    handles = [
-        swatch(text, f"{text} ({int(((codes == value) & computed).sum())})", colour)
-        for value, text, colour in CATEGORIES
-    ]
-    if not computed.all():
-        handles.append(swatch(NOT_COMPUTED, f"not computed ({int((~computed).sum())})", "white"))
-    ax.legend(handles=handles, title="down vs up (cells)", loc="upper left",
-              bbox_to_anchor=(1.03, 1.0), alignment="left")  # fmt: skip
+    draw_codes(ax, xe, ye, codes, computed, CATEGORIES, legend=legend, title="down vs up (cells)")

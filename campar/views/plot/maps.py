@@ -261,6 +261,32 @@ def draw_legend(ax, entries, title: str, columns: int) -> None:
               ncols=columns, alignment="left")  # fmt: skip
 
 
+def draw_codes(
+    ax, xe, ye, codes, computed, categories, *, legend: bool, title: str, optional=()
+) -> None:
+    """A map of category codes as flat colours (``categories``: (code, text, colour) with
+    codes 0, 1, … in order), cells not computed hatched, a legend counting each category's
+    cells (the ``optional`` codes only where some cell has them)."""
+    draw_gaps(ax, xe, ye, None, ~computed)
+    ax.pcolormesh(
+        xe, ye, np.ma.masked_array(codes, ~computed),
+        cmap=ListedColormap([colour for _, _, colour in categories]),
+        vmin=-0.5, vmax=len(categories) - 0.5, shading="flat", rasterized=True,
+    )  # fmt: skip
+    if not legend:
+        return
+    counts = {value: int(((codes == value) & computed).sum()) for value, _, _ in categories}
+    handles = [
+        swatch(text, f"{text} ({counts[value]})", colour)
+        for value, text, colour in categories
+        if counts[value] or value not in optional
+    ]
+    if not computed.all():
+        handles.append(swatch(NOT_COMPUTED, f"not computed ({int((~computed).sum())})", "white"))
+    ax.legend(handles=handles, title=title, loc="upper left", bbox_to_anchor=(1.03, 1.0),
+              alignment="left")  # fmt: skip
+
+
 def draw_quantity(ax, xe, ye, arrays, what: str, *, legend: bool, log, vmin, vmax) -> bool:
     """A per-cell quantity with a colour bar; failed (NaN) and not computed cells as gaps,
     explained in a one-line legend just above the map. True if that legend was drawn."""

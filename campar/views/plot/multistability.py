@@ -7,9 +7,8 @@ chain's own end state reached. This map draws it as categories 1, 2, 3 and 4+ (a
 """
 
 import numpy as np
-from matplotlib.colors import ListedColormap
 
-from .labels import NOT_COMPUTED, computed_cells
+from .labels import computed_cells
 
 # Categories: (lowest count, legend text, colour); a cell falls in the last whose count ≤ it.
 CATEGORIES = (
@@ -30,24 +29,18 @@ def multistability_codes(n_attractors) -> np.ndarray:
 
 def draw_multistability(ax, xe, ye, arrays, *, legend: bool) -> None:
     """n_attractors as flat colours by category; cells not computed hatched."""
-    from .maps import draw_gaps, swatch  # maps imports this module
+    from .maps import draw_codes  # maps imports this module
 
     codes = multistability_codes(arrays["n_attractors"])
     computed = computed_cells(arrays, codes.shape) & (codes >= 0)
-    draw_gaps(ax, xe, ye, None, ~computed)
-    ax.pcolormesh(
-        xe, ye, np.ma.masked_array(codes, ~computed),
-        cmap=ListedColormap([colour for _, _, colour in CATEGORIES]),
-        vmin=-0.5, vmax=len(CATEGORIES) - 0.5, shading="flat", rasterized=True,
-    )  # fmt: skip
-    if not legend:
-        return
-    handles = [
-        swatch(text, f"{text} ({int(((codes == value) & computed).sum())})", colour)
-        for value, text, colour in CATEGORIES
-        if value > 0 or ((codes == 0) & computed).any()  # "none settled" only if it occurs
-    ]
-    if not computed.all():
-        handles.append(swatch(NOT_COMPUTED, f"not computed ({int((~computed).sum())})", "white"))
-    ax.legend(handles=handles, title="attractors (cells)", loc="upper left",
-              bbox_to_anchor=(1.03, 1.0), alignment="left")  # fmt: skip
+    draw_codes(
+        ax,
+        xe,
+        ye,
+        codes,
+        computed,
+        CATEGORIES,
+        legend=legend,
+        title="attractors (cells)",
+        optional=(0,),
+    )  # "none settled" only if it occurs
