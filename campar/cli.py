@@ -250,11 +250,12 @@ def format_point(r) -> str:
 
 @subcommand
 def add_plot(sub):
-    from .views.plot import MAP_VIEWS, parse_range  # cheap: matplotlib loads only to draw
+    from .views.plot import STORE_VIEWS, parse_range  # cheap: matplotlib loads only to draw
 
     p = sub.add_parser("plot", help="draw a map of a result store (n-p labels, duty cycle, …)")
     p.add_argument("store", help="result store of `campar run` (Zarr directory or HDF5 file)")
-    p.add_argument("--what", choices=MAP_VIEWS, default="labels", help="default: n-p labels")
+    p.add_argument("--what", choices=STORE_VIEWS, default="labels",
+                   help="default: n-p labels (of a basin store: the basin)")  # fmt: skip
     p.add_argument("-o", "--output", metavar="FILE", help="image; format from the suffix "
                    "(.png, .pdf, .svg); default STORE-WHAT.png here")  # fmt: skip
     p.add_argument("--omega", metavar="A:B", type=parse_range, help="zoom to ω in [A, B]")
@@ -280,7 +281,12 @@ def run_plot(args) -> int:
         raise JobError("--json and --trace go with --bifurcations")
     found = None
     if args.bifurcations:
+        from .sweep.store import read_store
         from .views.boundaries import store_boundaries
+
+        with read_store(args.store) as store:
+            if store.job.kind == "basin":
+                raise JobError(f"{args.store} is a basin store: --bifurcations is for maps")
         from .views.output import figure_file
 
         if args.output:

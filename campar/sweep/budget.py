@@ -55,7 +55,7 @@ def check_budget(job: Job, *, max_store: int | None = None, max_memory: int | No
     max_store = DEFAULT_MAX_STORE if max_store is None else max_store
     max_memory = DEFAULT_MAX_MEMORY if max_memory is None else max_memory
     e = estimate(job)
-    grid = f"{job.shape[0]} {job.second} × {job.shape[1]} omega" + (
+    grid = f"{job.shape[0]} {job.second} × {job.shape[1]} {job.first}" + (
         " × 2 directions" if len(job.directions) > 1 else ""
     )
     if e.store_bytes > max_store:
@@ -68,7 +68,7 @@ def check_budget(job: Job, *, max_store: int | None = None, max_memory: int | No
     if e.rank_bytes > max_memory:
         raise JobError(
             f"job {job.name}: each rank would need about {format_size(e.rank_bytes)} of memory "
-            f"(a tile of {job.tiles.rows} chains × {job.shape[1]} omega × {e.cell_bytes} B, "
+            f"(a tile of {job.tiles.rows} chains × {job.shape[1]} {job.first} × {e.cell_bytes} B, "
             f"{TILE_COPIES} copies, plus {format_size(BASE_MEMORY)}), more than the limit "
             f"{format_size(max_memory)}: lower tiles.rows or the omega points, or raise the "
             f"limit with --max-memory {format_size(e.rank_bytes, plain=True)}"

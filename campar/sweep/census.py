@@ -92,6 +92,12 @@ def match_tolerance(window_tol: float, period_tol: float, rtol: float = 0.0) -> 
     return CYCLE_FACTOR * max(2.0 * window_tol, period_tol, rtol)
 
 
+def cycle_tolerance(job) -> float:
+    """``match_tolerance`` with a job's settings (1e-5 with the defaults): how the census
+    of a map, a basin and the hysteresis of a ``both`` map match cycles."""
+    return match_tolerance(job.transient.window_tol, job.classify.period_tol, job.integrator.rtol)
+
+
 def same_cycles(n_a, sections_a, n_b, sections_b, tol: float) -> np.ndarray:
     """Per cell: the cycles with σn points ``sections_a[..., :n_a, :]`` and
     ``sections_b[..., :n_b, :]`` (time order) are one, i.e. equal within ``tol``
@@ -176,27 +182,68 @@ def group_records(kinds, points, tol: float, counted: int | None = None):
     """Distinct attractors among records; returns (groups, basin).
 
     ``kinds``: kind code per record; ``points``: its σn points (``record_points``).
+    ``group_cells`` of the records, the points NaN-padded into one array; ``groups`` as
+    lists of record indices.
+    """
+    width = max((len(p) for p in points), default=0)
+    sections = np.full((len(points), max(width, 1), 2), np.nan)
+    ns = np.zeros(len(points), np.int64)
+    for i, (kind, pts) in enumerate(zip(kinds, points, strict=True)):
+        sections[i, : len(pts)] = pts
+        ns[i] = len(pts) if int(kind) == Kind.PERIODIC else 0
+    groups, basin = group_cells(kinds, ns, sections, tol, counted)
+    return [group.tolist() for group in groups], basin
+
+
+BLOCK = 4096  # records compared with a group's first member at once (bounds the memory)
+
+
+def group_cells(kinds, ns, sections, tol: float, counted: int | None = None):
+    """Distinct attractors among records given as arrays; returns (groups, basin).
+
+    ``kinds``, ``ns``: kind code and period per record; ``sections`` (records, S, 2):
+    their σn points, NaN-padded, as the kernel fills them (``record_points`` reads them).
     Unsettled records (not periodic, quasi-periodic or chaotic) join no group. Each
     settled record joins the first group whose first member is ``same_record``, or
-    starts a new one. ``groups``: lists of record indices, ranked by how many of the
-    first ``counted`` records (the starts whose shares are basin fractions; default all)
-    reached each, most first, ties by first member. ``basin``: per record, the index of
-    its group in that order, −1 where unsettled.
+    starts a new one (as Attractors.jl maps initial conditions for ``basins_fractions``).
+    Computed group by group: the first record no group has taken starts one, and every
+    later record of its kind not taken yet is compared with it at once, which is the
+    same rule record by record. ``groups``: arrays of record indices, ranked by how many
+    of the first ``counted`` records (the starts whose shares are basin fractions;
+    default all) reached each, most first, ties by first member. ``basin``: per record,
+    the index of its group in that order, −1 where unsettled.
     """
+    kinds = np.asarray(kinds, np.int64).reshape(-1)
+    ns = np.asarray(ns, np.int64).reshape(-1)
+    sections = np.asarray(sections, float)
     counted = len(kinds) if counted is None else counted
-    members: list[list[int]] = []
-    for i, (kind, pts) in enumerate(zip(kinds, points, strict=True)):
-        if int(kind) not in SETTLED_KINDS:
+    found = np.full(len(kinds), -1)
+    free = np.isin(kinds, list(SETTLED_KINDS))
+    members: list[np.ndarray] = []
+    for first in np.flatnonzero(free):
+        if not free[first]:
             continue
-        for group in members:
-            first = group[0]
-            if same_record(int(kinds[first]), points[first], int(kind), pts, tol):
-                group.append(i)
-                break
+        free[first] = False
+        rest = np.flatnonzero(free & (kinds == kinds[first]))
+        rest = rest[rest > first]
+        same = np.zeros(len(rest), bool)
+        if kinds[first] == Kind.PERIODIC:
+            for block in range(0, len(rest), BLOCK):
+                cells = rest[block : block + BLOCK]
+                same[block : block + BLOCK] = same_cycles(
+                    np.full(len(cells), ns[first]),
+                    np.broadcast_to(sections[first], (len(cells), *sections.shape[1:])),
+                    ns[cells], sections[cells], tol,
+                )  # fmt: skip
         else:
-            members.append([i])
-    groups = sorted(members, key=lambda g: (-sum(i < counted for i in g), g[0]))
-    basin = np.full(len(kinds), -1)
+            cloud = record_points(int(kinds[first]), int(ns[first]), sections[first])
+            for j, cell in enumerate(rest):
+                other = record_points(int(kinds[cell]), int(ns[cell]), sections[cell])
+                same[j] = clouds_overlap(cloud, other)
+        group = np.concatenate([[first], rest[same]])
+        free[group] = False
+        members.append(group)
+    groups = sorted(members, key=lambda g: (-int(np.sum(g < counted)), int(g[0])))
     for g, group in enumerate(groups):
-        basin[group] = g
-    return groups, basin
+        found[group] = g
+    return groups, found

@@ -22,6 +22,9 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from ..errors import JobError
 
 PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
+# The axes of a basin job: the initial state (y, y') at θ = 0, y along the first
+# (columns), y' along the second (rows); its parameters are all fixed.
+BASIN_AXES = ("y0", "ydot0")
 # The paper's base values (docs/model.md, sweeps) for parameters a job does not sweep or
 # fix. Points, lines, the CLI, the benchmarks and the paper's set-ups take them from here.
 PAPER_VALUES = {"f0": 0.5, "mu_kn": 0.8, "mu_cn": 0.8, "zeta": 0.2}
@@ -303,13 +306,18 @@ class Job(Settings):
     @classmethod
     def omega_and_one_more(cls, sweep: dict[str, Axis]) -> dict[str, Axis]:
         keys = list(sweep)
+        if tuple(keys) == BASIN_AXES:  # a basin: initial states, checked as any number
+            return sweep
         unknown = [k for k in keys if k not in PARAMETERS]
         if unknown:
-            raise ValueError(f"unknown parameter {unknown[0]!r}; allowed: {', '.join(PARAMETERS)}")
+            raise ValueError(
+                f"unknown parameter {unknown[0]!r}; allowed: {', '.join(PARAMETERS)} "
+                f"(a map), or exactly {', '.join(BASIN_AXES)} (a basin)"
+            )
         if len(keys) != 2 or keys[0] != "omega":
             raise ValueError(
                 "must list omega (the continuation axis) first and exactly one second "
-                f"parameter, got {keys}"
+                f"parameter (a map), or {', '.join(BASIN_AXES)} (a basin), got {keys}"
             )
         for name, axis in sweep.items():
             for end, value in (("from", axis.start), ("to", axis.stop)):
@@ -323,8 +331,8 @@ class Job(Settings):
     @classmethod
     def known_fixed(cls, fixed: dict[str, float]) -> dict[str, float]:
         for name, value in fixed.items():
-            if name not in PAPER_VALUES:
-                raise ValueError(f"unknown parameter {name!r}; allowed: {', '.join(PAPER_VALUES)}")
+            if name not in PARAMETERS:
+                raise ValueError(f"unknown parameter {name!r}; allowed: {', '.join(PARAMETERS)}")
             try:
                 check_parameter(name, value)
             except ValueError as exc:
@@ -343,16 +351,23 @@ class Job(Settings):
 
     @model_validator(mode="before")
     @classmethod
-    def both_directions_store_sections(cls, data):
-        # The two directions' cycles are compared by their σn points (views.dataset):
-        # a ``both`` job stores them whether or not its outputs list them.
-        if not isinstance(data, dict) or not isinstance(data.get("chains"), dict):
+    def matched_cycles_store_sections(cls, data):
+        # The two directions' cycles, or a basin's attractors, are compared by their σn
+        # points (views.dataset, views.basins): such jobs store them whether or not their
+        # outputs list them; a basin its cells' multipliers too (the kernel computes them
+        # there anyway: its cells are ``campar point --attractors`` records).
+        if not isinstance(data, dict):
             return data
-        if data["chains"].get("direction") != "both":
-            return data
+        wanted = ()
+        if isinstance(data.get("sweep"), dict) and tuple(data["sweep"]) == BASIN_AXES:
+            wanted = ("sections", "multipliers")
+        elif isinstance(data.get("chains"), dict) and data["chains"].get("direction") == "both":
+            wanted = ("sections",)
         outputs = data.get("outputs", DEFAULT_OUTPUTS)
-        if isinstance(outputs, (list, tuple)) and "sections" not in outputs:
-            data = {**data, "outputs": (*outputs, "sections")}
+        if isinstance(outputs, (list, tuple)):
+            missing = tuple(name for name in wanted if name not in outputs)
+            if missing:
+                data = {**data, "outputs": (*outputs, *missing)}
         return data
 
     @model_validator(mode="after")
@@ -373,16 +388,62 @@ class Job(Settings):
             raise ValueError(f"{sorted(both)[0]} is both swept and fixed")
         return self
 
+    @model_validator(mode="after")
+    def basin_fixes_every_parameter(self):
+        if self.kind == "map":
+            return self
+        if "omega" not in self.fixed:
+            raise ValueError("a basin job (sweep y0, ydot0) fixes omega: fixed: {omega: …}")
+        # What a map's chains need has no meaning for a basin, whose every cell starts
+        # from its own grid point: such keys are mistakes, not settings to ignore.
+        unused = {
+            "chains": self.chains != DEFAULT_CHAINS,
+            "initial": self.initial != DEFAULT_INITIAL,
+            "attractors": self.attractors is not None,
+        }
+        for key, given in unused.items():
+            if given:
+                raise ValueError(
+                    f"{key}: a basin job's cells each start from their own (y0, ydot0); "
+                    f"leave {key} out"
+                )
+        if self.classify.sections is not None and self.classify.sections < self.classify.n_max:
+            raise ValueError(
+                f"classify.sections: a basin compares whole cycles of up to classify.n_max = "
+                f"{self.classify.n_max} section points; sections must be ≥ n_max or unset, "
+                f"got {self.classify.sections}"
+            )
+        return self
+
     # -- derived views -------------------------------------------------------
 
     @property
+    def kind(self) -> str:
+        """ "map": chains along ω over a parameter plane; "basin": one parameter point,
+        every cell a start (y0, ydot0) of its own (``campar.sweep.basin``)."""
+        return "basin" if tuple(self.sweep) == BASIN_AXES else "map"
+
+    @property
+    def first(self) -> str:
+        """Name of the first axis, along each row (columns): omega, or y0 of a basin."""
+        return list(self.sweep)[0]
+
+    @property
     def second(self) -> str:
-        """Name of the second (non-continuation) parameter."""
+        """Name of the second axis, one value per row: the map's second parameter, or
+        ydot0 of a basin."""
         return list(self.sweep)[1]
 
     @property
+    def first_values(self) -> np.ndarray:
+        return self.sweep[self.first].values()
+
+    @property
     def omega(self) -> np.ndarray:
-        return self.sweep["omega"].values()
+        """The ω axis of a map job (a basin's ω is ``parameter("omega")``)."""
+        if self.kind != "map":
+            raise ValueError(f"job {self.name} is a basin at omega = {self.fixed['omega']:g}")
+        return self.first_values
 
     @property
     def second_values(self) -> np.ndarray:
@@ -390,8 +451,8 @@ class Job(Settings):
 
     @property
     def shape(self) -> tuple[int, int]:
-        """(second, omega): the layout of every per-cell array."""
-        return self.sweep[self.second].points, self.sweep["omega"].points
+        """(second, first): the layout of every per-cell array, (rows, columns)."""
+        return self.sweep[self.second].points, self.sweep[self.first].points
 
     def parameter(self, name: str) -> float:
         """Value of a parameter that is not swept."""
@@ -412,7 +473,13 @@ class Job(Settings):
 
     @property
     def n_sections(self) -> int:
-        return self.classify.sections or self.classify.n_max
+        """σn points stored per cell: ``classify.sections``, else n_max; a basin's cells
+        keep a whole read window (the section cloud a non-periodic attractor is matched by)."""
+        if self.classify.sections:
+            return self.classify.sections
+        if self.kind == "basin":
+            return max(self.classify.n_max, self.classify.window_revolutions)
+        return self.classify.n_max
 
     def wants(self, output: str) -> bool:
         return output in self.outputs

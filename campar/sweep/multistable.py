@@ -19,7 +19,7 @@ the chain's own arrays. Cost: K + 1 cold one-cell runs per cell (benchmarks/RESU
 import numpy as np
 
 from ..core.kernel import OUT_MULTIPLIERS, OUT_SECTIONS, OUT_STATS, run_chain
-from .census import CHAOS_AFTER, CLOUD_POINTS, group_records, match_tolerance, record_points
+from .census import CHAOS_AFTER, CLOUD_POINTS, cycle_tolerance, group_records, record_points
 from .census import spread_starts as census_starts
 from .job import Job
 from .tile import allocate_outputs, cell_settings, solver_options
@@ -28,12 +28,6 @@ from .tile import allocate_outputs, cell_settings, solver_options
 # multipliers and window statistics), so its trajectory is that command's, bit for bit.
 CENSUS_BITS = OUT_STATS | OUT_SECTIONS | OUT_MULTIPLIERS
 NO_ATTRACTOR = -1  # n, p, kind of the slots beyond a cell's attractors
-
-
-def census_tolerance(job: Job) -> float:
-    """``census.match_tolerance`` with the job's settings (1e-5 with the defaults)."""
-    tr, cl = job.transient, job.classify
-    return match_tolerance(tr.window_tol, cl.period_tol, job.integrator.rtol)
 
 
 def census_row(job: Job, par: dict[str, np.ndarray], chain_state: np.ndarray) -> dict:
@@ -52,7 +46,7 @@ def census_row(job: Job, par: dict[str, np.ndarray], chain_state: np.ndarray) ->
     }
     solver = solver_options(job)
     settings = cell_settings(job)._replace(chaos_after=CHAOS_AFTER, output_bits=CENSUS_BITS)
-    tol = census_tolerance(job)
+    tol = cycle_tolerance(job)
     law = job.model.law
     for i in range(n_cells):
         cell = {name: values[i : i + 1] for name, values in par.items()}

@@ -182,7 +182,8 @@ def describe(reader, max_labels: int = 12) -> str:
     failed = sum(s["failed"].values())
     lines = [
         f"store   {reader.path}  (job {job.name}, hash {reader.attrs.get('job_hash')})",
-        f"grid    {job.shape[0]} {job.second} × {job.shape[1]} omega, {job.tiles.rows} rows a tile"
+        f"grid    {job.shape[0]} {job.second} × {job.shape[1]} {job.first}, "
+        f"{job.tiles.rows} rows a tile"
         + (", each chain down and up" if len(job.directions) > 1 else ""),
         f"tiles   {s['tiles'][0]}/{s['tiles'][1]} done" + _damage(s["damaged"]),
         f"cells   {s['cells'][0]}/{s['cells'][1]} done, {failed} failed (status ≠ 0)",

@@ -116,8 +116,13 @@ def allocate_outputs(n_cells: int, bits: int, n_sections: int) -> CellOutputs:
 def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     """Compute every chain of a tile; arrays shaped (tile rows, ω points, …) in the job's
     ω order, whichever way the chains ran. A ``both`` job's tile is computed as its
-    direction's one-direction job computes it (same starts, settings and outputs)."""
+    direction's one-direction job computes it (same starts, settings and outputs); a
+    basin's tile by ``basin.run_basin_tile``."""
     ensure_fresh_cache()
+    if job.kind == "basin":
+        from .basin import run_basin_tile  # it builds on this module's settings and buffers
+
+        return run_basin_tile(job, tile, array_names(job))
     if tile.direction is not None:
         job = job.one_direction(tile.direction)
     elif job.chains.direction == "both":

@@ -27,6 +27,11 @@ of its own, is never stale after a repaired tile, and the raw ``xr.open_zarr``
 or ``xr.open_dataset`` of the store holds everything it is computed from
 (``hysteresis(ds)`` computes it on such a Dataset).
 
+A basin store (a job sweeping ``y0``, ``ydot0``) has ``basin`` (ydot0, y0), the
+attractor each start reached, and per attractor (dimension ``attractor``) its n, p,
+kind, label, starts, fraction, σn points and multipliers (``campar.views.basins``),
+derived here as ``hysteresis`` is.
+
 A store of format 1 (before the CF metadata) is read through ``read_store``
 and given the current format's variables and attributes, built from its job:
 its numbers are laid out alike. The Dataset reads lazily; close it (or use
@@ -40,9 +45,11 @@ import xarray as xr
 
 from ..core.codes import KIND_LABELS, cell_label
 from ..errors import StoreDamaged
+from ..sweep.census import cycle_tolerance
 from ..sweep.plan import plan_tiles
 from ..sweep.store import FORMAT, backend_name, read_store, store_arrays, upgraded_attrs
-from .cycles import hysteresis_cells, match_tolerance
+from .basins import basin_variables
+from .cycles import hysteresis_cells
 
 NOT_COMPUTED = -1  # the integer arrays' fill value
 TYPED_ATTRS = ("_FillValue", "flag_values", "flag_masks")  # CF: the variable's own type
@@ -82,6 +89,8 @@ def open(path: str | Path) -> xr.Dataset:
         )
     if "direction" in ds.dims:
         ds["hysteresis"] = hysteresis(ds, job)
+    if job.kind == "basin":  # which attractor each start reached
+        ds = ds.assign(basin_variables(ds, job))
     return ds
 
 
@@ -167,11 +176,6 @@ def _normalise(ds: xr.Dataset) -> xr.Dataset:
 # -- hysteresis: the two sweep directions on different attractors ----------------------
 
 BLOCK_ROWS = 64  # chains compared at once: ~26 MB of σn points for 400 ω values
-
-
-def cycle_tolerance(job) -> float:
-    """``cycles.match_tolerance`` with a job's settings (1e-5 with the defaults)."""
-    return match_tolerance(job.transient.window_tol, job.classify.period_tol, job.integrator.rtol)
 
 
 def hysteresis(ds: xr.Dataset, job=None) -> xr.DataArray:

@@ -29,6 +29,14 @@ PARAMETER_DOCS = {
     "mu_kn": ("contact stiffness parameter", "contact stiffness k = μkn / (1 − μkn)"),
     "mu_cn": ("contact damping parameter", "contact damping c = 2 ζ μcn / (1 − μcn)"),
     "zeta": ("spring damping ratio", "ζ in y'' + 2 ζ y' + y = Pn − f0"),
+    "y0": (
+        "initial displacement",
+        "y at θ = 0, where the cell's run starts, in units of the stroke h (basin jobs)",
+    ),
+    "ydot0": (
+        "initial velocity",
+        "dy/dt at θ = 0, where the cell's run starts, t in units of 1/ωn (basin jobs)",
+    ),
 }
 
 SCALING = (
@@ -150,10 +158,10 @@ def checksum_attrs(dtype: np.dtype) -> dict:
 
 def global_attrs(job: Job, created: str) -> dict:
     """The file's CF and campar attributes, besides campar's own (job, runs, …)."""
-    start = job.initial
     return {
         "Conventions": CONVENTIONS,
-        "title": f"campar map {job.name}: steady motions over (omega, {job.second})",
+        "title": f"campar {job.kind} {job.name}: steady motions over ({job.first}, {job.second})"
+        + (f" at omega = {job.parameter('omega'):g}" if job.kind == "basin" else ""),
         "source": f"campar {__version__}: cam–follower impact oscillator, "
         f"{job.integrator.method} integrator (rtol {job.integrator.rtol:g}, "
         f"atol {job.integrator.atol:g}), {job.transient.mode} transient",
@@ -167,16 +175,29 @@ def global_attrs(job: Job, created: str) -> dict:
         "duty_cycle_definition": DUTY_CYCLES[job.model.duty_cycle],
         "cam_velocity": job.model.cam_velocity,
         "cam_velocity_definition": CAM_VELOCITIES[job.model.cam_velocity],
-        "chain_start": job.chains.start,
-        "chain_start_state": f"y = {start.y:g}, ydot = {start.v:g} at θ = 0"
-        + (
-            f", {job.second} = {job.second_values[0]:g} (first column)"
-            if job.chains.start == "continue"
-            else ""
-        ),
-        "sweep_direction": job.chains.direction,
+        **chain_attrs(job),
         "campar_version": __version__,
         "date_created": created,
+    }
+
+
+def chain_attrs(job: Job) -> dict:
+    """Where the runs start and which way they go: a map's chains, or a basin's cells."""
+    if job.kind == "basin":
+        return {
+            "chain_start": "grid",
+            "chain_start_state": "each cell from its own (y0, ydot0) at θ = 0, chaos called "
+            "only at the end of the transient budget (as campar point --attractors)",
+            "sweep_direction": "none",
+        }
+    start = job.initial
+    state = f"y = {start.y:g}, ydot = {start.v:g} at θ = 0"
+    if job.chains.start == "continue":
+        state += f", {job.second} = {job.second_values[0]:g} (first column)"
+    return {
+        "chain_start": job.chains.start,
+        "chain_start_state": state,
+        "sweep_direction": job.chains.direction,
     }
 
 

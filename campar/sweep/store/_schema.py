@@ -1,7 +1,8 @@
 """What a result store holds, independent of the backend: arrays, dims, fills, attributes.
 
-Every per-cell array lies over (second, omega[, tail]) and is chunked one tile
-of chains by the whole ω axis, so a tile is one chunk of every array and a
+Every per-cell array lies over (second, omega[, tail]) — a basin's over (ydot0,
+y0[, tail]): ``Job.second``, ``Job.first`` — and is chunked one tile of chains
+by the whole first axis, so a tile is one chunk of every array and a
 killed writer can only leave whole chunks behind. ``done`` has one element per
 tile and one chunk per element: the commit flag of a tile never shares a chunk
 with a neighbour's. Nor does its ``checksum`` (of the tile's arrays, ``_integrity``),
@@ -75,7 +76,7 @@ def fill_value(dtype: np.dtype):
 def cell_arrays(job: Job) -> list[ArraySchema]:
     """Per-cell arrays of a job, in ``arrays.array_names`` order (a ``both`` job's with a
     leading ``direction`` axis, chunked one direction at a time)."""
-    n_second, n_omega = job.shape
+    n_second, n_first = job.shape
     both = job.chains.direction == "both"
     lead, lead_chunks, lead_dims = (
         ((len(DIRECTIONS),), (1,), ("direction",)) if both else ((), (), ())
@@ -86,9 +87,9 @@ def cell_arrays(job: Job) -> list[ArraySchema]:
         fill = fill_value(dtype)
         arrays.append(
             ArraySchema(
-                name, dtype, (*lead, n_second, n_omega, *tail),
-                (*lead_chunks, job.tiles.rows, n_omega, *tail),
-                (*lead_dims, job.second, "omega", *TAIL_DIMS.get(name, ())), fill,
+                name, dtype, (*lead, n_second, n_first, *tail),
+                (*lead_chunks, job.tiles.rows, n_first, *tail),
+                (*lead_dims, job.second, job.first, *TAIL_DIMS.get(name, ())), fill,
                 cell_attrs(job, name, dtype, fill),
             )
         )  # fmt: skip
@@ -135,7 +136,7 @@ TILE_ARRAYS = ("checksum", "done")
 
 
 def coordinates(job: Job) -> dict[str, np.ndarray]:
-    return {"omega": job.omega, job.second: job.second_values}
+    return {job.first: job.first_values, job.second: job.second_values}
 
 
 def coordinate_arrays(job: Job) -> list[ArraySchema]:
@@ -144,7 +145,7 @@ def coordinate_arrays(job: Job) -> list[ArraySchema]:
     tiles = plan_tiles(job)
     labels = {
         job.second: job.second_values,
-        "omega": job.omega,
+        job.first: job.first_values,
         "component": np.array(COMPONENTS),
         "section_point": np.arange(sizes.get("section_point", 0), dtype=np.int32),
         "multiplier": np.arange(sizes.get("multiplier", 0), dtype=np.int32),
@@ -289,7 +290,8 @@ def layout_problems(job: Job, attrs: dict, shapes: dict[str, tuple]) -> list[str
         elif tuple(got) != a.shape:
             problems.append(
                 f"array {a.name} has shape {list(got)}, the stored job's grid "
-                f"({job.shape[0]} {job.second} × {job.shape[1]} omega) makes it {list(a.shape)}"
+                f"({job.shape[0]} {job.second} × {job.shape[1]} {job.first}) makes it "
+                f"{list(a.shape)}"
             )
     return problems
 

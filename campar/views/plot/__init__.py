@@ -8,6 +8,7 @@ Figures are headless (Agg) and returned, so a caller can adjust or save them.
 - ``maps``: two-parameter maps (``MapGrid``, ``plot_map``, ``select_cells``, ``plot_store``).
 - ``hysteresis``: maps of a two-direction store (which direction; down against up).
 - ``multistability``: the number of attractors per cell of a census (job key ``attractors``).
+- ``basin``: the basin of attraction of a basin store, starts coloured by attractor.
 - ``style``: fonts, the field's notation, ``save_figure``.
 - ``orbit``: one steady orbit (``plot_orbit``; ``plot_phase``, ``plot_gap``, ``plot_force``).
 - ``bifurcation``: σn points and detachments along ω (``plot_line``, ``plot_lines``).
@@ -39,6 +40,8 @@ MAP_VIEWS = (
     "labels", "kind", "dc", "eps_max", "eps_min", "pn_max", "revolutions", "lyapunov", "hysteresis",
     "multistability",
 )  # fmt: skip
+# What ``campar plot --what`` can draw of a store: the map views, and a basin store's one.
+STORE_VIEWS = (*MAP_VIEWS, "basin")
 
 _EXPORTS = {
     "label_colour": "labels",
@@ -62,7 +65,7 @@ _EXPORTS = {
     "mark_transitions": "transitions",
 }
 
-__all__ = ["MAP_VIEWS", "PlotError", "parse_range", *_EXPORTS]
+__all__ = ["MAP_VIEWS", "STORE_VIEWS", "PlotError", "parse_range", *_EXPORTS]
 
 
 def parse_range(text: str) -> tuple[float, float]:

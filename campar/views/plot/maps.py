@@ -415,6 +415,10 @@ def plot_store(
     from ...sweep.store import fill_value, read_store, verify_store  # only this view reads files
     from ..output import figure_file
 
+    with read_store(path) as store:
+        basin = store.job.kind == "basin"
+    if basin or what == "basin":
+        return basin_view(path, what, output, basin, zoomed=(omega, second, curves, direction))
     output = figure_file(output or f"{Path(path).stem}-{what}.png")
     needed = arrays_for(what)
     with read_store(path) as store:
@@ -465,6 +469,19 @@ def plot_store(
     if layer is not None:  # one direction of a both store: say which
         title = f"{title or parameter_text(grid.fixed)}   (ω swept {direction or 'down'})"
     return save_figure(plot_map(grid, arrays, what, title=title, curves=curves), output)
+
+
+def basin_view(path, what: str, output, basin: bool, zoomed) -> Path:
+    """``plot_store`` of a basin store: its one view, the basin figure (``basin``)."""
+    from .basin import plot_basin_store
+
+    if not basin:
+        raise PlotError(f"{path} is a map; --what basin draws a basin store (sweep y0, ydot0)")
+    if what not in ("labels", "basin"):
+        raise PlotError(f"{path} is a basin store: it draws --what basin (the default), not {what}")
+    if any(option is not None for option in zoomed):
+        raise PlotError(f"{path} is a basin store: zooms, curves and directions are for maps")
+    return plot_basin_store(path, output)
 
 
 def drawn_indices(centres: np.ndarray, bounds, name: str) -> np.ndarray:

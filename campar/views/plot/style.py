@@ -49,6 +49,8 @@ SYMBOLS = {
     "mu_kn": r"$\mu_{\mathrm{kn}}$",
     "mu_cn": r"$\mu_{\mathrm{cn}}$",
     "zeta": r"$\zeta$",
+    "y0": r"$y_0$",
+    "ydot0": r"$\dot y_0$",
 }
 MEANINGS = {
     "omega": "cam speed",
@@ -56,6 +58,8 @@ MEANINGS = {
     "mu_kn": "contact stiffness",
     "mu_cn": "contact damping",
     "zeta": "damping ratio",
+    "y0": "initial displacement",
+    "ydot0": "initial velocity",
 }
 
 
@@ -67,6 +71,8 @@ UNITS = {
     "mu_kn": "dimensionless",
     "mu_cn": "dimensionless",
     "zeta": "dimensionless",
+    "y0": "units of stroke $h$, at θ = 0",
+    "ydot0": r"units of $h\,\omega_n$, at θ = 0",
 }
 # Axis titles of the orbit quantities: y, yc, ε in strokes h, ẏ in h·ωn, t in 1/ωn, Pn in K1·h.
 Y_LABEL = r"displacement $y$ (units of stroke $h$)"
