@@ -156,7 +156,7 @@ def test_group_cells_is_the_record_by_record_rule_on_random_records():
     assert (found[np.array(kinds) == Kind.UNCONVERGED] == -1).all()
 
 
-@pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+@pytest.mark.parametrize("suffix", [".zarr", pytest.param(".h5", marks=pytest.mark.slow)])
 def test_an_interrupted_basin_resumes_bitwise_and_both_backends_open_alike(
     basin, tmp_path, monkeypatch, suffix
 ):
@@ -178,6 +178,7 @@ def test_an_interrupted_basin_resumes_bitwise_and_both_backends_open_alike(
         xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())
 
 
+@pytest.mark.slow  # the quick tier's MPI run is tests/test_mpi.py's
 def test_a_basin_under_mpirun_equals_the_serial_one(basin, tmp_path):
     whole, _ = basin
     assert_mpirun_store_equals(BASIN, tmp_path, whole)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import QuadMesh
+from matplotlib.colors import to_rgba
 from matplotlib.patches import Rectangle
 
 from campar.cli import main
@@ -19,13 +20,13 @@ from campar.core.codes import FAILED as KIND_FAILED
 from campar.sweep.job import Job
 from campar.sweep.plan import plan_tiles
 from campar.views.plot import MAP_VIEWS, PlotError, parse_range
+from campar.views.plot.colour import srgb_to_lab
 from campar.views.plot.labels import (
     DESIGNED,
     FAILED,
     GAP_STYLE,
     NOT_COMPUTED,
     category_of,
-    delta_e,
     distinct_categories,
     fallback_colour,
     label_colour,
@@ -166,6 +167,11 @@ def test_chattering_is_grouped_per_n():
     # the threshold follows the job's classify.chatter_p
     entries = {e.label for e in map_labels(arrays, chatter_p=5).entries}
     assert entries == {"1-p~", "2-p~"}
+
+
+def delta_e(colour_a, colour_b) -> float:
+    """CIE76 colour difference ΔE*ab of two colours (≈ 2.3: just noticeable)."""
+    return float(np.linalg.norm(srgb_to_lab(to_rgba(colour_a)) - srgb_to_lab(to_rgba(colour_b))))
 
 
 def test_designed_colours_are_pairwise_distinguishable():

@@ -141,13 +141,6 @@ def cam(theta, phase):
 
 
 @hot
-def cam_at(theta):
-    """yc, dyc/dθ, d²yc/dθ² at any angle θ (taken modulo 2π)."""
-    th = theta % TWO_PI
-    return cam(th, phase_of(th))
-
-
-@hot
 def contact_force(eps, deps, p):
     """Hunt–Crossley force Pn for penetration ε and its rate ε' (docs/model.md, paper eq. 12)."""
     if eps <= 0.0:
@@ -210,16 +203,6 @@ def rhs(t, y, p, mode, dy):
         dy[3] = y[5]
         dy[4] = a10 * y[2] + a11 * y[4]
         dy[5] = a10 * y[3] + a11 * y[5]
-
-
-@hot
-def divergence(t, y, p, mode):
-    """div f = tr A of the (y, y') field in the current mode (Liouville's formula)."""
-    if mode[1] != PUSH:
-        return -2.0 * p.zeta
-    eps, _ = gap(t, y, p, mode[0])
-    eps = max(eps, 0.0)
-    return -2.0 * p.zeta - p.k * eps * math.sqrt(eps) * p.c
 
 
 @hot

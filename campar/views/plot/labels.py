@@ -175,11 +175,6 @@ def label_name(n: int, p: int | None) -> str:
 cielab = srgb_to_lab  # CIE L*a*b* (D65) of sRGB colours in [0, 1], shape (..., 3) → (..., 3)
 
 
-def delta_e(colour_a, colour_b) -> float:
-    """CIE76 colour difference ΔE*ab of two colours (≈ 2.3: just noticeable)."""
-    return float(np.linalg.norm(cielab(to_rgba(colour_a)) - cielab(to_rgba(colour_b))))
-
-
 @functools.cache
 def _designed_lab() -> np.ndarray:
     return cielab(np.array([to_rgba(c) for c in DESIGNED.values()]))
