@@ -93,13 +93,13 @@ def test_the_integrator_knows_no_cam():
         assert word not in code, word
 
 
-def test_only_the_runner_imports_mpi4py():
+def test_only_the_wire_imports_mpi4py():
     users = {
         name
         for name, path in MODULES.items()
         if any(m.startswith("mpi4py") for m in imports_of(path))
     }
-    assert users <= {"campar.sweep.runner"}, users
+    assert users == {"campar.sweep.wire"}, users
 
 
 @pytest.mark.parametrize("package", ["campar.views.plot", "campar.sweep.store"])

@@ -62,10 +62,24 @@ def test_mpi_map_equals_the_serial_one_and_every_rank_computes(write_job, ranks)
         assert_same_map(reader, job)
     entry = last_run(job.store)
     assert entry["ranks"] == ranks and entry["outcome"] == "complete"
+    assert entry["writer"] == "workers"  # a Zarr store: each worker wrote its own tiles
     assert entry["hosts"] == [socket.gethostname()]
     assert sum(entry["tiles_per_rank"]) == 6
     assert all(n >= 1 for n in entry["tiles_per_rank"]), entry["tiles_per_rank"]
     assert len(entry["peak_rss_mb"]) == ranks and all(0 < mb < 2000 for mb in entry["peak_rss_mb"])
+
+
+@slow
+@pytest.mark.parametrize(("suffix", "env"), [(".zarr", {"CAMPAR_WRITER": "master"}), (".h5", {})])
+def test_where_the_master_writes_every_tile_the_map_is_the_same(write_job, tmp_path, suffix, env):
+    path, job = write_job(slow=True, store=str(tmp_path / f"m{suffix}"))
+    result = subprocess.run([*mpirun(2), *CAMPAR, "run", str(path)], capture_output=True,
+                            text=True, timeout=300, env={**subprocess_env(), **env})  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
+    entry = last_run(job.store)
+    assert entry["writer"] == "master" and all(n >= 1 for n in entry["tiles_per_rank"])
 
 
 @slow

@@ -2,20 +2,18 @@
 
 One scheduling loop serves both runners. The ``Master`` hands tiles to lanes —
 the compute thread of its own process, and under MPI one lane per worker
-rank — writes each finished tile to the store (rank 0 is the only writer),
-and stops on a signal. The kernel's ``run_chain`` releases the GIL, so the
-master's compute thread keeps a core busy while its main thread does every
-MPI call, store write and signal check: with two ranks on two cores both
-cores compute.
+rank — commits each finished tile to the store, and stops on a signal. Who
+writes a tile's arrays depends on the backend (``Store.direct_writes``): into a
+Zarr store every worker writes its own tiles' chunks (on a thread of its own,
+while its lane computes the next tile) and the master only commits them
+(checksum, then ``done``: ~1 ms a tile instead of ~8, docs/scaling.md); into
+HDF5 (serial h5py) the master writes every tile. ``CAMPAR_WRITER=master``
+makes the master write Zarr tiles too (the single-writer path, for comparison).
+The kernel's ``run_chain`` releases the GIL, so the master's compute thread
+keeps a core busy while its main thread does every MPI call, store write and
+signal check: with two ranks on two cores both cores compute.
 
-Wire protocol (mpi4py.futures style: plain data, ``STOP`` ends a worker, the
-master never blocks in a receive — it probes and sleeps with a backoff capped
-at 1 ms). Results travel as one packed byte buffer whose layout both sides
-know from the job (``pack``/``unpack``), never as pickles:
-
-    worker → master   READY (host)  |  RESULT [tile, ns] + arrays  |  ERROR [tile, ns] + text
-                      NOTICE [signal]  |  BYE [peak RSS kB, CPU ns]
-    master → worker   TILE [index], or TILE [STOP]
+The wire protocol between the master and its worker ranks is ``campar.sweep.wire``'s.
 
 Signals (SIGTERM, SIGINT, SIGUSR1 — mpich's mpirun forwards all three to every
 rank): the first one stops handing out tiles and collects those in flight
@@ -23,13 +21,12 @@ for up to ``grace`` seconds; a second one, or the end of the grace, abandons
 them. The run is logged and ``Interrupted`` (exit 75) raised; running the same
 command again resumes with the tiles whose ``done`` is unset.
 
-mpi4py is imported only here, and only when the process was started by an MPI
-launcher, so ``campar --help`` and serial runs never load MPI.
+mpi4py is imported only by ``wire``, and only when the process was started by an
+MPI launcher, so ``campar --help`` and serial runs never load MPI.
 """
 
 import contextlib
 import logging
-import os
 import queue
 import signal
 import socket
@@ -40,65 +37,30 @@ from collections import Counter, deque
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
-from ..errors import (
-    CamparError,
-    Interrupted,
-    JobError,
-    StoreDamaged,
-    StoreError,
-    StoreIOError,
-    StoreLocked,
-    StoreMismatch,
-)
-from .arrays import array_names
+from ..errors import CamparError, Interrupted, JobError, StoreIOError
 from .budget import check_budget
 from .job import Job
 from .plan import Tile, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
 from .signals import Signals, early_interruption
-from .store import cell_arrays, open_store, tile_shape
+from .store import open_store
 from .tile import run_tile
+from .wire import (
+    Backoff,
+    Outcome,
+    Workers,
+    direct_path,
+    mpi_world,
+    receive_outcome,
+    share_outcome,
+    work,
+)
 
 log = logging.getLogger("campar.run")
 
-TAG_READY, TAG_TILE, TAG_RESULT, TAG_ERROR, TAG_NOTICE, TAG_BYE = range(11, 17)
-STOP = -1
-BACKOFF_SECONDS = 1e-3  # longest sleep of an idle loop between probes (mpi4py.futures)
 MAX_ATTEMPTS = 2  # a tile that fails on two lanes ends the run
 BYE_SECONDS = 10.0  # how long the master waits for workers to leave after STOP
 SIGNAL_CHECK_SECONDS = 0.05  # a serial run's idle wait: signals are seen within this
-MPI_LAUNCHER_ENV = ("PMI_SIZE", "PMI_RANK", "OMPI_COMM_WORLD_SIZE", "PMIX_RANK")
-
-
-@dataclass
-class Outcome:
-    """A lane's report on one tile: its arrays, or the error text."""
-
-    index: int
-    arrays: dict | None
-    error: str | None
-    seconds: float
-    lane: int = 0  # the rank that computed it
-
-
-class Backoff:
-    """Waits between idle polls: double from ~1 µs to ``BACKOFF_SECONDS``, reset on activity."""
-
-    def __init__(self, longest: float = BACKOFF_SECONDS):
-        self.longest, self.shortest, self.now = longest, longest / 1024, 0.0
-
-    def reset(self) -> None:
-        self.now = 0.0
-
-    def delay(self) -> float:
-        """The next wait, in seconds."""
-        now, self.now = self.now, min(self.longest, max(self.shortest, 2 * self.now))
-        return now
-
-    def sleep(self) -> None:
-        time.sleep(self.delay())
 
 
 class ThreadLane:
@@ -141,114 +103,13 @@ class ThreadLane:
             self._outbox.put(Outcome(tile.index, arrays, error, time.perf_counter() - start))
 
 
-# -- packing tile arrays into one buffer -----------------------------------------------
-
-
-def tile_layout(job: Job, tile: Tile) -> list[tuple[str, np.dtype, tuple[int, ...]]]:
-    """(name, dtype, shape) of each array of a tile, in ``array_names`` order."""
-    return [(a.name, a.dtype, tile_shape(a, tile)) for a in cell_arrays(job)]
-
-
-def pack(header: list[int], arrays: list[np.ndarray]) -> np.ndarray:
-    """One contiguous byte buffer: int64 header, then each array's bytes in order."""
-    parts = [np.asarray(header, np.int64).view(np.uint8)]
-    parts += [np.ascontiguousarray(a).reshape(-1).view(np.uint8) for a in arrays]
-    return np.concatenate(parts)
-
-
-def unpack(job: Job, tile: Tile, payload: np.ndarray) -> dict[str, np.ndarray]:
-    layout = tile_layout(job, tile)
-    expected = sum(np.dtype(d).itemsize * int(np.prod(s)) for _, d, s in layout)
-    if payload.nbytes != expected:
-        raise CamparError(
-            f"tile {tile.index}: {payload.nbytes} bytes received, {expected} expected"
-        )
-    arrays, offset = {}, 0
-    for name, dtype, shape in layout:
-        count = int(np.prod(shape))
-        arrays[name] = np.frombuffer(payload, dtype, count, offset).reshape(shape).copy()
-        offset += count * np.dtype(dtype).itemsize
-    return arrays
-
-
-# -- the master's view of its worker ranks ---------------------------------------------
-
-
-class Workers:
-    """Master side of the wire protocol: which rank is idle, busy, told to stop, gone."""
-
-    def __init__(self, comm, job: Job):
-        from mpi4py import MPI
-
-        self.MPI, self.comm, self.job = MPI, comm, job
-        self.tiles = plan_tiles(job)
-        self.status = MPI.Status()
-        self.idle: list[int] = []
-        self.busy: dict[int, int] = {}
-        self.stopped: set[int] = set()
-        self.gone: set[int] = set()
-        self.hosts: dict[int, str] = {}
-        self.rss: dict[int, float] = {}
-        self.cpu: dict[int, float] = {}
-        self.seconds = 0.0
-
-    def poll(self) -> list:
-        """Every message waiting now: Outcomes, and ("signal", signum) notices."""
-        events = []
-        MPI = self.MPI
-        while self.comm.Iprobe(MPI.ANY_SOURCE, MPI.ANY_TAG, self.status):
-            rank, tag = self.status.Get_source(), self.status.Get_tag()
-            buf = np.empty(self.status.Get_count(MPI.BYTE), np.uint8)
-            self.comm.Recv([buf, MPI.BYTE], rank, tag)
-            head = buf[:16].view(np.int64) if buf.nbytes >= 16 else None
-            if tag == TAG_READY:
-                self.hosts[rank] = buf.tobytes().decode()
-                self.idle.append(rank)
-            elif tag in (TAG_RESULT, TAG_ERROR):
-                index, seconds = int(head[0]), head[1] / 1e9
-                self.busy.pop(rank, None)
-                self.idle.append(rank)
-                self.seconds += seconds
-                if tag == TAG_RESULT:
-                    arrays = unpack(self.job, self.tiles[index], buf[16:])
-                    events.append(Outcome(index, arrays, None, seconds, rank))
-                else:
-                    text = buf[16:].tobytes().decode()
-                    events.append(Outcome(index, None, text, seconds, rank))
-            elif tag == TAG_NOTICE:
-                events.append(("signal", int(buf.view(np.int64)[0])))
-            elif tag == TAG_BYE:
-                rss, cpu = buf.view(np.int64) / (1024, 1e9)
-                self.rss[rank], self.cpu[rank] = round(rss, 1), round(cpu, 3)
-                self.gone.add(rank)
-        return events
-
-    def assign(self, rank: int, tile: Tile) -> None:
-        self.idle.remove(rank)
-        self.busy[rank] = tile.index
-        self._send(rank, tile.index)
-
-    def stop(self, rank: int) -> None:
-        if rank not in self.stopped:
-            self.stopped.add(rank)
-            self._send(rank, STOP)
-
-    def _send(self, rank: int, value: int) -> None:
-        # 8 bytes: sent eagerly, Send returns at once.
-        self.comm.Send([np.array([value], np.int64), self.MPI.BYTE], rank, TAG_TILE)
-
-    @property
-    def all_gone(self) -> bool:
-        return len(self.gone) == self.comm.Get_size() - 1
-
-
 # -- the master ---------------------------------------------------------------------------
 
 
 class Master:
     """Hands pending tiles to lanes, writes results, and stops on request."""
 
-    def __init__(self, job, store, tiles, progress, grace, comm=None):
+    def __init__(self, job, store, tiles, progress, grace, comm=None, direct=False):
         self.job, self.store, self.progress, self.grace = job, store, progress, grace
         self.tiles = plan_tiles(job)
         self.queue = deque(tiles)
@@ -261,6 +122,7 @@ class Master:
         self.failure: str | None = None
         self.abandon_at = None
         self.cpu = time.process_time()  # at the start of the run
+        self.direct = direct  # the workers write their own tiles (the master commits them)
 
     def stop(self, reason: str) -> None:
         if self.stop_reason is None:
@@ -270,7 +132,9 @@ class Master:
 
     @property
     def in_flight(self) -> int:
-        return (self.local.busy is not None) + (len(self.workers.busy) if self.workers else 0)
+        """Tiles handed out and not yet back: computing, or written by their worker."""
+        workers = len(self.workers.busy) + len(self.workers.writing) if self.workers else 0
+        return (self.local.busy is not None) + workers
 
     def handle(self, out) -> None:
         """Act on a notice or a failure; results are only counted (``write`` stores them)."""
@@ -278,6 +142,8 @@ class Master:
             self.stop(f"{signal.Signals(out[1]).name} at a worker")
         elif out.error is None:
             return
+        elif out.io_error:  # as if the master's own write had failed
+            raise StoreIOError(out.error)
         else:
             failed_on = self.failed_on.setdefault(out.index, [])
             failed_on.append(out.lane)
@@ -303,7 +169,10 @@ class Master:
 
     def write(self, out: Outcome) -> None:
         tile = self.tiles[out.index]
-        self.store.write_tile(tile, out.arrays)
+        if out.checksum is None:
+            self.store.write_tile(tile, out.arrays)
+        else:  # its worker wrote the arrays
+            self.store.commit_tile(tile, out.checksum)
         self.tiles_by_lane[out.lane] += 1
         self.progress.tile_done(tile.n_rows * self.job.shape[1])
 
@@ -379,52 +248,6 @@ class Master:
             log.warning("ranks %s did not confirm STOP within %.0f s", missing, BYE_SECONDS)
 
 
-# -- workers --------------------------------------------------------------------------------
-
-
-def work(comm, job: Job, signals: Signals) -> None:
-    """A worker rank: ask for tiles, compute them on a thread, send results back."""
-    from mpi4py import MPI
-
-    rank, host, cpu = comm.Get_rank(), socket.gethostname(), time.process_time()
-    tiles = plan_tiles(job)
-    lane = ThreadLane(job, f"rank {rank} on {host}")
-    comm.Send([np.frombuffer(host.encode(), np.uint8), MPI.BYTE], 0, TAG_READY)
-    index = np.empty(1, np.int64)
-    backoff, forwarded = Backoff(), 0
-    while True:
-        active = False
-        if comm.Iprobe(0, TAG_TILE):
-            comm.Recv([index, MPI.BYTE], 0, TAG_TILE)
-            if index[0] == STOP:
-                break
-            lane.start(tiles[int(index[0])])
-            active = True
-        if out := lane.poll(backoff.delay()):
-            head = [out.index, int(out.seconds * 1e9)]
-            if out.error is None:
-                buf, tag = pack(head, [out.arrays[n] for n in array_names(job)]), TAG_RESULT
-            else:
-                buf, tag = pack(head, [np.frombuffer(out.error.encode(), np.uint8)]), TAG_ERROR
-            wait(comm.Isend([buf, MPI.BYTE], 0, tag))
-            active = True
-        if signals.count > forwarded:  # the master decides; it may not have been signalled
-            forwarded = signals.count
-            comm.Send([np.array([signals.last], np.int64), MPI.BYTE], 0, TAG_NOTICE)
-        if active:
-            backoff.reset()
-    lane.close()
-    usage = [int(peak_rss_mb() * 1024), int((time.process_time() - cpu) * 1e9)]
-    comm.Send([np.array(usage, np.int64), MPI.BYTE], 0, TAG_BYE)
-
-
-def wait(request) -> None:
-    """Complete a request without spinning a core (MPI's Wait busy-polls in mpich)."""
-    backoff = Backoff()
-    while not request.Test():
-        backoff.sleep()
-
-
 # -- entry point ------------------------------------------------------------------------------
 
 
@@ -432,18 +255,6 @@ def wait(request) -> None:
 class RunSummary:
     outcome: str  # complete | nothing to do | worker
     entry: dict  # the run-log entry (empty on workers and when nothing was pending)
-
-
-def mpi_world():
-    """COMM_WORLD when started by an MPI launcher with more than one rank, else None."""
-    if not any(name in os.environ for name in MPI_LAUNCHER_ENV):
-        return None
-    import mpi4py
-
-    mpi4py.rc.thread_level = "funneled"  # only the main thread calls MPI
-    from mpi4py import MPI
-
-    return MPI.COMM_WORLD if MPI.COMM_WORLD.Get_size() > 1 else None
 
 
 def run_job(
@@ -470,68 +281,35 @@ def run_job(
     with Signals() as signals:
         comm = mpi_world()
         if comm is not None and comm.Get_rank() > 0:
-            receive_outcome(comm)  # of opening the store
-            work(comm, job, signals)
+            direct = receive_outcome(comm)  # of opening the store: where to write, if at all
+            work(
+                comm,
+                job,
+                signals,
+                ThreadLane(job, f"rank {comm.Get_rank()} on {socket.gethostname()}"),
+                direct,
+            )
             receive_outcome(comm)  # of the run
             return RunSummary("worker", {})
-        with share_outcome(comm):
+        opened = {}
+        with share_outcome(comm, opened):
             store = open_store(path, job, overwrite=overwrite)
+            opened["text"] = direct_path(store)
         with store, share_outcome(comm):
-            return run_master(job, store, signals, comm, grace)
+            return run_master(job, store, signals, comm, grace, bool(opened["text"]))
 
 
 # Errors a worker re-raises after the master (by index); others arrive as CamparError.
-SHARED_ERRORS = (
-    CamparError, JobError, StoreError, StoreMismatch, StoreLocked, Interrupted, StoreIOError,
-    StoreDamaged,
-)  # fmt: skip
 
 
-@contextlib.contextmanager
-def share_outcome(comm):
-    """Master: tell every worker whether the block raised, and what (so that all ranks
-    of an SPMD caller take the same branch)."""
-    try:
-        yield
-    except BaseException as exc:
-        if comm is not None:
-            code = next((i for i, c in enumerate(SHARED_ERRORS) if type(exc) is c), 0)
-            _send_outcome(comm, code, str(exc), getattr(exc, "exit_code", 1))
-        raise
-    if comm is not None:
-        _send_outcome(comm, -1, "", 0)
-
-
-def _send_outcome(comm, code: int, text: str, exit_code: int) -> None:
-    # The exit code too: mpirun ORs the ranks' codes, so they must agree (130 | 75 = 203).
-    data = np.frombuffer(text.encode(), np.uint8).copy()
-    wait(comm.Ibcast(np.array([code, data.size, exit_code], np.int64), root=0))
-    if data.size:
-        wait(comm.Ibcast(data, root=0))
-
-
-def receive_outcome(comm) -> None:
-    """Worker: raise what the master raised (marked with this rank: the master reports it)."""
-    head = np.empty(3, np.int64)
-    wait(comm.Ibcast(head, root=0))
-    if head[0] < 0:
-        return
-    data = np.empty(int(head[1]), np.uint8)
-    if data.size:
-        wait(comm.Ibcast(data, root=0))
-    error = SHARED_ERRORS[int(head[0])](data.tobytes().decode())
-    error.rank, error.exit_code = comm.Get_rank(), int(head[2])
-    raise error
-
-
-def run_master(job, store, signals, comm, grace) -> RunSummary:
+def run_master(job, store, signals, comm, grace, direct=False) -> RunSummary:
     tiles = pending_tiles(job, store.done)
     all_tiles = plan_tiles(job)
     n_rows, n_omega = job.shape
     done_cells = sum(t.n_rows for t in all_tiles if store.done[t.index]) * n_omega
     total_cells = n_rows * n_omega * len(job.directions)
     progress = Progress(len(all_tiles), total_cells, len(all_tiles) - len(tiles), done_cells)
-    master = Master(job, store, tiles, progress, grace, comm)
+    master = Master(job, store, tiles, progress, grace, comm, direct)
     if not tiles:
         log.info("%s: all %d tiles are done already", store.path, len(all_tiles))
         master.run(signals)  # dismisses the workers
@@ -571,6 +349,7 @@ def usage(master: Master) -> dict:
     w, others = master.workers, range(1, master.n_lanes)
     return {
         "ranks": master.n_lanes,
+        "writer": "workers" if master.direct else "master",  # of the workers' tiles
         "host": master.host,
         "hosts": sorted({master.host, *(w.hosts.values() if w else ())}),
         "compute_seconds": round(master.local.seconds + (w.seconds if w else 0), 3),

@@ -49,6 +49,7 @@ from ._schema import (
     cell_arrays,
     check_readable,
     check_same_job,
+    check_tile_arrays,
     fill_value,
     job_differences,
     store_arrays,
@@ -61,6 +62,7 @@ __all__ = [
     "ArraySchema",
     "Store",
     "StoreReader",
+    "TileWriter",
     "Verification",
     "backend_name",
     "cell_arrays",
@@ -179,6 +181,34 @@ def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job):
             path, len(report.committed), time.monotonic() - start, len(report.damaged),
         )  # fmt: skip
     return report.verified
+
+
+class TileWriter:
+    """Writes its own tiles' arrays into a store that allows it (``Store.direct_writes``):
+    a worker rank's side of a run whose master only commits (``Store.commit_tile``).
+    ``real``: the store's real path (``Store.real``), as the master opened it."""
+
+    def __init__(self, real: str | Path, job: Job):
+        self.path, self.job = Path(real), job
+        self.tiles = plan_tiles(job)
+        self._names = [a.name for a in cell_arrays(job)]
+        try:
+            self._arrays = _zarr.ZarrTileArrays(self.path, job)
+        except OSError as exc:
+            raise io_error(f"cannot open the store {self.path} to write tiles", exc) from None
+
+    def write_tile(self, tile, arrays: dict[str, np.ndarray]) -> int:
+        """Write a tile's arrays (as ``run_tile`` returns them); returns the checksum its
+        commit records. StoreIOError (exit 74) when the write fails."""
+        if tile != self.tiles[tile.index]:
+            raise ValueError(f"{tile} is not tile {tile.index} of job {self.job.name}")
+        check_tile_arrays(self.job, tile, arrays)
+        try:
+            self._arrays.write(tile, arrays)
+        except OSError as exc:
+            what = f"cannot write tile {tile.index} to the store {self.path}"
+            raise io_error(what, exc) from None
+        return tile_checksum(arrays, self._names)
 
 
 def read_store(path: str | Path) -> StoreReader:

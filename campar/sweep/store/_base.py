@@ -188,7 +188,14 @@ def tile_values(read, n_tiles: int, dtype, name: str) -> tuple[np.ndarray, dict[
 
 
 class Store(ABC):
-    """A store opened for one run: holds the lock; the only writer."""
+    """A store opened for one run: holds the lock; the only writer of commits.
+
+    ``direct_writes``: other processes may write a tile's arrays themselves
+    (``TileWriter``), the store then commits it (``commit_tile``): a backend whose tiles
+    are files of their own (Zarr); HDF5 from PyPI is serial and has one writer.
+    """
+
+    direct_writes = False
 
     def __init__(self, path: Path, job: Job, lock: StoreLock, runs: list, real: Path | None = None):
         self.path = path  # as given, for messages
@@ -216,6 +223,21 @@ class Store(ABC):
             raise io_error(
                 f"cannot write tile {tile.index} to the store {self.path}", exc
             ) from None
+
+    def commit_tile(self, tile: Tile, checksum: int) -> None:
+        """Commit a tile whose arrays a ``TileWriter`` wrote: its checksum, then ``done``."""
+        if not self.direct_writes:
+            raise StoreError(f"{self.path}: this backend has one writer; use write_tile")
+        if tile != self.tiles[tile.index]:
+            raise ValueError(f"{tile} is not tile {tile.index} of job {self.job.name}")
+        try:
+            self._commit(tile, checksum)
+        except OSError as exc:
+            what = f"cannot commit tile {tile.index} to the store {self.path}"
+            raise io_error(what, exc) from None
+
+    def _commit(self, tile: Tile, checksum: int) -> None:
+        raise NotImplementedError  # backends with direct_writes
 
     def log_run(self, entry: dict) -> None:
         """Append one entry to the store's run log (attribute ``runs``)."""

@@ -153,12 +153,38 @@ def repair(path: Path, job: Job, report: Verification) -> None:
             group.store.delete_sync(f"{a.name}/{key}")
 
 
+class ZarrTileArrays:
+    """Writes tiles' array chunks into a Zarr store, without the lock and without commit:
+    what a worker rank does for its own tiles (``Store.direct_writes``). Distinct tiles
+    never share a chunk file, so writers of different tiles never meet; the master
+    commits a tile (checksum, then ``done``) only after its writer reported it written,
+    and resume clears the chunks of uncommitted tiles (``ZarrStore._clear``)."""
+
+    def __init__(self, real: Path, job: Job):
+        self.real, self.job = real, job
+        self._group = zarr.open_group(real, mode="r+")
+        self._arrays = {a.name: self._group[a.name] for a in cell_arrays(job)}
+
+    def write(self, tile: Tile, arrays: dict[str, np.ndarray]) -> None:
+        try:
+            # Every array's chunk of the tile in one call of zarr's event loop: one call per
+            # array costs each its own round trip through the loop (docs/scaling.md).
+            sync(_all_at_once(self._arrays[k].async_array.setitem(tile.region, v)
+                              for k, v in arrays.items()))  # fmt: skip
+        except OSError:
+            clean_leftovers(self.real, self.job)  # a failed write's .partial files
+            raise
+
+
 class ZarrStore(Store):
+    direct_writes = True
+
     def __init__(self, path: Path, job: Job, lock: StoreLock, done: np.ndarray, real: Path):
         group = zarr.open_group(real, mode="r+")
         super().__init__(path, job, lock, decode_attrs(group.attrs.asdict())["runs"], real)
         self._group = group
-        self._arrays = {a.name: group[a.name] for a in cell_arrays(job)}
+        self._tile_arrays = ZarrTileArrays(real, job)
+        self._arrays = self._tile_arrays._arrays
         self._schemas = cell_arrays(job)
         self._checksums = group["checksum"]
         self._flags = group["done"]
@@ -181,15 +207,15 @@ class ZarrStore(Store):
         return self._done.copy()
 
     def _write_tile(self, tile: Tile, arrays: dict[str, np.ndarray], checksum: int) -> None:
+        self._tile_arrays.write(tile, arrays)
+        self._commit(tile, checksum)
+
+    def _commit(self, tile: Tile, checksum: int) -> None:
         try:
-            # Every array's chunk of the tile in one call of zarr's event loop: one call per
-            # array costs each its own round trip through the loop (docs/scaling.md).
-            sync(_all_at_once(self._arrays[k].async_array.setitem(tile.region, v)
-                              for k, v in arrays.items()))  # fmt: skip
             self._checksums[tile.index] = checksum
             self._flags[tile.index] = 1  # the commit: after every array chunk and the checksum
         except OSError:
-            clean_leftovers(self.real, self.job)  # a failed write's .partial files
+            clean_leftovers(self.real, self.job)
             raise
         self._done[tile.index] = True
 

@@ -1,0 +1,379 @@
+"""The wire between the runner's master (rank 0) and its worker ranks, and MPI itself.
+
+Wire protocol (mpi4py.futures style: plain data, ``STOP`` ends a worker, the
+master never blocks in a receive — it probes and sleeps with a backoff capped
+at 1 ms). Results travel as one packed byte buffer whose layout both sides
+know from the job (``pack``/``unpack``), never as pickles:
+
+    worker → master   READY (host)  |  RESULT [tile, ns] + arrays  |  ERROR [tile, ns] + text
+                      COMPUTED [tile, ns]  |  WRITTEN [tile, checksum]  |  IO_ERROR [tile] + text
+                      NOTICE [signal]  |  BYE [peak RSS kB, CPU ns]
+    master → worker   TILE [index], or TILE [STOP]
+
+(COMPUTED, WRITTEN and IO_ERROR where workers write their own tiles: COMPUTED frees
+the rank for its next tile, WRITTEN lets the master commit the tile, IO_ERROR ends
+the run as a failed write of the master's own would, exit 74.)
+
+Every rank learns the outcome of what the master does alone — opening the store,
+then the run — as one broadcast (``share_outcome``/``receive_outcome``): all ranks of
+an SPMD caller raise the same error, with the same exit code (mpirun ORs them).
+
+mpi4py is imported only here, and only when the process was started by an MPI
+launcher (``mpi_world``), so ``campar --help`` and serial runs never load MPI.
+"""
+
+import contextlib
+import os
+import queue
+import socket
+import threading
+import time
+import traceback
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import (
+    CamparError,
+    Interrupted,
+    JobError,
+    StoreDamaged,
+    StoreError,
+    StoreIOError,
+    StoreLocked,
+    StoreMismatch,
+)
+from .arrays import array_names
+from .job import Job
+from .plan import Tile, plan_tiles
+from .progress import peak_rss_mb
+from .store import cell_arrays, tile_shape
+
+TAG_READY, TAG_TILE, TAG_RESULT, TAG_ERROR, TAG_NOTICE, TAG_BYE = range(11, 17)
+TAG_COMPUTED, TAG_WRITTEN, TAG_IO_ERROR = range(17, 20)
+WRITER_ENV = "CAMPAR_WRITER"  # "master": the master writes every tile, whatever the backend
+STOP = -1
+BACKOFF_SECONDS = 1e-3  # longest sleep of an idle loop between probes (mpi4py.futures)
+MPI_LAUNCHER_ENV = ("PMI_SIZE", "PMI_RANK", "OMPI_COMM_WORLD_SIZE", "PMIX_RANK")
+
+
+@dataclass
+class Outcome:
+    """A lane's report on one tile: its arrays, or the error text."""
+
+    index: int
+    arrays: dict | None
+    error: str | None
+    seconds: float
+    lane: int = 0  # the rank that computed it
+    checksum: int | None = None  # written by its worker already: only the commit is left
+    io_error: bool = False  # ``error`` is its worker's failed write: the run ends (exit 74)
+
+
+class Backoff:
+    """Waits between idle polls: double from ~1 µs to ``BACKOFF_SECONDS``, reset on activity."""
+
+    def __init__(self, longest: float = BACKOFF_SECONDS):
+        self.longest, self.shortest, self.now = longest, longest / 1024, 0.0
+
+    def reset(self) -> None:
+        self.now = 0.0
+
+    def delay(self) -> float:
+        """The next wait, in seconds."""
+        now, self.now = self.now, min(self.longest, max(self.shortest, 2 * self.now))
+        return now
+
+    def sleep(self) -> None:
+        time.sleep(self.delay())
+
+
+# -- packing tile arrays into one buffer -----------------------------------------------
+
+
+def tile_layout(job: Job, tile: Tile) -> list[tuple[str, np.dtype, tuple[int, ...]]]:
+    """(name, dtype, shape) of each array of a tile, in ``array_names`` order."""
+    return [(a.name, a.dtype, tile_shape(a, tile)) for a in cell_arrays(job)]
+
+
+def pack(header: list[int], arrays: list[np.ndarray]) -> np.ndarray:
+    """One contiguous byte buffer: int64 header, then each array's bytes in order."""
+    parts = [np.asarray(header, np.int64).view(np.uint8)]
+    parts += [np.ascontiguousarray(a).reshape(-1).view(np.uint8) for a in arrays]
+    return np.concatenate(parts)
+
+
+def unpack(job: Job, tile: Tile, payload: np.ndarray) -> dict[str, np.ndarray]:
+    layout = tile_layout(job, tile)
+    expected = sum(np.dtype(d).itemsize * int(np.prod(s)) for _, d, s in layout)
+    if payload.nbytes != expected:
+        raise CamparError(
+            f"tile {tile.index}: {payload.nbytes} bytes received, {expected} expected"
+        )
+    arrays, offset = {}, 0
+    for name, dtype, shape in layout:
+        count = int(np.prod(shape))
+        arrays[name] = np.frombuffer(payload, dtype, count, offset).reshape(shape).copy()
+        offset += count * np.dtype(dtype).itemsize
+    return arrays
+
+
+# -- the master's view of its worker ranks ---------------------------------------------
+
+
+class Workers:
+    """Master side of the wire protocol: which rank is idle, busy, told to stop, gone."""
+
+    def __init__(self, comm, job: Job):
+        from mpi4py import MPI
+
+        self.MPI, self.comm, self.job = MPI, comm, job
+        self.tiles = plan_tiles(job)
+        self.status = MPI.Status()
+        self.idle: list[int] = []
+        self.busy: dict[int, int] = {}
+        self.writing: dict[int, int] = {}  # tile → the rank writing its arrays
+        self.stopped: set[int] = set()
+        self.gone: set[int] = set()
+        self.hosts: dict[int, str] = {}
+        self.rss: dict[int, float] = {}
+        self.cpu: dict[int, float] = {}
+        self.seconds = 0.0
+
+    def poll(self) -> list:
+        """Every message waiting now: Outcomes, and ("signal", signum) notices."""
+        events = []
+        MPI = self.MPI
+        while self.comm.Iprobe(MPI.ANY_SOURCE, MPI.ANY_TAG, self.status):
+            rank, tag = self.status.Get_source(), self.status.Get_tag()
+            buf = np.empty(self.status.Get_count(MPI.BYTE), np.uint8)
+            self.comm.Recv([buf, MPI.BYTE], rank, tag)
+            head = buf[:16].view(np.int64) if buf.nbytes >= 16 else None
+            if tag == TAG_READY:
+                self.hosts[rank] = buf.tobytes().decode()
+                self.idle.append(rank)
+            elif tag in (TAG_RESULT, TAG_ERROR):
+                index, seconds = int(head[0]), head[1] / 1e9
+                self.busy.pop(rank, None)
+                self.idle.append(rank)
+                self.seconds += seconds
+                if tag == TAG_RESULT:
+                    arrays = unpack(self.job, self.tiles[index], buf[16:])
+                    events.append(Outcome(index, arrays, None, seconds, rank))
+                else:
+                    text = buf[16:].tobytes().decode()
+                    events.append(Outcome(index, None, text, seconds, rank))
+            elif tag == TAG_COMPUTED:  # the rank writes it now and is free for another
+                index, seconds = int(head[0]), head[1] / 1e9
+                self.busy.pop(rank, None)
+                self.idle.append(rank)
+                self.seconds += seconds
+                self.writing[index] = rank
+            elif tag == TAG_WRITTEN:
+                index, checksum = int(head[0]), int(head[1:2].view(np.uint64)[0])
+                self.writing.pop(index, None)
+                events.append(Outcome(index, None, None, 0.0, rank, checksum))
+            elif tag == TAG_IO_ERROR:
+                index = int(buf[:8].view(np.int64)[0])
+                self.writing.pop(index, None)
+                text = buf[8:].tobytes().decode()
+                events.append(Outcome(index, None, text, 0.0, rank, io_error=True))
+            elif tag == TAG_NOTICE:
+                events.append(("signal", int(buf.view(np.int64)[0])))
+            elif tag == TAG_BYE:
+                rss, cpu = buf.view(np.int64) / (1024, 1e9)
+                self.rss[rank], self.cpu[rank] = round(rss, 1), round(cpu, 3)
+                self.gone.add(rank)
+        return events
+
+    def assign(self, rank: int, tile: Tile) -> None:
+        self.idle.remove(rank)
+        self.busy[rank] = tile.index
+        self._send(rank, tile.index)
+
+    def stop(self, rank: int) -> None:
+        if rank not in self.stopped:
+            self.stopped.add(rank)
+            self._send(rank, STOP)
+
+    def _send(self, rank: int, value: int) -> None:
+        # 8 bytes: sent eagerly, Send returns at once.
+        self.comm.Send([np.array([value], np.int64), self.MPI.BYTE], rank, TAG_TILE)
+
+    @property
+    def all_gone(self) -> bool:
+        return len(self.gone) == self.comm.Get_size() - 1
+
+
+# -- the worker ranks ----------------------------------------------------------------------
+
+
+class WriterThread:
+    """A worker's writes of its own tiles (``TileWriter`` into the store at ``real``), on a
+    daemon thread: the lane computes its next tile meanwhile. Results come back in order
+    as (tile index, checksum, None) or (tile index, None, the StoreIOError's text)."""
+
+    def __init__(self, real: str, job: Job):
+        self.real, self.job, self.pending = real, job, 0
+        self._inbox, self._outbox = queue.Queue(), queue.Queue()
+        threading.Thread(target=self._loop, daemon=True, name="campar-writer").start()
+
+    def put(self, tile: Tile, arrays: dict) -> None:
+        self.pending += 1
+        self._inbox.put((tile, arrays))
+
+    def poll(self, timeout: float | None = 0.0):
+        try:
+            done = (
+                self._outbox.get(timeout=timeout) if timeout != 0.0 else self._outbox.get_nowait()
+            )
+        except queue.Empty:
+            return None
+        self.pending -= 1
+        return done
+
+    def close(self) -> None:
+        self._inbox.put(None)
+
+    def _loop(self):
+        from .store import TileWriter
+
+        writer = None
+        while (item := self._inbox.get()) is not None:
+            tile, arrays = item
+            try:
+                writer = writer or TileWriter(self.real, self.job)
+                self._outbox.put((tile.index, writer.write_tile(tile, arrays), None))
+            except StoreIOError as exc:
+                self._outbox.put((tile.index, None, str(exc)))
+            except Exception:
+                self._outbox.put((tile.index, None, traceback.format_exc()))
+
+
+def work(comm, job: Job, signals, lane, direct: str = "") -> None:
+    """A worker rank: ask for tiles, compute them on ``lane`` (a thread: ``start``,
+    ``poll``, ``close``), send results back — or, where ``direct`` names the store's real
+    path, write them there and report that."""
+    from mpi4py import MPI
+
+    host, cpu = socket.gethostname(), time.process_time()
+    tiles = plan_tiles(job)
+    writer = WriterThread(direct, job) if direct else None
+
+    def report(done) -> None:  # a write's outcome, to the master
+        index, checksum, error = done
+        if error is None:
+            head = np.array([index, 0], np.int64)
+            head[1:] = np.array([checksum], np.uint64).view(np.int64)
+            wait(comm.Isend([head, MPI.BYTE], 0, TAG_WRITTEN))
+        else:
+            buf = pack([index], [np.frombuffer(error.encode(), np.uint8)])
+            wait(comm.Isend([buf, MPI.BYTE], 0, TAG_IO_ERROR))
+
+    comm.Send([np.frombuffer(host.encode(), np.uint8), MPI.BYTE], 0, TAG_READY)
+    index = np.empty(1, np.int64)
+    backoff, forwarded = Backoff(), 0
+    while True:
+        active = False
+        if comm.Iprobe(0, TAG_TILE):
+            comm.Recv([index, MPI.BYTE], 0, TAG_TILE)
+            if index[0] == STOP:
+                break
+            lane.start(tiles[int(index[0])])
+            active = True
+        if out := lane.poll(backoff.delay()):
+            head = [out.index, int(out.seconds * 1e9)]
+            if out.error is not None:
+                buf, tag = pack(head, [np.frombuffer(out.error.encode(), np.uint8)]), TAG_ERROR
+            elif writer is not None:  # free for the next tile; the writer takes this one
+                buf, tag = pack(head, []), TAG_COMPUTED
+                writer.put(tiles[out.index], out.arrays)
+            else:
+                buf, tag = pack(head, [out.arrays[n] for n in array_names(job)]), TAG_RESULT
+            wait(comm.Isend([buf, MPI.BYTE], 0, tag))
+            active = True
+        if writer is not None and (done := writer.poll()):
+            report(done)
+            active = True
+        if signals.count > forwarded:  # the master decides; it may not have been signalled
+            forwarded = signals.count
+            comm.Send([np.array([signals.last], np.int64), MPI.BYTE], 0, TAG_NOTICE)
+        if active:
+            backoff.reset()
+    lane.close()
+    if writer is not None:  # tiles computed before STOP: written, so the master may commit them
+        while writer.pending:
+            report(writer.poll(timeout=None))
+        writer.close()
+    usage = [int(peak_rss_mb() * 1024), int((time.process_time() - cpu) * 1e9)]
+    comm.Send([np.array(usage, np.int64), MPI.BYTE], 0, TAG_BYE)
+
+
+def wait(request) -> None:
+    """Complete a request without spinning a core (MPI's Wait busy-polls in mpich)."""
+    backoff = Backoff()
+    while not request.Test():
+        backoff.sleep()
+
+
+def mpi_world():
+    """COMM_WORLD when started by an MPI launcher with more than one rank, else None."""
+    if not any(name in os.environ for name in MPI_LAUNCHER_ENV):
+        return None
+    import mpi4py
+
+    mpi4py.rc.thread_level = "funneled"  # only the main thread calls MPI
+    from mpi4py import MPI
+
+    return MPI.COMM_WORLD if MPI.COMM_WORLD.Get_size() > 1 else None
+
+
+SHARED_ERRORS = (
+    CamparError, JobError, StoreError, StoreMismatch, StoreLocked, Interrupted, StoreIOError,
+    StoreDamaged,
+)  # fmt: skip
+
+
+def direct_path(store) -> str:
+    """The store path workers write their own tiles into ("" where the master writes)."""
+    if not store.direct_writes or os.environ.get(WRITER_ENV) == "master":
+        return ""
+    return str(store.real)
+
+
+@contextlib.contextmanager
+def share_outcome(comm, success: dict | None = None):
+    """Master: tell every worker whether the block raised, and what (so that all ranks
+    of an SPMD caller take the same branch); on success, ``success["text"]`` if set."""
+    try:
+        yield
+    except BaseException as exc:
+        if comm is not None:
+            code = next((i for i, c in enumerate(SHARED_ERRORS) if type(exc) is c), 0)
+            _send_outcome(comm, code, str(exc), getattr(exc, "exit_code", 1))
+        raise
+    if comm is not None:
+        _send_outcome(comm, -1, (success or {}).get("text", ""), 0)
+
+
+def _send_outcome(comm, code: int, text: str, exit_code: int) -> None:
+    # The exit code too: mpirun ORs the ranks' codes, so they must agree (130 | 75 = 203).
+    data = np.frombuffer(text.encode(), np.uint8).copy()
+    wait(comm.Ibcast(np.array([code, data.size, exit_code], np.int64), root=0))
+    if data.size:
+        wait(comm.Ibcast(data, root=0))
+
+
+def receive_outcome(comm) -> str:
+    """Worker: raise what the master raised (marked with this rank: the master reports it);
+    on success, return the text the master sent with it."""
+    head = np.empty(3, np.int64)
+    wait(comm.Ibcast(head, root=0))
+    data = np.empty(int(head[1]), np.uint8)
+    if data.size:
+        wait(comm.Ibcast(data, root=0))
+    if head[0] < 0:
+        return data.tobytes().decode()
+    error = SHARED_ERRORS[int(head[0])](data.tobytes().decode())
+    error.rank, error.exit_code = comm.Get_rank(), int(head[2])
+    raise error
