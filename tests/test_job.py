@@ -104,3 +104,33 @@ def test_every_job_key_is_documented_in_jobs_readme():
 
     missing = [k for k in keys(Job) if f"`{k}`" not in readme]
     assert not missing, f"jobs/README.md does not document {missing}"
+
+
+def test_the_defaults_jobs_readme_states_are_the_job_models():
+    """Each row `| \\`section.key\\` | default |` of jobs/README.md whose default is one
+    number or word states the field's default (a stale row here misled a user before)."""
+    import re
+    from pathlib import Path
+
+    from campar.sweep.job import Job
+
+    readme = (Path(__file__).parents[1] / "jobs" / "README.md").read_text()
+    rows = re.findall(r"^\| `([a-z_]+)\.([a-z_0-9]+)` \| `?([^|`,]+?)`? \|", readme, re.M)
+    checked = 0
+    for section, key, stated in rows:
+        field = Job.model_fields.get(section)
+        settings = getattr(field, "default", None) if field else None
+        if settings is None or not hasattr(settings, key):
+            continue
+        value = getattr(settings, key)
+        stated = stated.strip().replace(" ", "")
+        if isinstance(value, bool):
+            assert stated == str(value).lower(), (section, key, stated, value)
+        elif isinstance(value, (int, float)):
+            assert float(stated) == value, (section, key, stated, value)
+        elif isinstance(value, str):
+            assert stated == value, (section, key, stated, value)
+        else:
+            continue
+        checked += 1
+    assert checked >= 25, checked

@@ -22,6 +22,7 @@ from conftest import (
     wait_for_tiles,
 )
 
+from campar.sweep.plan import auto_tile_rows
 from campar.sweep.store import read_store
 
 pytestmark = [
@@ -229,3 +230,25 @@ def test_no_rank_spins_while_waiting(write_job):
     assert len(usage) == 2
     for wall, cpu in (map(float, u) for u in usage):
         assert wall > 1.4 and cpu < 0.3 * wall, (wall, cpu)  # spinning: ≈ 0.65
+
+
+@slow
+def test_auto_tile_rows_are_chosen_for_the_ranks_and_kept_by_a_resume(write_job):
+    grid = {"omega": {"from": 6.0, "to": 1.0, "points": 12},
+            "mu_cn": {"from": 0.9, "to": 0.6, "points": 24}}  # fmt: skip
+    path, job = write_job(slow=True, sweep=grid, tiles={"rows": "auto"},
+                          transient={"mode": "fixed", "max_revolutions": 400})  # fmt: skip
+    three, serial = auto_tile_rows(job, 3, True)[0], auto_tile_rows(job, 1, False)[0]
+    assert (three, serial) == (2, 4)  # 24 chains: 4 tiles a lane for 3 ranks, else the default
+    proc = start_campar("run", path, launcher=mpirun(3))
+    wait_for_tiles(job.store, 2, proc)
+    kill_tree(proc.pid)
+    proc.communicate(timeout=60)
+    with read_store(job.store) as reader:
+        assert reader.job.tiles.rows == three and not reader.done.all()
+    resumed = run_campar("run", path)  # one process now: the store's layout stays
+    assert resumed.returncode == 0, resumed.stderr
+    assert f"{three}, as the store" in resumed.stderr
+    with read_store(job.store) as reader:
+        assert reader.job.tiles.rows == three
+        assert_same_map(reader, job.with_tile_rows(three))

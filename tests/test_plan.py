@@ -12,6 +12,8 @@ from hypothesis import strategies as st
 
 from campar.sweep.job import Job
 from campar.sweep.plan import (
+    auto_tile_rows,
+    cell_seconds,
     chain_order,
     chain_parameters,
     first_column_parameters,
@@ -169,3 +171,47 @@ def test_the_papers_plane_chains_run_from_its_starting_corner():
     assert (np.diff(first["omega"]) < 0).all()
     assert first["mu_cn"][0] == raw["mu_cn"]["from"]
     assert last["mu_cn"][0] == pytest.approx(raw["mu_cn"]["to"])
+
+
+# -- tiles.rows: auto --------------------------------------------------------------------
+
+
+@given(
+    rows=st.integers(1, 5000),
+    columns=st.integers(1, 5000),
+    lanes=st.integers(1, 2000),
+    direct=st.booleans(),
+)
+@settings(max_examples=300, deadline=None)
+def test_auto_tile_rows_keep_the_master_paced_and_balance_where_the_grid_allows(
+    rows, columns, lanes, direct
+):
+    from campar.sweep.plan import COMMITS_PER_SECOND, TILES_PER_LANE, WRITER_HEADROOM
+
+    job = Job.from_dict({"name": "auto", "tiles": {"rows": "auto"}, "sweep": {
+        "omega": {"from": 6.0, "to": 1.0, "points": columns},
+        "mu_cn": {"from": 0.9, "to": 0.6, "points": rows}}})  # fmt: skip
+    chosen, why = auto_tile_rows(job, lanes, direct)
+    assert 1 <= chosen <= rows
+    tile_seconds = chosen * columns * cell_seconds(job)
+    paced = lanes / tile_seconds <= COMMITS_PER_SECOND[direct] / WRITER_HEADROOM * (1 + 1e-9)
+    n_tiles = -(-rows // chosen)
+    balanced = n_tiles >= TILES_PER_LANE * lanes
+    assert paced or chosen == rows  # the master keeps up, unless a tile is the whole grid
+    if paced and chosen > 1 and not balanced:  # a smaller tile would break the pace
+        smaller = (chosen - 1) * columns * cell_seconds(job)
+        limit = COMMITS_PER_SECOND[direct] / WRITER_HEADROOM * (1 - 1e-9)  # ceil's rounding
+        assert lanes / smaller > limit or chosen <= 4
+        assert "some idle at the end" in why or chosen <= 4
+
+
+def test_auto_tile_rows_keep_the_default_where_it_works_and_grow_for_many_ranks():
+    job = Job.from_dict({"name": "plane", "tiles": {"rows": "auto"}, "sweep": {
+        "omega": {"from": 6.0, "to": 0.02, "points": 400},
+        "mu_cn": {"from": 0.95, "to": 0.70, "points": 400}}})  # fmt: skip
+    assert auto_tile_rows(job, 2, True)[0] == 4  # the layout of jobs/mu_cn.yaml
+    assert auto_tile_rows(job, 64, False)[0] > auto_tile_rows(job, 64, True)[0] > 4
+    with pytest.raises(ValueError, match="chosen when its store is created"):
+        plan_tiles(job)
+    assert plan_tiles(job.with_tile_rows(7))[-1].row_stop == 400
+    assert job.with_tile_rows(7).tiles.rows == 7

@@ -177,7 +177,7 @@ def _directions_arguments(p):
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
-@benchmark("master", "the single writer's capacity: tiles/s, latency to disk, idle ranks")
+@benchmark("master", "the master's capacity: tiles/s, latency to disk, idle ranks, per writer")
 def _master_arguments(p):
     p.add_argument("--ranks", type=ints, default=[16, 64, 128],
                    help="launches, oversubscribed beyond the cores (16,64,128)")  # fmt: skip
@@ -187,6 +187,9 @@ def _master_arguments(p):
     p.add_argument("--tile-seconds", type=float, default=0.15,
                    help="stand-in tile time (0.15 s: 4 chains of the μcn plane)")  # fmt: skip
     p.add_argument("--suffix", default=".zarr", help="store type: .zarr (default) or .h5")
+    p.add_argument("--writer", type=names, default=["workers", "master"],
+                   help="who writes the workers' tiles: workers (each its own; Zarr only), "
+                   "master (rank 0 writes every tile); default both, side by side")  # fmt: skip
     p.add_argument("--tmp", help="directory for the stores (default: the system's)")
     p.add_argument("--keep-stores", action="store_true", help="keep the stores")
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")

@@ -1,4 +1,4 @@
-"""``campar bench master``: how many tiles a second the single writer (rank 0) can take.
+"""``campar bench master``: how many tiles a second the master (rank 0) can take.
 
 The real runner (``campar.sweep.runner``: master, workers, wire protocol, store
 writes) runs under ``mpirun -n R`` with the kernel replaced by a stand-in that
@@ -15,6 +15,10 @@ capacity test of the master, not of the kernel). Reported per R:
 - the master's CPU time per tile (rank 0's process: its own compute lane only
   sleeps), and its inverse, the tiles/s one core can write — the capacity that
   oversubscription on a small machine hides behind the ranks' own polling;
+- each for both writers (``--writer``): the workers writing their own tiles' chunks
+  and the master committing them in groups, or the master writing every tile
+  (``CAMPAR_WRITER=master``, and always for HDF5); "write ms" is the master's share
+  per tile (the write, or the commit);
 - peak RSS of rank 0 and of the largest worker (without numba: the stand-in
   replaces the kernel's module, so add the kernel's ~70 MB for a real run).
 
@@ -75,20 +79,31 @@ def serve(job_path: str, store: str, seconds: float, report: str) -> None:
     from campar.sweep import runner
     from campar.sweep.job import load_job
 
-    latencies, writes = [], []
-    write = runner.Master.write
+    committed, writes = {}, []
+    save = runner.Master.save
 
-    def timed_write(self, out):
+    def timed_save(self, outcomes):  # the writes (of tiles their workers wrote: the commit)
+        if not outcomes:
+            return save(self, outcomes)
         start = time.monotonic_ns()
-        write(self, out)
+        save(self, outcomes)
         end = time.monotonic_ns()
-        latencies.append((end - int(out.arrays["steps"][0, 0])) / 1e9)
-        writes.append((end - start) / 1e9)
+        committed.update((out.index, end) for out in outcomes)
+        writes.extend([(end - start) / 1e9 / len(outcomes)] * len(outcomes))
 
-    runner.Master.write = timed_write
-    summary = runner.run_job(load_job(job_path), store, overwrite=True)
+    runner.Master.save = timed_save
+    job = load_job(job_path)
+    summary = runner.run_job(job, store, overwrite=True)
     if summary.outcome != "worker":
-        Path(report).write_text(json.dumps({"entry": summary.entry, "latency": latencies,
+        # each tile's end on its rank, stamped by the stand-in into the store (whoever wrote)
+        from campar.sweep.plan import plan_tiles
+        from campar.sweep.store import read_store
+
+        with read_store(store) as reader:
+            steps = reader.read("steps")
+        tiles = plan_tiles(job)
+        latency = [(end - int(steps[tiles[i].row_start, 0])) / 1e9 for i, end in committed.items()]
+        Path(report).write_text(json.dumps({"entry": summary.entry, "latency": latency,
                                             "write": writes}))  # fmt: skip
 
 
@@ -104,13 +119,14 @@ def write_job(directory: Path, rows: int, omegas: int, tile_rows: int) -> Path:
     return path
 
 
-def launch(job: Path, store: Path, ranks: int, seconds: float) -> dict:
+def launch(job: Path, store: Path, ranks: int, seconds: float, writer: str) -> dict:
     report = store.with_suffix(".json")
     code = "import sys; from campar.bench.master import serve; serve(*sys.argv[1:3], " \
         "float(sys.argv[3]), sys.argv[4])"  # fmt: skip
     command = [str(MPIRUN), "-n", str(ranks), sys.executable, "-c", code,
                str(job), str(store), str(seconds), str(report)]  # fmt: skip
-    done = subprocess.run(command, capture_output=True, text=True)
+    env = {**os.environ, "CAMPAR_WRITER": writer}  # workers: each its own tiles (Zarr only)
+    done = subprocess.run(command, capture_output=True, text=True, env=env)
     if done.returncode != 0:
         raise RuntimeError(f"mpirun -n {ranks} failed ({done.returncode}):\n{done.stderr[-2000:]}")
     return json.loads(report.read_text())
@@ -132,9 +148,9 @@ def run(args) -> int:
         tmp = Path(tmp)
         job = write_job(tmp, args.rows, args.omegas, args.tile_rows)
         n_tiles = -(-args.rows // args.tile_rows)
-        for ranks in args.ranks:
-            store = tmp / f"r{ranks}{args.suffix}"
-            result = launch(job, store, ranks, args.tile_seconds)
+        for ranks, writer in ((r, w) for r in args.ranks for w in args.writer):
+            store = tmp / f"r{ranks}{writer}{args.suffix}"
+            result = launch(job, store, ranks, args.tile_seconds, writer)
             entry, latency = result["entry"], sorted(result["latency"])
             ideal = min(ranks / args.tile_seconds, n_tiles / args.tile_seconds)
             sustained = entry["tiles"] / entry["seconds"]
@@ -142,7 +158,8 @@ def run(args) -> int:
             rss = [mb for mb in entry["peak_rss_mb"] if mb is not None]
             master_cpu = entry["cpu_seconds"][0] / entry["tiles"]  # its compute lane sleeps
             rows.append([
-                f"{ranks}", f"{sustained:.1f}", f"{ideal:.1f}", f"{100 * idle:.1f} %",
+                f"{ranks}", entry.get("writer", writer), f"{sustained:.1f}", f"{ideal:.1f}",
+                f"{100 * idle:.1f} %",
                 f"{1e3 * statistics.median(latency):.1f}",
                 f"{1e3 * latency[int(0.95 * (len(latency) - 1))]:.1f}",
                 f"{1e3 * statistics.median(result['write']):.2f}",
@@ -156,7 +173,7 @@ def run(args) -> int:
           f"stand-in tile {args.tile_seconds:g} s, {args.suffix} store, {os.cpu_count()} cores "
           "(ranks beyond them oversubscribed: they sleep)\n")  # fmt: skip
     print(format_table(
-        ["ranks", "tiles/s", "ideal", "idle", "result→disk ms (median)", "p95 ms",
+        ["ranks", "writer", "tiles/s", "ideal", "idle", "result→disk ms (median)", "p95 ms",
          "write ms", "master CPU ms/tile", "capacity tiles/s", "RSS MB rank 0 / worker max",
          "store MiB"], rows,
     ))  # fmt: skip

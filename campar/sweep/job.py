@@ -220,8 +220,17 @@ class ClassifySettings(Settings):
 
 
 class TileSettings(Settings):
-    rows: Annotated[int, Field(ge=1)] = 4
-    """Continuation chains (values of the second parameter) per tile."""
+    rows: int | str = 4
+    """Continuation chains (values of the second parameter) per tile; auto: chosen by
+    ``campar run`` when it creates the store, from the grid, the ranks and who writes
+    (``plan.auto_tile_rows``), then kept: the store's job holds the number."""
+
+    @field_validator("rows", mode="before")
+    @classmethod
+    def whole_number_or_auto(cls, value):
+        if value == "auto" or (type(value) is int and value >= 1):
+            return value
+        raise ValueError("must be an integer ≥ 1, or auto")
 
 
 class ChainSettings(Settings):
@@ -470,6 +479,11 @@ class Job(Settings):
             raise ValueError(f"direction must be one of {', '.join(DIRECTIONS)}, got {direction!r}")
         chains = self.chains.model_copy(update={"direction": direction})
         return self.model_copy(update={"chains": chains})
+
+    def with_tile_rows(self, rows: int) -> "Job":
+        """This job with ``tiles.rows`` fixed (``auto`` resolved): same numbers, the layout
+        of its store's chunks and its tiles is what changes."""
+        return self.model_copy(update={"tiles": TileSettings(rows=rows)})
 
     @property
     def n_sections(self) -> int:

@@ -4,7 +4,8 @@ A chain is one row of the grid: one value of the second parameter, every ω in
 the order of ``chains.direction`` (ω decreasing in the paper's planes); with
 ``chains.start: continue`` the first cells of the rows are themselves one chain
 along the second axis, the plane's first column. A tile is ``tiles.rows``
-consecutive chains. Tiles are fixed by the job alone, so the numbers never
+consecutive chains (``auto``: chosen for the ranks when the store is created,
+``auto_tile_rows``). Tiles are fixed by the job alone, so the numbers never
 depend on how many ranks ran it or where it was interrupted; a tile is the unit
 of work, of storage (one chunk) and of the ``done`` commit flag.
 
@@ -19,6 +20,7 @@ protocol; tiles of one-direction jobs have no direction and stores of them are
 laid out as before.
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,11 +54,63 @@ class Tile:
         return self.row_stop - self.row_start
 
 
+# ``tiles.rows: auto`` (``auto_tile_rows``): estimates measured on this project's 2-core VM
+# (benchmarks/RESULTS.md): a revolution costs ~17.5 µs of a core and a converged map cell
+# takes ~8 (the (ω, μcn) plane: 22 CPU s, 160,000 cells, 7.9 revolutions a cell), a fixed
+# transient its revolutions and window; a census cell K + 1 cells, a basin cell (a cold
+# start) ~4; the master commits ~300 tiles/s when workers write their own tiles (Zarr),
+# ~60 when it writes every tile (HDF5, or CAMPAR_WRITER=master): ``campar bench master``.
+REVOLUTION_SECONDS = 1.75e-5
+CONVERGED_REVOLUTIONS = 8
+BASIN_CELL_FACTOR = 4.0
+COMMITS_PER_SECOND = {True: 300.0, False: 60.0}  # by "workers write their own tiles"
+WRITER_HEADROOM = 3.0  # tiles arrive at most at a third of that rate
+TILES_PER_LANE = 4  # for the last tiles' tail: each lane gets at least this many
+DEFAULT_ROWS = 4  # the default of tiles.rows: what auto keeps where nothing asks for other
+
+
+def cell_seconds(job: Job) -> float:
+    """Estimated CPU seconds of one cell of ``job`` (``REVOLUTION_SECONDS`` and the rest)."""
+    fixed = job.transient.max_revolutions + job.classify.window_revolutions
+    revolutions = CONVERGED_REVOLUTIONS if job.transient.mode == "converged" else fixed
+    cost = REVOLUTION_SECONDS * revolutions * (BASIN_CELL_FACTOR if job.kind == "basin" else 1)
+    return cost * (1 + job.attractors.starts if job.attractors is not None else 1)
+
+
+def auto_tile_rows(job: Job, lanes: int, direct: bool) -> tuple[int, str]:
+    """``tiles.rows`` for ``lanes`` computing ranks; returns (rows, why).
+
+    Two bounds: the master must keep up — tiles arrive at lanes / tile time, at most a
+    ``WRITER_HEADROOM``-th of what it commits (``COMMITS_PER_SECOND``; ``direct``: the
+    workers write their own tiles) — and every lane should get ``TILES_PER_LANE`` tiles,
+    so the slowest last tiles leave the others idle for a small part of the run. Between
+    them, ``DEFAULT_ROWS`` where allowed (the layout of a map made without ``auto``); where
+    the grid is too small for both, the master's bound wins (a master that cannot keep up
+    idles every lane) and ``why`` says so.
+    """
+    n_rows, n_first = job.shape
+    tiles_wanted = TILES_PER_LANE * lanes
+    balance = max(1, (n_rows * len(job.directions)) // tiles_wanted)
+    row_seconds = n_first * cell_seconds(job)
+    rate = COMMITS_PER_SECOND[direct] / WRITER_HEADROOM
+    writer = max(1, math.ceil(lanes / (rate * row_seconds)))
+    rows = min(n_rows, max(writer, min(DEFAULT_ROWS, balance)))
+    why = f"auto for {lanes} lane{'s' if lanes != 1 else ''}: {rows} rows a tile"
+    if writer > balance:
+        n_tiles = -(-n_rows // rows) * len(job.directions)
+        why += (f"; the master's pace needs ≥ {writer} rows a tile and {tiles_wanted} tiles "
+                f"would need ≤ {balance}: {n_tiles} tiles for {lanes} lanes, some idle at "
+                "the end (more rows in the grid, or fewer ranks)")  # fmt: skip
+    return rows, why
+
+
 def plan_tiles(job: Job) -> list[Tile]:
     """Every tile of the job, in index order; together they cover each cell once (each
     cell of each direction, for a ``both`` job: every row range down, then up)."""
     n_rows, _ = job.shape
     size = job.tiles.rows
+    if size == "auto":
+        raise ValueError(f"job {job.name}: tiles.rows auto is chosen when its store is created")
     ranges = [(start, min(start + size, n_rows)) for start in range(0, n_rows, size)]
     layers = DIRECTIONS if job.chains.direction == "both" else (None,)
     return [

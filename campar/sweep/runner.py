@@ -27,6 +27,7 @@ MPI launcher, so ``campar --help`` and serial runs never load MPI.
 
 import contextlib
 import logging
+import os
 import queue
 import signal
 import socket
@@ -37,15 +38,18 @@ from collections import Counter, deque
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import CamparError, Interrupted, JobError, StoreIOError
 from .budget import check_budget
 from .job import Job
-from .plan import Tile, pending_tiles, plan_tiles
+from .plan import Tile, auto_tile_rows, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
 from .signals import Signals, early_interruption
-from .store import open_store
+from .store import backend_name, open_store, read_store
 from .tile import run_tile
 from .wire import (
+    WRITER_ENV,
     Backoff,
     Outcome,
     Workers,
@@ -53,6 +57,7 @@ from .wire import (
     mpi_world,
     receive_outcome,
     share_outcome,
+    wait,
     work,
 )
 
@@ -167,14 +172,18 @@ class Master:
             self.local.close()
             self.dismiss_workers()
 
-    def write(self, out: Outcome) -> None:
-        tile = self.tiles[out.index]
-        if out.checksum is None:
-            self.store.write_tile(tile, out.arrays)
-        else:  # its worker wrote the arrays
-            self.store.commit_tile(tile, out.checksum)
-        self.tiles_by_lane[out.lane] += 1
-        self.progress.tile_done(tile.n_rows * self.job.shape[1])
+    def save(self, outcomes: list[Outcome]) -> None:
+        """Store finished tiles: write those that came with their arrays, then commit those
+        their workers wrote, all at once (a group commit: two store writes for the lot)."""
+        for out in outcomes:
+            if out.checksum is None:
+                self.store.write_tile(self.tiles[out.index], out.arrays)
+        written = [(self.tiles[o.index], o.checksum) for o in outcomes if o.checksum is not None]
+        if written:
+            self.store.commit_tiles(written)
+        for out in outcomes:
+            self.tiles_by_lane[out.lane] += 1
+            self.progress.tile_done(self.tiles[out.index].n_rows * self.job.shape[1])
 
     def _loop(self, signals: Signals) -> None:
         backoff = Backoff()
@@ -194,9 +203,7 @@ class Master:
             for event in events:
                 self.handle(event)
             self.hand_out()  # before writing: no lane waits for the store
-            for event in events:
-                if isinstance(event, Outcome) and event.error is None:
-                    self.write(event)
+            self.save([e for e in events if isinstance(e, Outcome) and e.error is None])
             if self.stop_reason and (self.in_flight == 0 or time.monotonic() >= self.abandon_at):
                 break
             if not self.queue and self.in_flight == 0:
@@ -239,9 +246,8 @@ class Master:
             for rank in range(1, self.workers.comm.Get_size()):
                 self.workers.stop(rank)
             events = self.workers.poll()
-            for out in events:
-                if isinstance(out, Outcome) and out.error is None:
-                    self.write(out)  # finished just before STOP: keep it
+            # finished just before STOP: keep them
+            self.save([e for e in events if isinstance(e, Outcome) and e.error is None])
             backoff.reset() if events else backoff.sleep()
         missing = sorted(set(range(1, self.workers.comm.Get_size())) - self.workers.gone)
         if missing:
@@ -277,9 +283,13 @@ def run_job(
     path = store_path or job.store
     if path is None:
         raise JobError(f"job {job.name} names no store: add 'store: PATH' or pass --store PATH")
-    check_budget(job, max_store=max_store, max_memory=max_memory)
+    if job.tiles.rows != "auto":
+        check_budget(job, max_store=max_store, max_memory=max_memory)
     with Signals() as signals:
         comm = mpi_world()
+        if job.tiles.rows == "auto":  # every rank the same number (rank 0's), then the budget
+            job = job.with_tile_rows(agreed_tile_rows(job, path, comm, overwrite))
+            check_budget(job, max_store=max_store, max_memory=max_memory)
         if comm is not None and comm.Get_rank() > 0:
             direct = receive_outcome(comm)  # of opening the store: where to write, if at all
             work(
@@ -300,6 +310,34 @@ def run_job(
 
 
 # Errors a worker re-raises after the master (by index); others arrive as CamparError.
+
+
+def agreed_tile_rows(job: Job, path, comm, overwrite: bool) -> int:
+    """``tiles.rows`` of a job that says ``auto``: the store's, where it holds this job
+    already (a resume keeps its layout, whatever the ranks now), else ``auto_tile_rows``
+    for the ranks and the writer; decided on rank 0 and shared, so every rank plans the
+    same tiles."""
+    rows = np.zeros(1, np.int64)
+    if comm is None or comm.Get_rank() == 0:
+        rows[0], why = stored_tile_rows(job, path) if not overwrite else (0, "")
+        if not rows[0]:
+            direct = backend_name(path) == "zarr" and comm is not None
+            direct = direct and os.environ.get(WRITER_ENV) != "master"
+            rows[0], why = auto_tile_rows(job, 1 if comm is None else comm.Get_size(), direct)
+        log.info("tiles.rows %s", why)
+    if comm is not None:
+        wait(comm.Ibcast(rows, root=0))
+    return int(rows[0])
+
+
+def stored_tile_rows(job: Job, path) -> tuple[int, str]:
+    """(rows, why) of the store at ``path`` if it holds this job but for ``tiles``, else 0."""
+    with contextlib.suppress(Exception):  # no store, or not one of this job: choose anew
+        with read_store(path) as reader:
+            stored = reader.job
+        if stored.with_tile_rows(1) == job.with_tile_rows(1):
+            return stored.tiles.rows, f"{stored.tiles.rows}, as the store {path} has it"
+    return 0, ""
 
 
 def run_master(job, store, signals, comm, grace, direct=False) -> RunSummary:

@@ -224,19 +224,22 @@ class Store(ABC):
                 f"cannot write tile {tile.index} to the store {self.path}", exc
             ) from None
 
-    def commit_tile(self, tile: Tile, checksum: int) -> None:
-        """Commit a tile whose arrays a ``TileWriter`` wrote: its checksum, then ``done``."""
+    def commit_tiles(self, written: list[tuple[Tile, int]]) -> None:
+        """Commit tiles whose arrays a ``TileWriter`` wrote, given as (tile, checksum): every
+        checksum, then every ``done`` flag (a group commit: the order per tile is kept)."""
         if not self.direct_writes:
             raise StoreError(f"{self.path}: this backend has one writer; use write_tile")
-        if tile != self.tiles[tile.index]:
-            raise ValueError(f"{tile} is not tile {tile.index} of job {self.job.name}")
+        for tile, _ in written:
+            if tile != self.tiles[tile.index]:
+                raise ValueError(f"{tile} is not tile {tile.index} of job {self.job.name}")
         try:
-            self._commit(tile, checksum)
+            self._commit(written)
         except OSError as exc:
-            what = f"cannot commit tile {tile.index} to the store {self.path}"
+            which = ", ".join(str(tile.index) for tile, _ in written)
+            what = f"cannot commit tiles {which} to the store {self.path}"
             raise io_error(what, exc) from None
 
-    def _commit(self, tile: Tile, checksum: int) -> None:
+    def _commit(self, written: list[tuple[Tile, int]]) -> None:
         raise NotImplementedError  # backends with direct_writes
 
     def log_run(self, entry: dict) -> None:

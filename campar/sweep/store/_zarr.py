@@ -208,16 +208,21 @@ class ZarrStore(Store):
 
     def _write_tile(self, tile: Tile, arrays: dict[str, np.ndarray], checksum: int) -> None:
         self._tile_arrays.write(tile, arrays)
-        self._commit(tile, checksum)
+        self._commit([(tile, checksum)])
 
-    def _commit(self, tile: Tile, checksum: int) -> None:
+    def _commit(self, written: list[tuple[Tile, int]]) -> None:
+        # Each tile's checksum and flag is a chunk of its own: the checksums in one call of
+        # zarr's loop, then the flags in another, after them (the commit of each tile).
         try:
-            self._checksums[tile.index] = checksum
-            self._flags[tile.index] = 1  # the commit: after every array chunk and the checksum
+            sync(_all_at_once(self._checksums.async_array.setitem(tile.index, np.uint64(value))
+                              for tile, value in written))  # fmt: skip
+            sync(_all_at_once(self._flags.async_array.setitem(tile.index, np.int8(1))
+                              for tile, _ in written))  # fmt: skip
         except OSError:
             clean_leftovers(self.real, self.job)
             raise
-        self._done[tile.index] = True
+        for tile, _ in written:
+            self._done[tile.index] = True
 
     def _write_runs(self, runs: list[dict]) -> None:
         try:
