@@ -380,13 +380,14 @@ class Job(Settings):
         return data
 
     @model_validator(mode="after")
-    def whole_cycles_for_both(self):
+    def whole_cycles_where_cycles_are_matched(self):
         sections, n_max = self.classify.sections, self.classify.n_max
-        if self.chains.direction == "both" and sections is not None and sections < n_max:
+        matched = self.chains.direction == "both" or self.kind == "basin"
+        if matched and sections is not None and sections < n_max:
+            what = "a basin" if self.kind == "basin" else "chains.direction both"
             raise ValueError(
-                f"classify.sections: chains.direction both compares whole cycles of up to "
-                f"classify.n_max = {n_max} section points; sections must be ≥ n_max "
-                f"or unset, got {sections}"
+                f"classify.sections: {what} compares whole cycles of up to classify.n_max = "
+                f"{n_max} section points; sections must be ≥ n_max or unset, got {sections}"
             )
         return self
 
@@ -410,17 +411,10 @@ class Job(Settings):
             "initial": self.initial != DEFAULT_INITIAL,
             "attractors": self.attractors is not None,
         }
-        for key, given in unused.items():
-            if given:
-                raise ValueError(
-                    f"{key}: a basin job's cells each start from their own (y0, ydot0); "
-                    f"leave {key} out"
-                )
-        if self.classify.sections is not None and self.classify.sections < self.classify.n_max:
+        for key in (key for key, given in unused.items() if given):
             raise ValueError(
-                f"classify.sections: a basin compares whole cycles of up to classify.n_max = "
-                f"{self.classify.n_max} section points; sections must be ≥ n_max or unset, "
-                f"got {self.classify.sections}"
+                f"{key}: a basin job's cells each start from their own (y0, ydot0); "
+                f"leave {key} out"
             )
         return self
 

@@ -54,6 +54,11 @@ TAG_COMPUTED, TAG_WRITTEN, TAG_IO_ERROR = range(17, 20)
 WRITER_ENV = "CAMPAR_WRITER"  # "master": the master writes every tile, whatever the backend
 STOP = -1
 BACKOFF_SECONDS = 1e-3  # longest sleep of an idle loop between probes (mpi4py.futures)
+# A worker whose lane computes and whose writer is idle expects nothing from the master
+# but STOP (tiles come only in answer to its results): it waits on its lane, woken the
+# moment the tile is done, and looks for STOP and signals this often (not 1000× a second:
+# hundreds of ranks polling would take the cores their lanes compute on).
+COMPUTING_WAIT_SECONDS = 0.05
 MPI_LAUNCHER_ENV = ("PMI_SIZE", "PMI_RANK", "OMPI_COMM_WORLD_SIZE", "PMIX_RANK")
 
 
@@ -281,7 +286,8 @@ def work(comm, job: Job, signals, lane, direct: str = "") -> None:
                 break
             lane.start(tiles[int(index[0])])
             active = True
-        if out := lane.poll(backoff.delay()):
+        waiting = lane.busy is not None and not (writer is not None and writer.pending)
+        if out := lane.poll(COMPUTING_WAIT_SECONDS if waiting else backoff.delay()):
             head = [out.index, int(out.seconds * 1e9)]
             if out.error is not None:
                 buf, tag = pack(head, [np.frombuffer(out.error.encode(), np.uint8)]), TAG_ERROR
