@@ -7,7 +7,13 @@ on this package.
 - ``setups``: the paper's planes, lines, portraits and quoted numbers, as data
   and the small computations behind them;
 - ``claims``, ``map_claims``: each quantitative claim with its stated test;
+- ``robust``, ``liouville``: how a label claim is judged robust; the multipliers'
+  determinant against Liouville's formula;
 - ``gallery``: the whole figure set (``campar gallery``);
+- ``structure``: the attractor-structure jobs of the three planes (both sweep
+  directions, censuses, recomputed zooms); ``structure_stats`` counts jumps, tongues
+  and irreversible transitions from their stores, ``structure_figures`` draws them,
+  ``structure_report`` writes their section of the report;
 - ``report``: the reproduction report docs/paper.md (``campar report``).
 
 May import: ``campar.core``, ``campar.sweep``, ``campar.views``, ``campar.errors``.

@@ -18,6 +18,13 @@ Size "small" (48 × 48 planes, 1000-cell lines) takes about a minute on two
 cores and is what CI runs; "full" uses the job files' own 400 × 400 grids (tens
 of seconds per plane here; the stores are reused by later runs and by ``campar
 report`` of the same size).
+
+After the paper's figures come those of attractor structure
+(``campar.paper.structure_figures``): per plane a hysteresis map (both sweep
+directions along the paper's path) and a multistability map (an attractor census
+on ``Size.census`` points per axis), and for the (ω, f0) and (ω, μkn) planes the map
+with its typed bifurcation curves and three zoom panels, each recomputed on its own
+finer job (``Size.zoom`` points across its window), as the paper's Figs 2c–e, 4c–e.
 """
 
 import math
@@ -30,6 +37,7 @@ import yaml
 from ..sweep.job import PAPER_VALUES
 from ..views.point import point_job
 from . import setups
+from .structure_figures import draw_structure
 
 MAP_FIGURES = {"omega_f0": "fig2", "mu_kn": "fig4", "mu_cn": "fig7"}
 # Views drawn per plane, with their captions.
@@ -50,7 +58,12 @@ START_TEXT = {
     "continue": "chains start continue (the plane's 2-D continuation from its corner)",
     "rest": "start rest ((y, ẏ) = (0, 0) at θ = 0)",
 }
-DIRECTION_TEXT = {"down": "ω swept down", "up": "ω swept up", "none": "no sweep (single points)"}
+DIRECTION_TEXT = {
+    "down": "ω swept down",
+    "up": "ω swept up",
+    "both": "ω swept down and up (both sweeps compared)",
+    "none": "no sweep (single points)",
+}
 
 
 def provenance(tensile: str, start: str, direction: str, *, short: bool = False) -> str:
@@ -143,6 +156,7 @@ def make_gallery(outdir, size: str = "small", tensile: str = BOTH, stores=None,
         draw_penetration(g)
         draw_forces(g)
         draw_orbit_example(g)
+        draw_structure(g)  # hysteresis, multistability, curves with zooms
         galleries.append(g)
     write_index(outdir, size, tensile, galleries, time.perf_counter() - start)
     return [outdir / name for g in galleries for name, _ in g.entries]

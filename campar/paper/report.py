@@ -8,6 +8,9 @@ command that reproduces the number. A label claim (rows P) counts only when it
 is robust (``campar.paper.robust``). Claims the report does not test are listed
 with the reason. A last section states which claims each option of the force
 law (duty cycle by force, the paper's literal cam velocity) changes, computed.
+A section on jumps, tongues and irreversible transitions counts, from each plane
+swept both ways and from its attractor census, what the model gives about the
+paper's Figs. 2c–e and 4c–e (``campar.paper.structure_report``).
 The Floquet multipliers the paper quotes are checked against Liouville's formula
 (``campar.paper.liouville``).
 
@@ -38,6 +41,7 @@ from .claims import (
 )
 from .liouville import cell, divergence_integral, liouville_bound, liouville_rows, liouville_table
 from .robust import NEIGHBOURS, STEP, WIDTH, label_claim
+from .structure_report import structure_section
 
 __all__ = ["CLAIMS", "build_report", "divergence_integral", "liouville_bound", "write_report"]
 
@@ -357,6 +361,7 @@ def build_report(size: str = "small", stores=None, log=print, options: bool = Tr
     grid = setups.plane_job("omega_f0", size).shape
     log(f"report: {len(results)} claims evaluated in {time.perf_counter() - start:.1f} s")
     effects = option_effects(results, size, stores, log) if options else ["(not computed)"]
+    structure = structure_section(size, stores, log)
     text = [
         "# Reproduction report: cam with flat-bottomed follower (seed paper)",
         "",
@@ -425,6 +430,7 @@ def build_report(size: str = "small", stores=None, log=print, options: bool = Tr
         "with the clamp column above.",
         "",
         *effects,
+        *structure,
         "## Liouville check of the quoted Floquet multipliers",
         "",
         "For the flow of y'' + 2ζy' + y = Pn − f0 the divergence is div f = −2ζ − k c ε^{3/2} "

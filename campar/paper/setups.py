@@ -48,13 +48,22 @@ LAW = DEFAULT_MODEL.tensile  # the default force law; its figures and planes get
 
 @dataclass(frozen=True)
 class Size:
-    """Resolution of a figure set: plane grid (None: the job file's own) and line cells."""
+    """Resolution of a figure set: plane grid (None: the job file's own), line cells, the
+    census maps' grid (None: the plane's) and the points across a zoom window
+    (``campar.paper.structure``)."""
 
     plane: int | None
     line: int
+    census: int | None = None
+    zoom: int = 12
 
 
-SIZES = {"small": Size(plane=48, line=1000), "full": Size(plane=None, line=4000)}
+# full: the census on every third cell of the 400 × 400 planes (134 = 399/3 + 1), zooms
+# of 120 × 120 cells.
+SIZES = {
+    "small": Size(plane=48, line=1000, census=24, zoom=40),
+    "full": Size(plane=None, line=4000, census=134, zoom=120),
+}
 
 # Fig. 5: bifurcation lines at four contact stiffness ratios (f0 = 0.5, μcn = 0.8).
 FIG5_MU_KN = (0.94, 0.90, 0.91, 0.922)
@@ -209,6 +218,8 @@ def plane_path_job(omega: float, second: float, tensile: str = LAW, plane: str =
         if not min(start, stop) <= target <= max(start, stop):
             raise JobError(f"{axis} = {target:g} is outside the {plane} plane")
         count = max(2, int(np.ceil(abs(target - start) / step - 1e-9)) + 1)
+        if target == start:  # the path's first cell itself (a zoom's starting edge)
+            count = 1
         data["sweep"][axis] = {"from": start, "to": target, "points": count}
     data["chains"] = {"start": "continue", "direction": "down"}
     data["outputs"] = ["label", "dc", "eps"]

@@ -413,8 +413,7 @@ class Job(Settings):
         }
         for key in (key for key, given in unused.items() if given):
             raise ValueError(
-                f"{key}: a basin job's cells each start from their own (y0, ydot0); "
-                f"leave {key} out"
+                f"{key}: a basin job's cells each start from their own (y0, ydot0); leave {key} out"
             )
         return self
 
