@@ -65,6 +65,20 @@ def test_the_structure_figures_are_written_with_sidecars_and_index_entries(struc
                 assert job["chains"]["start"] == "continue" and job["sweep"]["omega"]["from"] == 6.0
 
 
+def test_the_basin_figure_shows_the_bistable_cells_two_attractors(structure_gallery):
+    g = structure_gallery
+    png = g.outdir / "bistable_basin.png"
+    assert png.read_bytes().startswith(PNG)
+    meta = yaml.safe_load(png.with_suffix(".yaml").read_text())
+    assert (meta["start"], meta["direction"]) == ("grid", "none")
+    # the two attractors rest and the start reach there (1-1, 3-2: SciPy confirms
+    # both, tests/test_multistability.py), each with its share of the starts
+    assert sorted(a.split()[0] for a in meta["attractors"]) == ["1-1", "3-2"]
+    job = yaml.safe_load((g.outdir / meta["job"]).read_text())
+    assert list(job["sweep"]) == ["y0", "ydot0"] and job["fixed"]["omega"] == 5.8
+    assert job["sweep"]["y0"]["points"] == structure.BASIN_SMALL
+
+
 def test_zoom_jobs_are_finer_than_their_plane_and_cover_their_window():
     for plane, zooms in structure.ZOOMS.items():
         parent = paper.plane_job(plane, "full")

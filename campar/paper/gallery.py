@@ -57,6 +57,7 @@ LAW_TEXT = {
 START_TEXT = {
     "continue": "chains start continue (the plane's 2-D continuation from its corner)",
     "rest": "start rest ((y, ẏ) = (0, 0) at θ = 0)",
+    "grid": "every start of a grid of initial states (y, ẏ) at θ = 0 (a basin)",
 }
 DIRECTION_TEXT = {
     "down": "ω swept down",

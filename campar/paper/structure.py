@@ -127,6 +127,24 @@ def hysteresis_job(plane: str, size: str = "full", tensile: str = setups.LAW) ->
                          source=f"{base.name} swept both ways")  # fmt: skip
 
 
+BASIN_JOB = "basin_bistable"  # jobs/basin_bistable.yaml: ω = 5.8, μkn = 0.86
+BASIN_SMALL = 40  # starts per axis of the small gallery's basin (the job file's: 200)
+
+
+def basin_job(size: str = "full", tensile: str = setups.LAW) -> Job:
+    """The basin of the bistable cell (``jobs/basin_bistable.yaml``) under ``tensile``, its
+    own 200 × 200 starts at size full, BASIN_SMALL × BASIN_SMALL at small."""
+    from ..sweep.job import load_job
+
+    path = setups.jobs_dir() / f"{BASIN_JOB}.yaml"
+    data = load_job(path).to_dict()
+    if size != "full":
+        for axis in data["sweep"].values():
+            axis["points"] = BASIN_SMALL
+    data["model"]["tensile"] = tensile
+    return Job.from_dict(_named(data, BASIN_JOB, tensile), source=f"{path} at size {size}")
+
+
 def census_points(size: str) -> int | None:
     """Points per axis of the census grid (None: the plane's own grid)."""
     return setups.SIZES[size].census

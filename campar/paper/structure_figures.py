@@ -6,6 +6,7 @@ paper's own figures:
 - per plane, a hysteresis map (``structure.hysteresis_job``: both sweep directions along
   the paper's path) and a multistability map (``structure.census_job``: the number of
   distinct attractors the census finds per cell);
+- the basin of the bistable cell (``structure.basin_job``, a basin store);
 - for the (ω, f0) and (ω, μkn) planes, the map with its typed bifurcation curves (the
   plane's own store: ω down along the paper's path, ``campar plot --bifurcations
   --trace``) and three zoom panels (``structure.ZOOMS``), each its own finer job
@@ -22,6 +23,7 @@ from . import setups, structure
 from .structure_stats import jump_summary, load_both, load_census
 
 PAIRS_SHOWN = 4  # label pairs a caption names
+BASIN_STEM = "bistable_basin"  # the job file beside it is basin_bistable.yaml
 
 
 def draw_structure(g) -> None:
@@ -31,6 +33,33 @@ def draw_structure(g) -> None:
         draw_multistability(g, plane)
     for plane in structure.ZOOM_PLANES:
         draw_zooms(g, plane)
+    draw_basin(g)
+
+
+def draw_basin(g) -> None:
+    """The basin of the bistable cell: every start coloured by the attractor it reached."""
+    from ..views.dataset import open as open_store
+    from ..views.plot.basin import plot_basin
+
+    job = structure.basin_job(g.size, g.tensile)
+    store = compute(g, job)
+    with open_store(store) as ds:
+        figure = plot_basin(ds)
+        found = [f"{label} {100 * fraction:.1f} %" for label, fraction in
+                 zip(ds["attractor_label"].values, ds["attractor_fraction"].values,
+                     strict=True)]  # fmt: skip
+    rows, cols = job.shape
+    caption = (
+        f"basin of attraction at ω = {job.parameter('omega'):g}, μkn = "
+        f"{job.parameter('mu_kn'):g} (job {job.name}.yaml): {cols} × {rows} starts (y0, ẏ0) "
+        f"at θ = 0, each run to its steady motion and coloured by the attractor it reached "
+        f"(attractors matched by their cycles' section points, not their labels): "
+        f"{', '.join(found) or 'none settled'}; each attractor's own σn points drawn on it"
+    )
+    recipe = {"job": f"{job.name}.yaml", "store": str(store), "view": "basin",
+              "command": f"campar run {job.name}.yaml; campar plot {store}",
+              "attractors": found}  # fmt: skip
+    g.save(figure, BASIN_STEM, caption, recipe, start="grid", direction="none")
 
 
 def axes_text(job) -> str:
