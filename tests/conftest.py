@@ -201,3 +201,30 @@ def assert_mpirun_store_equals(job_data: dict, tmp_path: Path, serial: Path) -> 
     with read_store(parallel) as reader:
         assert reader.attrs["runs"][-1]["ranks"] == 2
     assert_same_store(stored(parallel), stored(serial))
+
+
+def resume_after_interrupt(monkeypatch, job, path, index: int) -> None:
+    """Run ``job`` into ``path`` with SIGTERM sent while tile ``index`` computes (the run
+    ends Interrupted, the tile pending), then run it again to completion. The signal
+    reaches the computing thread; the main thread sees it within its wait (0.05 s), or
+    later on a loaded machine: ``index`` should leave two tiles after it."""
+    import signal as signals
+
+    import campar.sweep.runner as runner
+    from campar.errors import Interrupted
+    from campar.sweep.tile import run_tile
+
+    def tile_with_signal(job, tile):
+        if tile.index == index:
+            os.kill(os.getpid(), signals.SIGTERM)
+        return run_tile(job, tile)
+
+    monkeypatch.setattr(runner, "run_tile", tile_with_signal)
+    with pytest.raises(Interrupted):
+        runner.run_job(job, path)
+    from campar.sweep.store import read_store
+
+    with read_store(path) as reader:
+        assert not reader.done.all()
+    monkeypatch.setattr(runner, "run_tile", run_tile)
+    assert runner.run_job(job, path).outcome == "complete"

@@ -8,23 +8,26 @@ equals the record-by-record rule; resume, rank count and the two backends give t
 store; bad jobs are refused with a message naming the key.
 """
 
-import os
-import signal
-
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import assert_mpirun_store_equals, assert_same_store, merge, run_campar, stored
+from conftest import (
+    assert_mpirun_store_equals,
+    assert_same_store,
+    merge,
+    resume_after_interrupt,
+    run_campar,
+    stored,
+)
 
 import campar
 import campar.sweep.runner as runner
 from campar.bench.scipy_model import Model
 from campar.bench.scipy_peer import scipy_cell
 from campar.core.codes import Kind
-from campar.errors import Interrupted, JobError
+from campar.errors import JobError
 from campar.sweep.census import group_cells, record_points, same_record
 from campar.sweep.job import Job
-from campar.sweep.tile import run_tile
 from campar.views.attractors import CHAOS_AFTER, CLOUD_POINTS, find_attractors
 from campar.views.plot import PlotError, plot_store
 from campar.views.point import simulate_point
@@ -162,17 +165,7 @@ def test_an_interrupted_basin_resumes_bitwise_and_both_backends_open_alike(
 ):
     whole, job = basin
     path = tmp_path / f"resumed{suffix}"
-
-    def tile_with_signal(job, tile):
-        if tile.index == 1:
-            os.kill(os.getpid(), signal.SIGTERM)
-        return run_tile(job, tile)
-
-    monkeypatch.setattr(runner, "run_tile", tile_with_signal)
-    with pytest.raises(Interrupted):
-        runner.run_job(job, path)
-    monkeypatch.setattr(runner, "run_tile", run_tile)
-    assert runner.run_job(job, path).outcome == "complete"
+    resume_after_interrupt(monkeypatch, job, path, 0)
     assert_same_store(stored(path), stored(whole))
     with campar.open(path) as a, campar.open(whole) as b:
         xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())

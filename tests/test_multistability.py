@@ -8,8 +8,6 @@ monostable cell, ``find_attractors`` at the same cells, resume, MPI, both direct
 ``campar.open``; a job without the key keeps its hash and its store's layout.
 """
 
-import os
-import signal
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +17,7 @@ from conftest import (
     assert_mpirun_store_equals,
     assert_same_store,
     merge,
+    resume_after_interrupt,
     run_campar,
     stored,
 )
@@ -28,12 +27,12 @@ import campar.sweep.runner as runner
 from campar.bench.scipy_model import Model
 from campar.bench.scipy_peer import scipy_cell
 from campar.core.codes import Kind
-from campar.errors import Interrupted, JobError
+from campar.errors import JobError
 from campar.sweep.arrays import CENSUS_ARRAYS, array_names
 from campar.sweep.census import group_records
 from campar.sweep.job import Job, load_job
 from campar.sweep.plan import plan_tiles
-from campar.sweep.store import read_store, store_arrays
+from campar.sweep.store import store_arrays
 from campar.sweep.tile import run_tile
 from campar.views.attractors import find_attractors
 from campar.views.plot import PlotError, plot_store
@@ -233,19 +232,7 @@ def test_the_map_s_categories_are_1_2_3_4_or_more_and_not_computed():
 def test_an_interrupted_census_map_resumes_bitwise(census, tmp_path, monkeypatch, suffix):
     whole, job = census
     path = tmp_path / f"resumed{suffix}"
-
-    def tile_with_signal(job, tile):
-        if tile.index == 1:
-            os.kill(os.getpid(), signal.SIGTERM)
-        return run_tile(job, tile)
-
-    monkeypatch.setattr(runner, "run_tile", tile_with_signal)
-    with pytest.raises(Interrupted):
-        runner.run_job(job, path)
-    with read_store(path) as reader:
-        assert not reader.done.all()
-    monkeypatch.setattr(runner, "run_tile", run_tile)
-    assert runner.run_job(job, path).outcome == "complete"
+    resume_after_interrupt(monkeypatch, job, path, 0)
     assert_same_store(stored(path), stored(whole))
 
 
