@@ -117,6 +117,7 @@ def test_rk4_fixed_step_error_is_fourth_order():
     assert 12 < errs[0] / errs[1] < 20
 
 
+@pytest.mark.slow  # compiles the integrator once more, for this test's own field (~5 s)
 def test_two_roots_inside_one_step_are_found():
     # RK4 steps of 0.8 jump over the whole dip of g between y = 0.99 and 1.01: the step
     # (0.8, 1.6] has g > 0 at both ends; on y = t the roots are t = 1 ∓ 0.01 exactly
