@@ -167,6 +167,8 @@ def rows_of(text: str, heading: str) -> list:
             if m]  # fmt: skip
 
 
+@pytest.mark.slow  # the report's section on two tiny planes (~7 s); the counting's own
+# tests (regions, crossings on drawn examples) stay in the quick tier
 def test_the_reports_hysteresis_counts_agree_with_the_raw_arrays(section):
     text, stores = section
     rows = rows_of(text, "### (a) Jumps")
@@ -180,6 +182,8 @@ def test_the_reports_hysteresis_counts_agree_with_the_raw_arrays(section):
     assert nonzero  # the check is not vacuous: some plane has hysteresis at this size
 
 
+@pytest.mark.slow  # the report's section on two tiny planes (~7 s); the counting's own
+# tests (regions, crossings on drawn examples) stay in the quick tier
 def test_the_reports_crossings_and_census_agree_with_the_raw_arrays(section):
     text, stores = section
     for plane, law, cells in rows_of(text, "### (c) Irreversible"):
