@@ -228,3 +228,14 @@ def resume_after_interrupt(monkeypatch, job, path, index: int) -> None:
         assert not reader.done.all()
     monkeypatch.setattr(runner, "run_tile", run_tile)
     assert runner.run_job(job, path).outcome == "complete"
+
+
+def computed_store(tmp_path_factory, data: dict) -> tuple[Path, Job]:
+    """A Zarr store of the job ``data`` computed in this process, and the job (for
+    module-scoped fixtures: one computation shared by a module's tests)."""
+    import campar.sweep.runner as runner
+
+    job = Job.from_dict(data)
+    path = tmp_path_factory.mktemp(job.name) / f"{job.name}.zarr"
+    runner.run_job(job, path)
+    return path, job

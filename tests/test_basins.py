@@ -14,6 +14,7 @@ import xarray as xr
 from conftest import (
     assert_mpirun_store_equals,
     assert_same_store,
+    computed_store,
     merge,
     resume_after_interrupt,
     run_campar,
@@ -48,10 +49,7 @@ MONOSTABLE = merge(BASIN, {"fixed": {"omega": 5.8, "mu_kn": 0.82}})
 @pytest.fixture(scope="module")
 def basin(tmp_path_factory):
     """The BASIN store (Zarr) and its job."""
-    job = Job.from_dict(BASIN)
-    path = tmp_path_factory.mktemp("basin") / "basin.zarr"
-    runner.run_job(job, path)
-    return path, job
+    return computed_store(tmp_path_factory, BASIN)
 
 
 def starts_of(job: Job) -> np.ndarray:

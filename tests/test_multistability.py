@@ -16,6 +16,7 @@ from conftest import (
     MPIRUN,
     assert_mpirun_store_equals,
     assert_same_store,
+    computed_store,
     merge,
     resume_after_interrupt,
     run_campar,
@@ -56,10 +57,7 @@ BISTABLE, MONOSTABLE = (0, 1), (2, 1)  # (row, column): (0.86, 5.8) and (0.82, 5
 @pytest.fixture(scope="module")
 def census(tmp_path_factory):
     """The GRID map's store (Zarr) and its job."""
-    job = Job.from_dict(GRID)
-    path = tmp_path_factory.mktemp("census") / "census.zarr"
-    runner.run_job(job, path)
-    return path, job
+    return computed_store(tmp_path_factory, GRID)
 
 
 def cell_census(path, row: int, col: int) -> dict:

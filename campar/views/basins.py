@@ -58,26 +58,41 @@ def match_basin(job, kind, n, sections) -> BasinAttractors:
     return BasinAttractors(basin, first, starts, int(computed.sum()))
 
 
+# Per-attractor variables: (source, long name, extra attributes); the source is a stored
+# per-cell array taken at the attractor's first start, or one of the match's own counts.
+ATTRACTOR_VARIABLES = {
+    "attractor_n": ("n", "period of the attractor", {}),
+    "attractor_p": ("p", "detachments per period of the attractor", {}),
+    "attractor_kind": ("kind", "kind of the attractor", {}),
+    "attractor_label": ("label", "n-p label of the attractor", {}),
+    "attractor_starts": ("starts", "starts that reached the attractor", {}),
+    "attractor_fraction": ("fraction", "basin fraction of the attractor", {"units": "1"}),
+    "attractor_sections": ("points", "stroboscopic section points of the attractor", {
+        "units": "1", "comment": "of its first start: a cycle's n points, a cloud's read window"}),
+    "attractor_multipliers": ("multipliers", "Floquet multipliers of the attractor", {
+        "units": "1", "comment": "of its first start; NaN where not periodic"}),
+}  # fmt: skip
+
+
 def basin_variables(ds: xr.Dataset, job) -> dict[str, xr.DataArray]:
     """The variables ``campar.open`` adds to a basin store: ``basin`` over the grid, and
-    per attractor its n, p, kind, label, starts, fraction, σn points and multipliers."""
+    per attractor (ATTRACTOR_VARIABLES) its n, p, kind, label, starts, fraction, σn points
+    and multipliers."""
     grid = (job.second, job.first)
     match = match_basin(job, ds["kind"].values, ds["n"].values, ds["sections"].values)
-    flat = {name: ds[name].values.reshape(match.basin.size, *ds[name].shape[2:])
-            for name in ("n", "p", "kind", "sections", "multipliers", "label")}  # fmt: skip
-    rank = np.arange(1, len(match.first) + 1, dtype=np.int32)
-    per = {name: values[match.first] for name, values in flat.items()}
-    periodic = per["kind"] == Kind.PERIODIC
+    per = {name: ds[name].values.reshape(match.basin.size, *ds[name].shape[2:])[match.first]
+           for name in ("n", "p", "kind", "sections", "multipliers", "label")}  # fmt: skip
     # a cycle's own points: its first n σn points; a cloud keeps the whole read window
-    width = flat["sections"].shape[1]
+    width = per["sections"].shape[1]
+    periodic = per["kind"] == Kind.PERIODIC
     keep = np.where(periodic, per["n"], width)[:, None] > np.arange(width)[None, :]
-    points = np.where(keep[..., None], per["sections"], np.nan)
+    per["points"] = np.where(keep[..., None], per["sections"], np.nan)
+    per["starts"], per["fraction"] = match.starts, match.fraction
+    tails = {"points": ds["sections"].dims[2:], "multipliers": ds["multipliers"].dims[2:]}
+    rank = np.arange(1, len(match.first) + 1, dtype=np.int32)
     coords = {"attractor": ("attractor", rank, {"long_name": "attractor of the basin",
               "comment": "rank by the starts that reached it, 1 the most"})}  # fmt: skip
-    attractor = ("attractor",)
     codes = {k: v for k, v in ds["kind"].attrs.items() if k in ("flag_values", "flag_meanings")}
-    sections_dims = (*attractor, *ds["sections"].dims[2:])
-    multiplier_dims = (*attractor, *ds["multipliers"].dims[2:])
     out = {
         "basin": xr.DataArray(
             match.basin.reshape(ds["kind"].shape).astype(np.int32),
@@ -91,63 +106,12 @@ def basin_variables(ds: xr.Dataset, job) -> dict[str, xr.DataArray]:
                 "section points agree within "
                 f"{cycle_tolerance(job):.3g} (infinity norm) after a cyclic shift",
             },
-        ),  # fmt: skip
-        "attractor_n": xr.DataArray(
-            per["n"], dims=attractor, coords=coords, attrs={"long_name": "period of the attractor"}
-        ),
-        "attractor_p": xr.DataArray(
-            per["p"],
-            dims=attractor,
-            coords=coords,
-            attrs={"long_name": "detachments per period of the attractor"},
-        ),
-        "attractor_kind": xr.DataArray(
-            per["kind"],
-            dims=attractor,
-            coords=coords,
-            attrs={"long_name": "kind of the attractor", **codes},
-        ),
-        "attractor_label": xr.DataArray(
-            per["label"],
-            dims=attractor,
-            coords=coords,
-            attrs={"long_name": "n-p label of the attractor"},
-        ),
-        "attractor_starts": xr.DataArray(
-            match.starts,
-            dims=attractor,
-            coords=coords,
-            attrs={"long_name": "starts that reached the attractor"},
-        ),
-        "attractor_fraction": xr.DataArray(
-            match.fraction,
-            dims=attractor,
-            coords=coords,
-            attrs={
-                "long_name": "basin fraction of the attractor",
-                "units": "1",
-                "comment": f"of the {match.computed} starts computed",
-            },
-        ),  # fmt: skip
-        "attractor_sections": xr.DataArray(
-            points,
-            dims=sections_dims,
-            coords=coords,
-            attrs={
-                "long_name": "stroboscopic section points of the attractor",
-                "units": "1",
-                "comment": "of its first start: a cycle's n points, a cloud's read window",
-            },
-        ),  # fmt: skip
-        "attractor_multipliers": xr.DataArray(
-            per["multipliers"],
-            dims=multiplier_dims,
-            coords=coords,
-            attrs={
-                "long_name": "Floquet multipliers of the attractor",
-                "units": "1",
-                "comment": "of its first start; NaN where not periodic",
-            },
-        ),  # fmt: skip
+        )
     }
+    for name, (source, long_name, attrs) in ATTRACTOR_VARIABLES.items():
+        attrs = {"long_name": long_name, **attrs, **(codes if source == "kind" else {})}
+        if source == "fraction":
+            attrs["comment"] = f"of the {match.computed} starts computed"
+        dims = ("attractor", *tails.get(source, ()))
+        out[name] = xr.DataArray(per[source], dims=dims, coords=coords, attrs=attrs)
     return out
