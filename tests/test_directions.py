@@ -136,6 +136,12 @@ def test_a_both_store_is_the_down_and_the_up_store_bit_for_bit(tmp_path, suffix)
     assert status["tiles"] == (6, 6) and status["cells"] == (288, 288)
     result = run_campar("status", paths["both"])
     assert "tiles   6/6 done" in result.stdout and "each chain down and up" in result.stdout
+    # labels per direction, each counting its own cells (from the down and up stores)
+    assert list(status["labels"]) == ["down", "up"]
+    for way in ("down", "up"):
+        with read_store(paths[way]) as reader:
+            assert status["labels"][way] == summarize(reader)["labels"][None]
+        assert f"labels  ({way}) " in result.stdout
     assert run_campar("verify", paths["both"]).returncode == 0
 
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from .. import __version__
 from ..core.codes import KIND_NAMES, Kind, cell_label, status_message
+from .job import DIRECTIONS
 from .store import read_store, verify_store
 
 log = logging.getLogger("campar.run")
@@ -133,11 +134,13 @@ class Tally:
     def __init__(self, chatter_p: int):
         self.chatter_p = chatter_p
         self.cells = 0
-        self.failed, self.kinds, self.labels = Counter(), Counter(), Counter()
+        self.failed, self.kinds = Counter(), Counter()
+        self.labels: dict[str | None, Counter] = {}  # by sweep direction (None: the job's one)
 
     def add(self, check) -> None:
         """One verified tile (``_integrity.TileCheck``)."""
         a = check.arrays
+        labels = self.labels.setdefault(check.tile.direction, Counter())
         status, kind = a["status"], a["kind"]
         self.cells += status.size
         self.failed.update(dict(_counts(status[status != 0])))
@@ -147,7 +150,7 @@ class Tally:
             pairs = a["n"][periodic].astype(np.int64) << 32 | a["p"][periodic].astype(np.uint32)
             for pair, count in _counts(pairs):
                 n, p = pair >> 32, pair & 0xFFFFFFFF
-                self.labels[cell_label(0, n, p, self.chatter_p)] += count
+                labels[cell_label(0, n, p, self.chatter_p)] += count
 
 
 def summarize(reader) -> dict:
@@ -164,7 +167,12 @@ def summarize(reader) -> dict:
         "cells": (tally.cells, job.shape[0] * job.shape[1] * len(job.directions)),
         "failed": {status_message(int(s)): c for s, c in sorted(tally.failed.items())},
         "kinds": {_kind_name(k): c for k, c in sorted(tally.kinds.items())},
-        "labels": dict(tally.labels.most_common()),
+        "labels": {
+            way: dict(c.most_common())
+            for way, c in sorted(
+                tally.labels.items(), key=lambda item: DIRECTIONS.index(item[0]) if item[0] else -1
+            )
+        },  # fmt: skip
         "damaged": report.damaged,
         "problems": report.problems,
         "checksums": report.checksums,
@@ -194,11 +202,11 @@ def describe(reader, max_labels: int = 12) -> str:
         lines.append("check   format without checksums: tiles checked for being readable only")
     if s["kinds"]:
         lines.append("kinds   " + ", ".join(f"{k} {c}" for k, c in s["kinds"].items()))
-    if s["labels"]:
-        top = list(s["labels"].items())
+    for way, labels in s["labels"].items():  # a both store: each direction's own
+        top = list(labels.items())
         shown = ", ".join(f"{label} {c}" for label, c in top[:max_labels])
         more = f", … {len(top) - max_labels} more" if len(top) > max_labels else ""
-        lines.append(f"labels  {shown}{more}")
+        lines.append(f"labels  {f'({way}) ' if way else ''}{shown}{more}")
     if s["runs"]:
         lines.append(
             f"runs    {s['runs']} ({s['last_outcome']} last), {format_duration(s['seconds'])} "
