@@ -329,3 +329,18 @@ def test_an_idle_master_does_not_spin(write_job, monkeypatch):
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     assert wall > 2.4
     assert cpu < 0.25 * wall, (cpu, wall)
+
+
+def test_a_worker_writes_into_the_store_only_where_it_sees_the_masters_lock(tmp_path):
+    """``seen_store``: the lock file at the store's path must hold the master's text (the
+    same file system); else the worker sends its tiles to the master to write."""
+    from campar.sweep.store import lock_path
+    from campar.sweep.wire import seen_store
+
+    store = tmp_path / "s.zarr"
+    store.mkdir()
+    lock_path(store).write_text('{"host": "h", "pid": 1}')
+    assert seen_store(f'{store}\n{{"host": "h", "pid": 1}}') == str(store)
+    assert seen_store(f'{store}\n{{"host": "other", "pid": 2}}') == ""  # another run's lock
+    assert seen_store(f'{tmp_path / "absent.zarr"}\n{{"host": "h", "pid": 1}}') == ""
+    assert seen_store("") == ""

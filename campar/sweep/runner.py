@@ -382,12 +382,21 @@ def run_master(job, store, signals, comm, grace, direct=False) -> RunSummary:
     return RunSummary(outcome, entry)
 
 
+def writer_of(master: Master) -> str:
+    """Who wrote the workers' tiles: "workers" (each its own), "master", or "mixed" (ranks
+    that did not see the store sent theirs to the master)."""
+    kinds = set(master.workers.writers.values()) if master.workers else set()
+    if not kinds:
+        return "workers" if master.direct else "master"
+    return "mixed" if len(kinds) > 1 else {"worker": "workers", "master": "master"}[kinds.pop()]
+
+
 def usage(master: Master) -> dict:
     """Who computed what, and at what cost, for the run log (per rank: None if unknown)."""
     w, others = master.workers, range(1, master.n_lanes)
     return {
         "ranks": master.n_lanes,
-        "writer": "workers" if master.direct else "master",  # of the workers' tiles
+        "writer": writer_of(master),
         "host": master.host,
         "hosts": sorted({master.host, *(w.hosts.values() if w else ())}),
         "compute_seconds": round(master.local.seconds + (w.seconds if w else 0), 3),

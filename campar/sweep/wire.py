@@ -23,6 +23,7 @@ launcher (``mpi_world``), so ``campar --help`` and serial runs never load MPI.
 """
 
 import contextlib
+import logging
 import os
 import queue
 import socket
@@ -30,6 +31,7 @@ import threading
 import time
 import traceback
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -47,7 +49,9 @@ from .arrays import array_names
 from .job import Job
 from .plan import Tile, plan_tiles
 from .progress import peak_rss_mb
-from .store import cell_arrays, tile_shape
+from .store import cell_arrays, lock_path, tile_shape
+
+log = logging.getLogger("campar.run")
 
 TAG_READY, TAG_TILE, TAG_RESULT, TAG_ERROR, TAG_NOTICE, TAG_BYE = range(11, 17)
 TAG_COMPUTED, TAG_WRITTEN, TAG_IO_ERROR = range(17, 20)
@@ -138,6 +142,7 @@ class Workers:
         self.idle: list[int] = []
         self.busy: dict[int, int] = {}
         self.writing: dict[int, int] = {}  # tile → the rank writing its arrays
+        self.writers: dict[int, str] = {}  # rank → "worker" (wrote its tiles) or "master"
         self.stopped: set[int] = set()
         self.gone: set[int] = set()
         self.hosts: dict[int, str] = {}
@@ -163,6 +168,7 @@ class Workers:
                 self.idle.append(rank)
                 self.seconds += seconds
                 if tag == TAG_RESULT:
+                    self.writers[rank] = "master"
                     arrays = unpack(self.job, self.tiles[index], buf[16:])
                     events.append(Outcome(index, arrays, None, seconds, rank))
                 else:
@@ -174,6 +180,7 @@ class Workers:
                 self.idle.append(rank)
                 self.seconds += seconds
                 self.writing[index] = rank
+                self.writers[rank] = "worker"
             elif tag == TAG_WRITTEN:
                 index, checksum = int(head[0]), int(head[1:2].view(np.uint64)[0])
                 self.writing.pop(index, None)
@@ -257,13 +264,14 @@ class WriterThread:
 
 def work(comm, job: Job, signals, lane, direct: str = "") -> None:
     """A worker rank: ask for tiles, compute them on ``lane`` (a thread: ``start``,
-    ``poll``, ``close``), send results back — or, where ``direct`` names the store's real
-    path, write them there and report that."""
+    ``poll``, ``close``), send results back — or, where ``direct`` (``direct_path``) names
+    a store this rank sees, write them there and report that."""
     from mpi4py import MPI
 
     host, cpu = socket.gethostname(), time.process_time()
     tiles = plan_tiles(job)
-    writer = WriterThread(direct, job) if direct else None
+    real = seen_store(direct)
+    writer = WriterThread(real, job) if real else None
 
     def report(done) -> None:  # a write's outcome, to the master
         index, checksum, error = done
@@ -341,10 +349,31 @@ SHARED_ERRORS = (
 
 
 def direct_path(store) -> str:
-    """The store path workers write their own tiles into ("" where the master writes)."""
+    """Where workers write their own tiles, as the master tells them: the store's real path
+    and its lock file's text, one per line ("" where the master writes every tile)."""
     if not store.direct_writes or os.environ.get(WRITER_ENV) == "master":
         return ""
-    return str(store.real)
+    return f"{store.real}\n{lock_path(store.real).read_text()}"
+
+
+def seen_store(direct: str) -> str:
+    """The store path of ``direct_path``'s text if this rank sees the store the master
+    opened — the lock file at its path holds the master's text: the same file system —
+    else "" (this rank then sends its tiles to the master, which writes them)."""
+    if not direct:
+        return ""
+    real, _, lock = direct.partition("\n")
+    try:
+        if lock_path(Path(real)).read_text() == lock:
+            return real
+    except OSError:
+        pass
+    log.warning(
+        "rank on %s does not see the store %s as rank 0 does (not a shared file system?): "
+        "it sends its tiles to rank 0 to write",
+        socket.gethostname(), real,
+    )  # fmt: skip
+    return ""
 
 
 @contextlib.contextmanager
