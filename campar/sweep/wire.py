@@ -63,6 +63,10 @@ BACKOFF_SECONDS = 1e-3  # longest sleep of an idle loop between probes (mpi4py.f
 # moment the tile is done, and looks for STOP and signals this often (not 1000× a second:
 # hundreds of ranks polling would take the cores their lanes compute on).
 COMPUTING_WAIT_SECONDS = 0.05
+# An idle worker's probes for its next tile: from ~1 µs, doubling, up to this. The master
+# answers a result at once (a tile or STOP), so a longer wait means it is busy: probing
+# 1,000 times a second would only take the cores of the ranks that compute.
+IDLE_WORKER_BACKOFF_SECONDS = 0.01
 MPI_LAUNCHER_ENV = ("PMI_SIZE", "PMI_RANK", "OMPI_COMM_WORLD_SIZE", "PMIX_RANK")
 
 
@@ -285,7 +289,7 @@ def work(comm, job: Job, signals, lane, direct: str = "") -> None:
 
     comm.Send([np.frombuffer(host.encode(), np.uint8), MPI.BYTE], 0, TAG_READY)
     index = np.empty(1, np.int64)
-    backoff, forwarded = Backoff(), 0
+    backoff, forwarded = Backoff(IDLE_WORKER_BACKOFF_SECONDS), 0
     while True:
         active = False
         if comm.Iprobe(0, TAG_TILE):
