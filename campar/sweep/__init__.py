@@ -9,14 +9,16 @@
   grouping rules; numpy only), for ``campar point --attractors``, maps and hysteresis;
 - ``multistable``: the census of coexisting attractors at every cell of a map (job key
   ``attractors``), through the kernel;
-- ``runner``: the serial runner and the MPI master/workers;
+- ``basin``: a basin job's tile — every cell run from its own start (y0, ydot0);
+- ``runner``: the serial runner and the MPI master/workers, ``tiles.rows: auto``;
+- ``wire``: the master–worker protocol over MPI, workers writing their own tiles;
 - ``signals``: stop signals over a run's whole life (before, during, after it);
 - ``budget``: a job's store size and per-rank memory, estimated, and their limits;
 - ``progress``: the live progress line, the run log, ``campar status`` and ``verify``;
 - ``store``: Zarr and HDF5 backends behind one interface, commit flags and checksums,
   verification and repair, lock.
 
-May import: ``campar.core``, ``campar.errors`` and itself. ``runner`` is the only
+May import: ``campar.core``, ``campar.errors`` and itself. ``wire`` is the only
 module of campar that imports mpi4py; ``store`` imports nothing of the
 integration (``core`` beyond its codes).
 """

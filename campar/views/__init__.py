@@ -9,6 +9,8 @@
   (PD, SN, NS, G, chaos, jump) from its multipliers and extrema of ε;
 - ``boundaries``: ``store_boundaries`` — the same typing for every edge between labels of
   a map, along both axes (``campar plot --bifurcations``);
+- ``cycles``: when two sweep directions end on different cycles (``hysteresis``);
+- ``basins``: the attractors of a basin store, matched across its starts;
 - ``dataset``: ``open`` — a result store as a labelled, CF-annotated xarray
   Dataset, either backend, with the n-p labels as strings (``campar.open``);
 - ``output``: output files checked before anything is computed (``figure_file``);
