@@ -281,12 +281,7 @@ def run_plot(args) -> int:
         raise JobError("--json and --trace go with --bifurcations")
     found = None
     if args.bifurcations:
-        from .sweep.store import read_store
         from .views.boundaries import store_boundaries
-
-        with read_store(args.store) as store:
-            if store.job.kind == "basin":
-                raise JobError(f"{args.store} is a basin store: --bifurcations is for maps")
         from .views.output import figure_file
 
         if args.output:

@@ -27,7 +27,6 @@ MPI launcher, so ``campar --help`` and serial runs never load MPI.
 
 import contextlib
 import logging
-import os
 import queue
 import signal
 import socket
@@ -46,10 +45,9 @@ from .job import Job
 from .plan import Tile, auto_tile_rows, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
 from .signals import Signals, early_interruption
-from .store import backend_name, open_store, read_store
+from .store import open_store, read_store, takes_direct_writes
 from .tile import run_tile
 from .wire import (
-    WRITER_ENV,
     Backoff,
     Outcome,
     Workers,
@@ -59,6 +57,7 @@ from .wire import (
     share_outcome,
     wait,
     work,
+    workers_write,
 )
 
 log = logging.getLogger("campar.run")
@@ -321,8 +320,7 @@ def agreed_tile_rows(job: Job, path, comm, overwrite: bool) -> int:
     if comm is None or comm.Get_rank() == 0:
         rows[0], why = stored_tile_rows(job, path) if not overwrite else (0, "")
         if not rows[0]:
-            direct = backend_name(path) == "zarr" and comm is not None
-            direct = direct and os.environ.get(WRITER_ENV) != "master"
+            direct = comm is not None and workers_write(takes_direct_writes(path))
             rows[0], why = auto_tile_rows(job, 1 if comm is None else comm.Get_size(), direct)
         log.info("tiles.rows %s", why)
     if comm is not None:

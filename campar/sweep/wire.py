@@ -352,10 +352,16 @@ SHARED_ERRORS = (
 )  # fmt: skip
 
 
+def workers_write(direct_writes: bool) -> bool:
+    """Whether workers write their own tiles into a store whose backend allows it
+    (``Store.direct_writes``), unless ``CAMPAR_WRITER=master`` asks otherwise."""
+    return direct_writes and os.environ.get(WRITER_ENV) != "master"
+
+
 def direct_path(store) -> str:
     """Where workers write their own tiles, as the master tells them: the store's real path
     and its lock file's text, one per line ("" where the master writes every tile)."""
-    if not store.direct_writes or os.environ.get(WRITER_ENV) == "master":
+    if not workers_write(store.direct_writes):
         return ""
     return f"{store.real}\n{lock_path(store.real).read_text()}"
 

@@ -306,6 +306,8 @@ def store_boundaries(path, *, omega=None, second=None, trace: bool = False,
               "state")  # fmt: skip
     with read_store(path) as store:
         job = store.job
+        if job.kind == "basin":
+            raise PlotError(f"{path} is a basin store: bifurcation curves are for maps")
         ran = job.chains.direction
         held = ("down", "up") if ran == "both" else (ran,)
         if direction not in (None, *held):

@@ -63,6 +63,7 @@ __all__ = [
     "Store",
     "StoreReader",
     "TileWriter",
+    "takes_direct_writes",
     "Verification",
     "backend_name",
     "cell_arrays",
@@ -183,9 +184,15 @@ def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job):
     return report.verified
 
 
+def takes_direct_writes(path: str | Path) -> bool:
+    """Whether the store at ``path`` (by its backend) lets workers write their own tiles
+    (``Store.direct_writes``), before it is opened."""
+    return _STORES[_backend(Path(path))].direct_writes
+
+
 class TileWriter:
     """Writes its own tiles' arrays into a store that allows it (``Store.direct_writes``):
-    a worker rank's side of a run whose master only commits (``Store.commit_tile``).
+    a worker rank's side of a run whose master only commits (``Store.commit_tiles``).
     ``real``: the store's real path (``Store.real``), as the master opened it."""
 
     def __init__(self, real: str | Path, job: Job):

@@ -191,7 +191,7 @@ class Store(ABC):
     """A store opened for one run: holds the lock; the only writer of commits.
 
     ``direct_writes``: other processes may write a tile's arrays themselves
-    (``TileWriter``), the store then commits it (``commit_tile``): a backend whose tiles
+    (``TileWriter``), the store then commits it (``commit_tiles``): a backend whose tiles
     are files of their own (Zarr); HDF5 from PyPI is serial and has one writer.
     """
 

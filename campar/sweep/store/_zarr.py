@@ -160,16 +160,16 @@ class ZarrTileArrays:
     commits a tile (checksum, then ``done``) only after its writer reported it written,
     and resume clears the chunks of uncommitted tiles (``ZarrStore._clear``)."""
 
-    def __init__(self, real: Path, job: Job):
+    def __init__(self, real: Path, job: Job, group=None):
         self.real, self.job = real, job
-        self._group = zarr.open_group(real, mode="r+")
-        self._arrays = {a.name: self._group[a.name] for a in cell_arrays(job)}
+        group = group if group is not None else zarr.open_group(real, mode="r+")
+        self.arrays = {a.name: group[a.name] for a in cell_arrays(job)}
 
     def write(self, tile: Tile, arrays: dict[str, np.ndarray]) -> None:
         try:
             # Every array's chunk of the tile in one call of zarr's event loop: one call per
             # array costs each its own round trip through the loop (docs/scaling.md).
-            sync(_all_at_once(self._arrays[k].async_array.setitem(tile.region, v)
+            sync(_all_at_once(self.arrays[k].async_array.setitem(tile.region, v)
                               for k, v in arrays.items()))  # fmt: skip
         except OSError:
             clean_leftovers(self.real, self.job)  # a failed write's .partial files
@@ -183,8 +183,8 @@ class ZarrStore(Store):
         group = zarr.open_group(real, mode="r+")
         super().__init__(path, job, lock, decode_attrs(group.attrs.asdict())["runs"], real)
         self._group = group
-        self._tile_arrays = ZarrTileArrays(real, job)
-        self._arrays = self._tile_arrays._arrays
+        self._tile_arrays = ZarrTileArrays(real, job, group)
+        self._arrays = self._tile_arrays.arrays
         self._schemas = cell_arrays(job)
         self._checksums = group["checksum"]
         self._flags = group["done"]

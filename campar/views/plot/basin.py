@@ -51,12 +51,12 @@ def plot_basin(ds, title: str | None = None):
     """The basin of ``ds`` (``campar.open`` of a basin store) as a Figure."""
     from .maps import draw_codes  # the map drawer of every categorical view
 
-    job_first, job_second = ds["basin"].dims[1], ds["basin"].dims[0]
+    second, first = ds["basin"].dims  # (ydot0, y0): rows, columns
     basin = ds["basin"].values
     categories = basin_categories(ds)
     codes = np.minimum(basin, len(categories) - 1)
     computed = basin >= 0
-    xe, ye = cell_edges(ds[job_first].values), cell_edges(ds[job_second].values)
+    xe, ye = cell_edges(ds[first].values), cell_edges(ds[second].values)
     with figure_style():
         figure = new_figure(7.2, 4.6)
         ax = figure.add_subplot()
@@ -76,8 +76,8 @@ def plot_basin(ds, title: str | None = None):
                             fontsize=7, fontweight="bold")  # fmt: skip
         ax.set_xlim(xe.min(), xe.max())
         ax.set_ylim(ye.min(), ye.max())
-        ax.set_xlabel(axis_label(job_first))
-        ax.set_ylabel(axis_label(job_second))
+        ax.set_xlabel(axis_label(first))
+        ax.set_ylabel(axis_label(second))
         fixed = {n: float(ds[n]) for n in ("omega", "mu_kn", "mu_cn", "f0", "zeta") if n in ds}
         heading = f"basin of attraction: {parameter_text(fixed)}   (tensile: {ds.attrs['tensile']})"
         ax.set_title(heading if title is None else f"{heading}\n{title}", loc="left")

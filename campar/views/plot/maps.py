@@ -404,7 +404,8 @@ def plot_store(
     ("down", the default, or "up"); its "hysteresis" map draws both (``hysteresis``).
 
     omega, second: (a, b) zoom ranges. output defaults to "<store name>-<what>.png"
-    in the current directory; it is checked before the store is read. Tiles not
+    in the current directory; it is checked before the store's arrays are read (its
+    job is read first: a basin store draws its basin, ``basin_view``). Tiles not
     committed yet are drawn as "not computed", and so are tiles that fail their
     checksum (with a warning). ``curves``: typed bifurcation edges to overlay
     (``campar.views.boundaries.store_boundaries``), computed on the full grid.
