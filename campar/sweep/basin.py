@@ -13,12 +13,9 @@ decided when the store is read (``campar.views.basins``), by the census's rules.
 
 import numpy as np
 
-from ..core.kernel import run_chain
-from .census import CHAOS_AFTER
 from .job import Job
-from .multistable import CENSUS_BITS
+from .multistable import run_starts
 from .plan import Tile
-from .tile import allocate_outputs, cell_settings, solver_options
 
 
 def basin_parameters(job: Job) -> dict[str, np.ndarray]:
@@ -29,21 +26,12 @@ def basin_parameters(job: Job) -> dict[str, np.ndarray]:
 
 
 def run_basin_tile(job: Job, tile: Tile, names: list[str]) -> dict[str, np.ndarray]:
-    """Every cell of a basin tile, each a one-cell chain from its (y0, ydot0): arrays
-    ``names`` shaped (tile rows, y0 points, …)."""
-    par = basin_parameters(job)
-    solver = solver_options(job)
-    settings = cell_settings(job)._replace(chaos_after=CHAOS_AFTER, output_bits=CENSUS_BITS)
-    law = job.model.law
+    """Every cell of a basin tile, each a one-cell chain from its (y0, ydot0)
+    (``multistable.run_starts``): arrays ``names`` shaped (tile rows, y0 points, …)."""
+    cell = basin_parameters(job)
     y0, ydot0 = job.first_values, job.second_values
-    rows = []
-    for row in range(tile.row_start, tile.row_stop):
-        out = allocate_outputs(len(y0), CENSUS_BITS, job.n_sections)
-        for col, y in enumerate(y0):
-            cell = allocate_outputs(1, CENSUS_BITS, job.n_sections)
-            run_chain(par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-                      law, np.array([y, ydot0[row]]), solver, settings, cell)  # fmt: skip
-            for name in names:
-                getattr(out, name)[col] = getattr(cell, name)[0]
-        rows.append(out)
-    return {name: np.stack([getattr(out, name) for out in rows]) for name in names}
+    rows = [
+        run_starts(job, cell, [(y, ydot0[row]) for y in y0], job.n_sections)
+        for row in range(tile.row_start, tile.row_stop)
+    ]
+    return {name: np.stack([getattr(records, name) for records in rows]) for name in names}

@@ -18,8 +18,8 @@ the chain's own arrays. Cost: K + 1 cold one-cell runs per cell (benchmarks/RESU
 
 import numpy as np
 
-from ..core.kernel import OUT_MULTIPLIERS, OUT_SECTIONS, OUT_STATS, run_chain
-from .census import CHAOS_AFTER, CLOUD_POINTS, cycle_tolerance, group_records, record_points
+from ..core.kernel import OUT_MULTIPLIERS, OUT_SECTIONS, OUT_STATS, CellOutputs, run_chain
+from .census import CHAOS_AFTER, CLOUD_POINTS, cycle_tolerance, group_cells
 from .census import spread_starts as census_starts
 from .job import Job
 from .tile import allocate_outputs, cell_settings, solver_options
@@ -28,6 +28,24 @@ from .tile import allocate_outputs, cell_settings, solver_options
 # multipliers and window statistics), so its trajectory is that command's, bit for bit.
 CENSUS_BITS = OUT_STATS | OUT_SECTIONS | OUT_MULTIPLIERS
 NO_ATTRACTOR = -1  # n, p, kind of the slots beyond a cell's attractors
+
+
+def run_starts(job: Job, cell: dict[str, np.ndarray], starts, n_sections: int) -> CellOutputs:
+    """The record of each start (y, y') at one parameter cell (``cell``: one-element
+    arrays), each run as a chain of one cell — a fresh start, as a point is — with the
+    settings of ``campar point --attractors`` (chaos called at the end of the budget, the
+    census's outputs, ``n_sections`` σn points); the records stacked, one per start."""
+    solver = solver_options(job)
+    settings = cell_settings(job)._replace(chaos_after=CHAOS_AFTER, output_bits=CENSUS_BITS)
+    records = allocate_outputs(len(starts), CENSUS_BITS, n_sections)
+    for i, x0 in enumerate(starts):
+        rec = allocate_outputs(1, CENSUS_BITS, n_sections)
+        run_chain(cell["omega"], cell["zeta"], cell["f0"], cell["mu_kn"], cell["mu_cn"],
+                  job.model.law, np.array(x0, float), solver, settings, rec)  # fmt: skip
+        for mine, one in zip(records, rec, strict=True):
+            if len(one):  # outputs not asked for have no cells
+                mine[i] = one[0]
+    return records
 
 
 def census_row(job: Job, par: dict[str, np.ndarray], chain_state: np.ndarray) -> dict:
@@ -44,25 +62,15 @@ def census_row(job: Job, par: dict[str, np.ndarray], chain_state: np.ndarray) ->
         "attractor_kind": np.full((n_cells, cap), NO_ATTRACTOR, np.int8),
         "attractor_fraction": np.full((n_cells, cap), np.nan),
     }
-    solver = solver_options(job)
-    settings = cell_settings(job)._replace(chaos_after=CHAOS_AFTER, output_bits=CENSUS_BITS)
     tol = cycle_tolerance(job)
-    law = job.model.law
     for i in range(n_cells):
         cell = {name: values[i : i + 1] for name, values in par.items()}
         starts = census_starts(k, float(par["omega"][i]))
         if np.all(np.isfinite(chain_state[i])):
             starts = np.vstack([starts, chain_state[i]])
-        kinds, ns, ps, points = [], [], [], []
-        for x0 in starts:  # each start a chain of one cell: a fresh start, as a point is
-            rec = allocate_outputs(1, CENSUS_BITS, CLOUD_POINTS)
-            run_chain(cell["omega"], cell["zeta"], cell["f0"], cell["mu_kn"], cell["mu_cn"],
-                      law, np.array(x0, float), solver, settings, rec)  # fmt: skip
-            kinds.append(int(rec.kind[0]))
-            ns.append(int(rec.n[0]))
-            ps.append(int(rec.p[0]))
-            points.append(record_points(kinds[-1], ns[-1], rec.sections[0]))
-        groups, basin = group_records(kinds, points, tol, counted=k)
+        rec = run_starts(job, cell, starts, CLOUD_POINTS)
+        kinds, ns, ps = rec.kind.astype(np.int64), rec.n, rec.p
+        groups, basin = group_cells(kinds, ns, rec.sections, tol, counted=k)
         out["n_attractors"][i] = len(groups)
         out["unsettled_starts"][i] = int(np.sum(basin[:k] < 0))
         for slot, group in enumerate(groups[:cap]):
@@ -70,5 +78,5 @@ def census_row(job: Job, par: dict[str, np.ndarray], chain_state: np.ndarray) ->
             out["attractor_n"][i, slot] = ns[first]
             out["attractor_p"][i, slot] = ps[first]
             out["attractor_kind"][i, slot] = kinds[first]
-            out["attractor_fraction"][i, slot] = sum(j < k for j in group) / k
+            out["attractor_fraction"][i, slot] = np.sum(group < k) / k
     return out
