@@ -7,7 +7,8 @@
   built from a job, in one place;
 - ``census``: which records of one cell are one attractor (the start spread, the
   grouping rules; numpy only), for ``campar point --attractors``, maps and hysteresis;
-- ``multistable``: the census of coexisting attractors at every cell of a map (job key
+- ``multistable``: starts run one cell at a time (``run_starts``, for basins too) and the
+  census of coexisting attractors at every cell of a map (job key
   ``attractors``), through the kernel;
 - ``basin``: a basin job's tile — every cell run from its own start (y0, ydot0);
 - ``runner``: the serial runner and the MPI master/workers, ``tiles.rows: auto``;
