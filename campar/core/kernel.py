@@ -58,7 +58,7 @@ from .model import (
     gap,
     make_params,
 )
-from .revolution import Trace, make_trace, run_revolution, scale_solver_options
+from .revolution import run_revolution, scale_solver_options
 
 # Transient policies.
 CONVERGED = 0  # stop once the section has converged to a cycle (Newton-accelerated)
@@ -141,7 +141,6 @@ class ChainWork(NamedTuple):
     est: np.ndarray  # (n_max, n_max, 3) cycle estimates by period (assess_revolution)
     revs: np.ndarray  # (R, N_REV_STATS)
     u: np.ndarray  # tangent vector for the Lyapunov exponent
-    no_trace: Trace
     x_start: np.ndarray  # (2,) the start of the current cell
     prev: np.ndarray  # (3, 2) final states of the last three cells, newest first
 
@@ -163,7 +162,6 @@ def make_chain_work(cs) -> ChainWork:
         est=np.full((cs.n_max, cs.n_max, 3), -1.0),
         revs=np.zeros((rows, N_REV_STATS)),
         u=np.array([1.0, 0.0]),
-        no_trace=make_trace(0, 0, 1),
         x_start=np.empty(2),
         prev=np.empty((3, 2)),
     )
@@ -179,7 +177,7 @@ def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
     x[0] = cw.xs[k, 0]
     x[1] = cw.xs[k, 1]
     limit = w.counts[0] + w.counts[1] + (step_budget - spend(cw))
-    status = run_revolution(x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit, cw.no_trace)
+    status = run_revolution(x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit, None)
     if status != OK:
         return status
     if not (math.isfinite(x[0]) and math.isfinite(x[1])):
@@ -472,10 +470,10 @@ def chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out, 
         same_period = periodic and streak > 0 and out.n[i] == prev_n
         streak = min(streak + 1, 3) if same_period else 1
         prev_n = out.n[i] if periodic else -1
-        prev[2] = prev[1]
-        prev[1] = prev[0]
-        prev[0, 0] = cw.xs[final, 0]
-        prev[0, 1] = cw.xs[final, 1]
+        for c in range(2):  # element by element: a row assignment compiles numba's
+            prev[2, c] = prev[1, c]  # shape-checking error message (~1.5 s cold)
+            prev[1, c] = prev[0, c]
+            prev[0, c] = cw.xs[final, c]
 
 
 @hot

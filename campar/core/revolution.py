@@ -114,9 +114,9 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
     variational part, Φ starts at I, so x[2:6] ends as the Jacobian of the
     one-revolution map. Fills the revolution's statistics in ``row``; fails with
     STEP_LIMIT once the workspace has counted more than step_limit steps.
-    Records the orbit into ``rec`` unless its arrays are empty.
+    Records the orbit into ``rec`` unless it is None: numba then prunes every
+    recording branch before typing, so a map's kernel never compiles the recorder.
     """
-    recording = rec.samples.shape[0] > 0
     if x.shape[0] == N_STATE_VARIATIONAL:
         x[2] = 1.0
         x[3] = 0.0
@@ -127,7 +127,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
     mode[1] = contact_mode(eps, deps, p)
     t = 0.0
     e0 = de0 = pn0 = dpn0 = 0.0
-    if recording:
+    if rec is not None:
         record_sample(rec, t, x[0], x[1], p, mode)
     for phase in range(N_PHASES):
         mode[0] = phase
@@ -143,7 +143,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
             contact = mode[1]
             if want_stats and not fresh:
                 e0, de0, pn0, dpn0 = contact_kinematics(t, x, f, p, mode)
-            if recording:
+            if rec is not None:
                 rec.prev[0] = x[0]
                 rec.prev[1] = x[1]
             status, t, which = advance(model.rhs, model.events, t, t_end, x, f, p, mode, opt, w)
@@ -151,7 +151,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                 return status
             if t > t_prev:
                 stuck = 0
-                if recording:
+                if rec is not None:
                     record_step(rec, opt.method, w, t_prev, t, x, p, mode)
                 if want_stats:
                     e1, de1, pn1, dpn1 = contact_kinematics(t, x, f, p, mode)
@@ -166,7 +166,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
             if which >= 0:
                 if is_detachment(contact, which):
                     row[REV_DETACH] += 1.0
-                if recording:
+                if rec is not None:
                     record_event(rec, t, x, contact, which)
                 if contact == FREE:
                     _, deps = gap(t, x, p, mode[0])
@@ -176,7 +176,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                 model.rhs(t, x, p, mode, f)
                 w.counts[2] += 1
                 fresh = False
-    if recording:
+    if rec is not None:
         rec.t0[0] += t
     return OK
 
