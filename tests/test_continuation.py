@@ -145,7 +145,9 @@ SLOW_CYCLE = Cell("slow 2-2", 3.45213, mu_cn=0.529474)
 
 def test_a_slowly_attracting_cycle_is_found_by_jumps_on_agreeing_estimates():
     found = simulate_point(SLOW_CYCLE.omega, multipliers=True, **SLOW_CYCLE.parameters)
-    assert found.label == "2-2" and found.revolutions < 60
+    # 28–82 revolutions as the step control varies at equal accuracy (the multiplier
+    # 0.9984 amplifies the Jacobian's error 600× in each estimate; benchmarks/RESULTS.md)
+    assert found.label == "2-2" and found.revolutions < 100
     assert "slow" in found.flags and 0.99 < abs(found.multipliers[0]) < 1.0
     # without them the transient is nowhere near the cycle after 150 revolutions
     plain = one_cell(SLOW_CYCLE, 0.0, 0.0, jump_agree=0.0, quasiperiodic_after=150)

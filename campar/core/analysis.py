@@ -27,7 +27,7 @@ test afterwards.
 import math
 
 from .codes import CHAOTIC, QUASIPERIODIC, UNCONVERGED
-from .hermite import hermite_extremum
+from .hermite import hermite_extremum, quintic_extremum
 from .jit import hot
 
 # Columns of the per-revolution statistics.
@@ -264,21 +264,29 @@ def cubic_extremes(g0, d0, g1, d1):
 
 
 @hot
-def add_step_stats(row, h, free, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
-    """Fold one step into a revolution's statistics (ε and Pn with rates at both ends);
-    ``free``: the step's time counts towards the duty cycle (model.released).
+def add_step_stats(row, h, free, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1):
+    """Fold one step into a revolution's statistics (ε with its first two rates, Pn with
+    its rate, at both ends); ``free``: the step's time counts towards the duty cycle
+    (model.released).
 
-    Extremes inside the step come from cubic Hermite models, accurate to O(h⁴).
+    Extremes inside the step come from Hermite models: quintic for ε (O(h⁶)), cubic
+    for Pn (O(h⁴); contact steps are short).
     """
     if free:
         row[REV_T_FREE] += h
-    lo, hi = cubic_extremes(e0, de0 * h, e1, de1 * h)
+    h2 = h * h
+    lo = min(e0, e1)
+    hi = max(e0, e1)
+    th, dip = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, True)
+    if th > 0.0:
+        lo = min(lo, dip)
+        # a local minimum of ε near 0 is where a detachment can appear or vanish
+        row[REV_GRAZE] = min(row[REV_GRAZE], abs(dip))
+    th, peak = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, False)
+    if th > 0.0:
+        hi = max(hi, peak)
     row[REV_EPS_MIN] = min(row[REV_EPS_MIN], lo)
     row[REV_EPS_MAX] = max(row[REV_EPS_MAX], hi)
-    # a local minimum of ε near 0 is where a detachment can appear or vanish
-    th, dip = hermite_extremum(e0, de0 * h, e1, de1 * h, True)
-    if th > 0.0:
-        row[REV_GRAZE] = min(row[REV_GRAZE], abs(dip))
     if not free:
         _, pn_hi = cubic_extremes(pn0, dpn0 * h, pn1, dpn1 * h)
         row[REV_PN_MAX] = max(row[REV_PN_MAX], pn_hi)

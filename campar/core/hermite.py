@@ -1,7 +1,10 @@
-"""Cubic Hermite models of a scalar over one step, from its values and slopes at both ends.
+"""Hermite models of a scalar over one step, from its values and derivatives at both ends.
 
-Shared by the integrator (roots of event functions between step ends) and the
-analysis (extremes of ε and Pn inside a step).
+Cubic (values and slopes): shared by the integrator (roots of event functions
+between step ends) and the analysis (extremes of Pn inside a step). Quintic
+(with second derivatives too): the analysis's extremes of ε, accurate to O(h⁶)
+where the cubic's O(h⁴) let DOP853's long free-flight steps misplace ε's
+minimum by 1 % (reference cell 7, benchmarks/RESULTS.md).
 """
 
 import numpy as np
@@ -40,3 +43,40 @@ def hermite_extremum(g0, d0, g1, d1, want_min):
     if best >= 0.0:
         best_val = ((a * best + b) * best + d0) * best + g0
     return best, best_val
+
+
+QUINTIC_NEWTON_ITER = 8
+
+
+@hot
+def quintic_extremum(g0, d0, s0, g1, d1, s1, want_min):
+    """Interior extremum of the quintic with values g, slopes d and second derivatives
+    s (per unit θ) at θ = 0 and 1, found by Newton's method from the cubic's.
+
+    Returns (θ, value) as hermite_extremum; θ = -1 when the cubic through the same
+    values and slopes has no such extremum.
+    """
+    th, _ = hermite_extremum(g0, d0, g1, d1, want_min)
+    if th < 0.0:
+        return th, 0.0
+    # g(θ) = Σ c_k θ^k with c0 = g0, c1 = d0, c2 = s0 / 2
+    dg = g1 - g0
+    c2 = 0.5 * s0
+    c3 = 10.0 * dg - 6.0 * d0 - 4.0 * d1 - 0.5 * (3.0 * s0 - s1)
+    c4 = -15.0 * dg + 8.0 * d0 + 7.0 * d1 + 0.5 * (3.0 * s0 - 2.0 * s1)
+    c5 = 6.0 * dg - 3.0 * (d0 + d1) - 0.5 * (s0 - s1)
+    x = th
+    for _ in range(QUINTIC_NEWTON_ITER):
+        slope = (((5.0 * c5 * x + 4.0 * c4) * x + 3.0 * c3) * x + 2.0 * c2) * x + d0
+        curv = ((20.0 * c5 * x + 12.0 * c4) * x + 6.0 * c3) * x + 2.0 * c2
+        if curv == 0.0 or (curv > 0.0) != want_min:
+            x = th  # not converging to this kind of extremum: keep the cubic's place
+            break
+        step = slope / curv
+        x -= step
+        if not 0.0 < x < 1.0:
+            x = th
+            break
+        if abs(step) < 1e-13:
+            break
+    return x, ((((c5 * x + c4) * x + c3) * x + c2) * x + d0) * x + g0

@@ -264,7 +264,7 @@ def is_detachment(contact, which):
 
 @hot
 def contact_kinematics(t, y, f, p, mode):
-    """ε, dε/dt, Pn and dPn/dt at a state with field value f, in the current mode.
+    """ε, dε/dt, d²ε/dt², Pn and dPn/dt at a state with field value f, in the current mode.
 
     Pn is the force of the mode's own field (zero unless pushing), so its rate
     is continuous inside a step.
@@ -272,12 +272,13 @@ def contact_kinematics(t, y, f, p, mode):
     yc, dyc, d2yc = cam(p.omega * t, mode[0])
     eps = yc - y[0]
     rate = p.omega * dyc - y[1]
+    accel = p.omega * p.omega * d2yc - f[1]
     if mode[1] != PUSH or eps <= 0.0:
-        return eps, rate, 0.0, 0.0
+        return eps, rate, accel, 0.0, 0.0
     deps = p.vcam * dyc - y[1]  # the force law's ε'
     d2eps = p.vcam * p.omega * d2yc - f[1]
     s = math.sqrt(eps)
     bracket = 1.0 + p.c * deps
     pn = p.k * eps * s * bracket
     dpn = p.k * (1.5 * s * rate * bracket + eps * s * p.c * d2eps)
-    return eps, rate, pn, dpn
+    return eps, rate, accel, pn, dpn

@@ -126,7 +126,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
     eps, deps = gap(0.0, x, p, RISE)
     mode[1] = contact_mode(eps, deps, p)
     t = 0.0
-    e0 = de0 = pn0 = dpn0 = 0.0
+    e0 = de0 = dde0 = pn0 = dpn0 = 0.0
     if rec is not None:
         record_sample(rec, t, x[0], x[1], p, mode)
     for phase in range(N_PHASES):
@@ -142,7 +142,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
             t_prev = t
             contact = mode[1]
             if want_stats and not fresh:
-                e0, de0, pn0, dpn0 = contact_kinematics(t, x, f, p, mode)
+                e0, de0, dde0, pn0, dpn0 = contact_kinematics(t, x, f, p, mode)
             if rec is not None:
                 rec.prev[0] = x[0]
                 rec.prev[1] = x[1]
@@ -154,10 +154,11 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                 if rec is not None:
                     record_step(rec, opt.method, w, t_prev, t, x, p, mode)
                 if want_stats:
-                    e1, de1, pn1, dpn1 = contact_kinematics(t, x, f, p, mode)
+                    e1, de1, dde1, pn1, dpn1 = contact_kinematics(t, x, f, p, mode)
                     dc_time = released(contact, p)
-                    add_step_stats(row, t - t_prev, dc_time, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1)
-                    e0, de0, pn0, dpn0 = e1, de1, pn1, dpn1
+                    add_step_stats(row, t - t_prev, dc_time, e0, de0, dde0, e1, de1, dde1,
+                                   pn0, dpn0, pn1, dpn1)  # fmt: skip
+                    e0, de0, dde0, pn0, dpn0 = e1, de1, dde1, pn1, dpn1
                     fresh = True
             elif which >= 0:
                 stuck += 1
