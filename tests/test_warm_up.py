@@ -1,5 +1,6 @@
-"""`campar warm-up` (the install line's step) compiles what a first point and a first map
-use: after it, neither compiles anything more into an empty numba cache."""
+"""`campar warm-up` (the install line's step) compiles what a first point (plotted, so its
+orbit traced) and a first map use: after it, neither compiles anything more into an
+empty numba cache."""
 
 import os
 import subprocess
@@ -9,7 +10,8 @@ from conftest import CAMPAR
 
 
 def cached_functions(cache) -> set[str]:
-    return {p.name for p in cache.rglob("*.nbi")}
+    """Every compiled function's index and every signature's machine code in the cache."""
+    return {p.name for p in cache.rglob("*.nb[ic]")}
 
 
 @pytest.mark.slow  # compiles the kernel into an empty cache: ~20 s
@@ -25,7 +27,7 @@ def test_warm_up_leaves_nothing_for_a_point_or_a_map_to_compile(tmp_path):
     assert "compiled and cached" in campar("warm-up")
     warm = cached_functions(tmp_path / "cache")
     assert any(name.startswith("kernel.") for name in warm), sorted(warm)
-    campar("point", "--omega", "3")
+    campar("point", "--omega", "3", "--plot", str(tmp_path / "point.png"))
     job = tmp_path / "job.yaml"
     job.write_text(
         "name: w\nsweep:\n  omega: {from: 4.0, to: 2.0, points: 3}\n"
