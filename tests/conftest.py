@@ -14,9 +14,19 @@ import numpy as np
 import pytest
 import yaml
 
-from campar.sweep.job import Job
-from campar.sweep.plan import plan_tiles
-from campar.sweep.tile import run_tile
+TESTS = Path(__file__).resolve().parent
+# Tests compile campar's integrator with fields of their own (test_integrator), and numba
+# indexes those signatures by the test module's name: a process that later reads such an
+# index must be able to import the module (else ModuleNotFoundError, measured), and the
+# package's own cache, which every campar run reads, must not hold them. So the session
+# caches into a directory of its own (before numba is imported), and its children find
+# the test modules.
+os.environ.setdefault("NUMBA_CACHE_DIR", str(TESTS.parent / ".numba-test-cache"))
+os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(TESTS), os.environ.get("PYTHONPATH")]))
+
+from campar.sweep.job import Job  # noqa: E402 (after the cache is chosen)
+from campar.sweep.plan import plan_tiles  # noqa: E402
+from campar.sweep.tile import run_tile  # noqa: E402
 
 CAMPAR = [sys.executable, "-m", "campar.cli"]
 MPIRUN = Path(sys.executable).parent / "mpirun"

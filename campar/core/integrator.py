@@ -26,7 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import dop853
+from . import dop853, entry_steps
 from .codes import NONFINITE, OK, STEP_UNDERFLOW
 from .hermite import hermite_extremum
 from .jit import hot
@@ -76,15 +76,6 @@ LOG_ERR_FLOOR = math.log(ERR_FLOOR)
 ERROR_EXPONENT = 0.2 - 0.75 * PI_BETA
 # DOP853: Hairer's dop853.f, an I controller (β = 0) on err^(1/8)
 ERROR_EXPONENT_853 = 1.0 / (dop853.ERROR_ORDER + 1)
-# A step starting where the field switches (an impact, a detachment, a cam phase boundary)
-# sees a nonsmooth solution: right after an impact of the Hunt–Crossley force its local
-# error grows about like h^3, not h^8 (measured on the μcn plane), so the I controller's
-# 1/8 power needed six rejections to shrink such a step. It shrinks with this power instead,
-# and each discrete state remembers the step its last entry accepted (``StepWork.h_memory``):
-# a periodic motion enters the same states every revolution.
-FRESH_ERROR_EXPONENT = 1.0 / 3.0
-MEMORY_GROWTH = 1.25  # a remembered step grows at most this much per entry
-MEMORY_SHRINK = 0.8
 MAX_REJECTS = 60  # consecutive rejections before the step is declared underflowed
 # A step that would leave less than this fraction of itself before t_end is stretched.
 STRETCH = 0.01
@@ -105,7 +96,6 @@ CTRL_G1_MODE1 = 4
 CTRL_G1_M = 5  # how many event functions they hold
 CTRL_DENSE = 6  # 1 when StepWork.F holds the DOP853 dense output of the step in K
 N_CTRL = 7
-MEMORY_SHAPE = (8, 4)  # discrete states (mode[0], mode[1]) whose entry step is remembered
 
 
 class SolverOptions(NamedTuple):
@@ -135,7 +125,7 @@ class StepWork(NamedTuple):
     ctrl: np.ndarray  # (N_CTRL,) step-control state, slots CTRL_*
     counts: np.ndarray  # [accepted steps, rejected steps, field evaluations]
     F: np.ndarray  # (7, n) DOP853 dense-output coefficients of the step in K
-    h_memory: np.ndarray  # (MEMORY_SHAPE) first step accepted on entering (mode[0], mode[1]); 0: none
+    h_memory: np.ndarray  # (entry_steps.MEMORY_SHAPE) the step to enter (mode[0], mode[1]) with
 
 
 def make_work(n, max_events, h0) -> StepWork:
@@ -154,7 +144,7 @@ def make_work(n, max_events, h0) -> StepWork:
         ctrl=np.empty(N_CTRL),
         counts=np.zeros(3, dtype=np.int64),
         F=np.zeros((dop853.INTERPOLATOR_POWER, n)),
-        h_memory=np.zeros(MEMORY_SHAPE),
+        h_memory=np.zeros(entry_steps.MEMORY_SHAPE),
     )
     restart_control(w, h0)
     return w
@@ -169,9 +159,7 @@ def restart_control(w, h0):
     w.ctrl[CTRL_G1_MODE0] = -1.0
     w.ctrl[CTRL_G1_MODE1] = -1.0
     w.ctrl[CTRL_G1_M] = 0.0
-    for i in range(w.h_memory.shape[0]):
-        for j in range(w.h_memory.shape[1]):
-            w.h_memory[i, j] = 0.0
+    entry_steps.forget(w.h_memory)
 
 
 class TrialStep(NamedTuple):
@@ -492,7 +480,7 @@ def advance(rhs, events, t, t_end, y, f, p, mode, opt, w):
     )  # the first step since the discrete state was entered (or since a step ended early)
     if fresh:
         m = events(t, y, f, p, mode, w.g0, w.dg0)
-        remembered = entry_step(w, mode)
+        remembered = entry_steps.recall(w.h_memory, mode)
         if adaptive and remembered > 0.0:
             ctrl[CTRL_H] = remembered
     else:
@@ -508,7 +496,7 @@ def advance(rhs, events, t, t_end, y, f, p, mode, opt, w):
         (ERROR_EXPONENT_853, 0.0) if opt.method == DOP853 else (ERROR_EXPONENT, PI_BETA)
     )
     if fresh:
-        reject_exponent = -FRESH_ERROR_EXPONENT
+        reject_exponent = -entry_steps.ENTRY_ERROR_EXPONENT
     elif opt.method == DOP853:
         reject_exponent = -ERROR_EXPONENT_853
     else:
@@ -561,7 +549,7 @@ def advance(rhs, events, t, t_end, y, f, p, mode, opt, w):
             t_new = t + h_event
         else:
             if adaptive and fresh and h < remaining:
-                remember_entry_step(w, mode, h, err)
+                entry_steps.remember(w.h_memory, mode, h, err)
             if adaptive:
                 # PI control of the next step from this accepted step's error
                 # err^ERROR_EXPONENT / err_prev^PI_BETA as one exp of logs: two powers
@@ -581,23 +569,6 @@ def advance(rhs, events, t, t_end, y, f, p, mode, opt, w):
             f[i] = w.K[end, i]
         w.counts[0] += 1
         return OK, t_new, which
-
-
-@hot
-def entry_step(w, mode):
-    """The step size remembered for entering discrete state ``mode`` (0: none)."""
-    if mode[0] < w.h_memory.shape[0] and mode[1] < w.h_memory.shape[1]:
-        return w.h_memory[mode[0], mode[1]]
-    return 0.0
-
-
-@hot
-def remember_entry_step(w, mode, h, err):
-    """Remember the accepted entry step h of error err, scaled as the fresh-step
-    controller would scale it, within [MEMORY_SHRINK, MEMORY_GROWTH]."""
-    if mode[0] < w.h_memory.shape[0] and mode[1] < w.h_memory.shape[1]:
-        fac = SAFETY * math.exp(-FRESH_ERROR_EXPONENT * math.log(max(err, 1e-10)))
-        w.h_memory[mode[0], mode[1]] = h * max(MEMORY_SHRINK, min(MEMORY_GROWTH, fac))
 
 
 @hot

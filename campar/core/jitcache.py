@@ -15,8 +15,8 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_MODULES = (
-    "jit", "codes", "hermite", "dop853", "model", "integrator", "analysis", "revolution",
-    "kernel",
+    "jit", "codes", "hermite", "dop853", "entry_steps", "model", "integrator", "analysis",
+    "revolution", "kernel",
 )  # fmt: skip
 STAMP = "campar-core.digest"
 
