@@ -101,6 +101,41 @@ def test_distinct_period_merges_points_within_tolerance():
     assert A.distinct_period(xs, 4, 4, 1e-10) == 4
 
 
+def test_a_two_cycle_within_reach_of_a_stable_one_cycle_is_the_one_cycle():
+    # two points 2e-6 apart (beyond period_tol 1e-6): with the 1-cycle's multiplier −0.979
+    # (stable, next to a flip) the cycle is the 1-cycle; at −1.02 (unstable, just past the
+    # flip) a genuine 2-cycle; 1e-3 apart it is a 2-cycle whatever the multiplier
+    def cycle(gap, multiplier):
+        a, b = np.array([0.19, -1.12]), np.array([0.19 + gap, -1.12])
+        xs = np.array([a, b, a, b, a])
+        jac = np.tile(np.diag([multiplier, 0.1]).ravel(), (4, 1))
+        return A.stable_subperiod(xs, jac, 4, A.distinct_period(xs, 4, 2, 1e-6), 1e-5)
+
+    assert cycle(2e-6, -0.979) == 1
+    assert cycle(2e-6, -1.02) == 2
+    assert cycle(1e-3, -0.979) == 2
+
+
+def test_quintic_extremum_matches_a_sampled_quintic():
+    rng = np.random.default_rng(7)
+    th = np.linspace(0, 1, 200001)
+    checked = 0
+    for _ in range(50):
+        q = np.polynomial.Polynomial(rng.normal(size=6))
+        dq, ddq = q.deriv(), q.deriv(2)
+        ends = (q(0), dq(0), ddq(0), q(1), dq(1), ddq(1))
+        for want_min in (True, False):
+            t, value = A.quintic_extremum(*ends, want_min)
+            if t <= 0.0:
+                continue  # no interior extremum of that kind in the cubic through the ends
+            # a true local extremum of the quintic (not just a value of it), located to 1e-9
+            assert abs(dq(t)) < 1e-9 * (1 + np.abs(dq(th)).max())
+            assert (ddq(t) > 0) == want_min
+            assert value == pytest.approx(q(t), abs=1e-12)
+            checked += 1
+    assert checked >= 20
+
+
 def test_repeat_period_needs_two_full_periods():
     cycle = np.array([[0, 0], [1, 0], [2, 0]], float)
     xs = np.vstack([cycle] * 3)

@@ -219,6 +219,32 @@ def distinct_period(xs, k, n, tol):
 
 
 @hot
+def stable_subperiod(xs, jac, k, n, reach):
+    """The smallest divisor d of n such that the n-cycle xs[k-n+1..k] repeats with period
+    d to within ``reach`` (∞-norm) and its period-d map DP^d is stable; n if none.
+
+    Such a cycle is the d-cycle read through the integration's noise: next to a flip,
+    the period-2 map's fixed point is ill-conditioned (multiplier near +1) and its two
+    points can stay farther apart than period_tol, while the period-1 cycle (multiplier
+    near −1) is stable. A genuine 2-cycle born in the flip has an unstable 1-cycle there.
+    """
+    for d in range(1, n):
+        if n % d != 0:
+            continue
+        close = True
+        for i in range(k - n + 1, k + 1):
+            j = i + d
+            if j > k:
+                j -= n
+            if abs(xs[i, 0] - xs[j, 0]) > reach or abs(xs[i, 1] - xs[j, 1]) > reach:
+                close = False
+                break
+        if close and spectral_radius(cycle_jacobian(jac, k, d)) < 1.0:
+            return d
+    return n
+
+
+@hot
 def repeat_period(xs, first, last, n_max, tol):
     """Smallest n ≤ n_max with |xs[j] − xs[j−n]| ≤ tol for every j in (first+n … last].
 

@@ -32,6 +32,7 @@ from .analysis import (
     repeat_period,
     slow_cycle_nearby,
     spectral_radius,
+    stable_subperiod,
     stretch_tangent,
     window_stats,
 )
@@ -72,6 +73,7 @@ OUT_LYAPUNOV = 8  # largest Lyapunov exponent
 
 SLOW_MARGIN = 0.02  # a multiplier this close to the unit circle marks a slow cell
 SLOW_REACH = 0.1  # … and, for a non-periodic cell, a stable cycle estimate this close
+PERIOD_REACH = 1e-5  # a converged cycle this close to a stable one of a divisor period is it
 GRAZE_TOL = 1e-5  # a dip of ε this close to 0 marks a cell whose p is sensitive
 EXTRAPOLATE_MAX = 0.05  # extrapolate the warm start only between close fixed points
 
@@ -350,6 +352,8 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     final = k
     if n > 0:
         m = distinct_period(cw.xs, k, n, cs.period_tol)
+        if cs.transient == CONVERGED:  # (the paper's recipe keeps its plain repeat test)
+            m = stable_subperiod(cw.xs, cw.jac, k, m, PERIOD_REACH)
         _, graze = record_window(out, i, cw, k - m, m, period_time)
         if graze < GRAZE_TOL:
             flags |= FLAG_GRAZING
