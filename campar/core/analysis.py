@@ -203,19 +203,22 @@ def distinct_period(xs, k, n, tol):
     The smallest divisor m of n with xs[i] ≈ xs[i+m] around the cycle.
     """
     for m in range(1, n):
-        if n % m != 0:
-            continue
-        same = True
-        for i in range(k - n + 1, k + 1):
-            j = i + m
-            if j > k:
-                j -= n
-            if abs(xs[i, 0] - xs[j, 0]) > tol or abs(xs[i, 1] - xs[j, 1]) > tol:
-                same = False
-                break
-        if same:
+        if n % m == 0 and repeats_with(xs, k, n, m, tol):
             return m
     return n
+
+
+@hot
+def repeats_with(xs, k, n, d, tol):
+    """True when the n-cycle xs[k-n+1..k] repeats with period d: xs[i] ≈ xs[i+d] (within
+    tol, ∞-norm) around the cycle."""
+    for i in range(k - n + 1, k + 1):
+        j = i + d
+        if j > k:
+            j -= n
+        if abs(xs[i, 0] - xs[j, 0]) > tol or abs(xs[i, 1] - xs[j, 1]) > tol:
+            return False
+    return True
 
 
 @hot
@@ -229,17 +232,11 @@ def stable_subperiod(xs, jac, k, n, reach):
     near −1) is stable. A genuine 2-cycle born in the flip has an unstable 1-cycle there.
     """
     for d in range(1, n):
-        if n % d != 0:
-            continue
-        close = True
-        for i in range(k - n + 1, k + 1):
-            j = i + d
-            if j > k:
-                j -= n
-            if abs(xs[i, 0] - xs[j, 0]) > reach or abs(xs[i, 1] - xs[j, 1]) > reach:
-                close = False
-                break
-        if close and spectral_radius(cycle_jacobian(jac, k, d)) < 1.0:
+        if (
+            n % d == 0
+            and repeats_with(xs, k, n, d, reach)
+            and spectral_radius(cycle_jacobian(jac, k, d)) < 1.0
+        ):
             return d
     return n
 
