@@ -138,3 +138,45 @@ def test_free_flight_multipliers_are_the_damped_oscillators():
     got = sorted((complex(re, im) for re, im in out.multipliers[0]), key=lambda z: z.imag)
     np.testing.assert_allclose(got, [exact.conjugate(), exact], rtol=1e-6)
     assert out.lyapunov[0] == pytest.approx(-zeta, rel=1e-6)
+
+
+def test_a_confirming_revolution_without_variational_equations_takes_the_same_steps():
+    """kernel.confirm_revolution relies on this: only (y, y') are error-controlled, so
+    with the step control handed over, the 2-dimensional state takes the 6-dimensional
+    one's steps and ends bit for bit where it ends, and the control comes back as if
+    the variational revolution had run (its entry-step memory included)."""
+    from campar.core.analysis import N_REV_STATS
+    from campar.core.integrator import make_work
+    from campar.core.kernel import hand_over_control
+    from campar.core.model import MAX_EVENTS, make_params
+    from campar.core.revolution import run_revolution, scale_solver_options
+
+    job = Job.from_dict({
+        "name": "confirm",
+        "sweep": {"omega": {"from": 3.0, "to": 3.0, "points": 1},
+                  "mu_cn": {"from": 0.8, "to": 0.8, "points": 1}},
+    })  # fmt: skip
+    p = make_params(3.0, 0.2, 0.5, 0.8, 0.8, np.int64(1))
+    opt = scale_solver_options(solver_options(job), 3.0, 200)
+    mode = np.zeros(2, dtype=np.int64)
+    row = np.zeros(N_REV_STATS)
+
+    def revolutions(x, w, count):
+        for _ in range(count):
+            run_revolution(x, np.zeros(x.shape[0]), p, opt, w, mode, row, True, 1 << 40, None)
+
+    # two identical variational histories: the entry memory and controller have state
+    x6, w6 = np.zeros(6), make_work(6, MAX_EVENTS, 1e-3)
+    x6_ref, w6_ref = np.zeros(6), make_work(6, MAX_EVENTS, 1e-3)
+    revolutions(x6, w6, 3)
+    revolutions(x6_ref, w6_ref, 3)
+    assert w6.h_memory.max() > 0.0
+    x2, w2 = x6[:2].copy(), make_work(2, MAX_EVENTS, 0.5)  # w2: a different history
+    hand_over_control(w6, w2)
+    revolutions(x2, w2, 1)
+    hand_over_control(w2, w6)
+    revolutions(x6_ref, w6_ref, 1)
+    assert x2.tolist() == x6_ref[:2].tolist()
+    assert w2.counts[:2].tolist() == (w6_ref.counts[:2] - w6.counts[:2]).tolist()
+    assert w6.ctrl.tolist() == w6_ref.ctrl.tolist()
+    assert w6.h_memory.tolist() == w6_ref.h_memory.tolist()
