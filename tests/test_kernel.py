@@ -141,7 +141,8 @@ def test_free_flight_multipliers_are_the_damped_oscillators():
 
 
 def test_a_confirming_revolution_without_variational_equations_takes_the_same_steps():
-    """kernel.confirm_revolution relies on this: only (y, y') are error-controlled, so
+    """The revolutions confirming a Newton jump (kernel.transient) rely on
+    this: only (y, y') are error-controlled, so
     with the step control handed over, the 2-dimensional state takes the 6-dimensional
     one's steps and ends bit for bit where it ends, and the control comes back as if
     the variational revolution had run (its entry-step memory included)."""
