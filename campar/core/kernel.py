@@ -47,7 +47,7 @@ from .codes import (
     OK,
     PERIODIC,
 )
-from .integrator import CTRL_H, StepWork, initial_step, make_work, restart_control
+from .integrator import CTRL_ERR, CTRL_H, StepWork, initial_step, make_work, restart_control
 from .jit import hot, inlined
 from .model import (
     MAX_EVENTS,
@@ -74,7 +74,6 @@ OUT_LYAPUNOV = 8  # largest Lyapunov exponent
 SLOW_MARGIN = 0.02  # a multiplier this close to the unit circle marks a slow cell
 SLOW_REACH = 0.1  # … and, for a non-periodic cell, a stable cycle estimate this close
 PERIOD_REACH = 1e-5  # a converged cycle this close to a stable one of a divisor period is it
-CONFIRM_REACH = 1e-5  # a Newton jump this short is confirmed without variational equations
 GRAZE_TOL = 1e-5  # a dip of ε this close to 0 marks a cell whose p is sensitive
 EXTRAPOLATE_MAX = 0.05  # extrapolate the warm start only between close fixed points
 
@@ -200,107 +199,49 @@ def spend(cw):
 
 
 @inlined
-def hand_over_control(src, dst):
-    """Continue src's step control (next step, error history, entry steps) in dst: the
-    state's own components then take the same steps in either workspace."""
-    for j in range(src.ctrl.shape[0]):
-        dst.ctrl[j] = src.ctrl[j]
-    for a in range(src.h_memory.shape[0]):
-        for b in range(src.h_memory.shape[1]):
-            dst.h_memory[a, b] = src.h_memory[a, b]
+def share_step_size(src, dst):
+    dst.ctrl[CTRL_H] = src.ctrl[CTRL_H]
+    dst.ctrl[CTRL_ERR] = src.ctrl[CTRL_ERR]
 
 
 @inlined
-def reuse_jacobian(cw, k, n):
-    """jac[k] for a revolution run without variational equations while confirming a
-    Newton jump of period n: the Jacobian n revolutions earlier, at the point the jump
-    corrected (at most CONFIRM_REACH away). The multipliers' error from it is below
-    the variational part's own at rtol 1e-7 (not error-controlled: ~2e-5, measured
-    against rtol 1e-11 on the (ω, μcn) plane); the convergence test multiplies it by
-    a residual of ~1e-10."""
-    for j in range(4):
-        cw.jac[k, j] = cw.jac[k - n, j]
-    cw.revs[k, REV_LOG_STRETCH] = stretch_tangent(cw.jac[k], cw.u)
+def transient_converged(cw, p, opt, cs, want_stats, step_budget):
+    """Revolutions until assess_revolution accepts a cycle or the budget ends.
 
-
-@inlined
-def transient(cw, p, opt, cs, want_stats, step_budget):
-    """The revolutions of a cell from xs[0] until its motion is settled.
-
-    CONVERGED: until assess_revolution accepts a cycle or the budget ends. From
-    revolution cs.chaos_after on (0: never), a motion whose largest Lyapunov
-    exponent over the last window exceeds cs.chaos_lyapunov per revolution is
-    declared chaotic at once: a clearly positive exponent does not turn into a
-    cycle within the rest of the budget. From revolution cs.quasiperiodic_after
-    on (0: never), a motion whose exponent lies within ±lyap_tol, as on an
-    invariant circle, is declared quasi-periodic. Both verdicts trade a few cells
-    on long transients for revolutions (measured by `campar bench map`). After a
-    Newton jump shorter than CONFIRM_REACH, the n revolutions that confirm the
-    cycle run without variational equations, a quarter cheaper (reuse_jacobian).
-
-    FIXED (the paper's recipe): cs.max_revolutions plain revolutions, then a
-    read window of cs.window_revolutions with variational equations; the period
-    from the plain repeat test.
-
-    Plain revolutions run in w2, variational ones in w6, the step control handed
-    over at each switch, so (y, y') take the same steps in either. One loop for
-    both modes: each inlined copy of step_revolution cost ~2 s of compilation.
-    Returns (status, k, period, base, jumps); base is the last restart (a jump)
-    or, FIXED, the first revolution of the window.
+    From revolution cs.chaos_after on (0: never), a motion whose largest
+    Lyapunov exponent over the last window exceeds cs.chaos_lyapunov per
+    revolution is declared chaotic at once: a clearly positive exponent does not
+    turn into a cycle within the rest of the budget. From revolution
+    cs.quasiperiodic_after on (0: never), a motion whose exponent lies within
+    ±lyap_tol, as on an invariant circle, is declared quasi-periodic. Both
+    verdicts trade a few cells on long transients for revolutions (measured
+    by `campar bench map`). Returns (status, k, period, base, jumps).
     """
-    converged = cs.transient == CONVERGED
-    total = cs.max_revolutions + (0 if converged else cs.window_revolutions)
     k = 0
-    base = np.int64(0 if converged else cs.max_revolutions)  # an int64 either way
-    period = 0
+    base = np.int64(0)  # not a literal: numba would compile assess_revolution twice
     jumps = 0
-    jump_period = 1
-    confirming = 0  # revolutions left to confirm the last jump, without variational equations
-    in_w6 = converged  # the workspace that holds the step control
-    status = OK
     for a in range(cw.est.shape[0]):  # no estimates of this cell yet
         for b in range(cw.est.shape[1]):
             cw.est[a, b, 0] = -1.0
-    while k < total:
-        variational = confirming == 0 if converged else k >= cs.max_revolutions
-        if variational != in_w6:
-            if variational:
-                hand_over_control(cw.w2, cw.w6)
-            else:
-                hand_over_control(cw.w6, cw.w2)
-            in_w6 = variational
-        status = step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget)
+    while k < cs.max_revolutions:
+        status = step_revolution(cw, k, True, p, opt, cs, want_stats, step_budget)
         if status != OK:
-            break
-        if converged and not variational:
-            reuse_jacobian(cw, k, jump_period)
-            confirming -= 1
+            return status, k, 0, base, jumps
         k += 1
-        if not converged:
-            continue
         period, jump_n, z0, z1 = assess_revolution(
             cw.xs, cw.jac, cw.est, k, base, cs.n_max, cs.conv_tol, cs.window_tol,
             cs.jump_residual, cs.jump_cap, cs.jump_agree,
         )  # fmt: skip
         if period > 0:
-            break
+            return OK, k, period, base, jumps
         if k - base >= cs.window_revolutions and nonperiodic_verdict(cw, k, cs):
-            break
+            return OK, k, 0, base, jumps
         if jump_n > 0 and cs.newton and jumps < cs.max_jumps:
-            reach = max(abs(z0 - cw.xs[k - jump_n, 0]), abs(z1 - cw.xs[k - jump_n, 1]))
             cw.xs[k, 0] = z0
             cw.xs[k, 1] = z1
             base = k
-            jump_period = jump_n
-            confirming = jump_n if reach <= CONFIRM_REACH else 0
             jumps += 1
-    if converged and not in_w6:  # the next cell starts where this one's control ended
-        hand_over_control(cw.w2, cw.w6)
-    if status != OK:
-        return status, k, 0, base, jumps
-    if not converged:
-        period = repeat_period(cw.xs, cs.max_revolutions, k, cs.n_max, cs.period_tol)
-    return OK, k, period, base, jumps
+    return OK, k, 0, base, jumps
 
 
 @inlined
@@ -312,6 +253,26 @@ def nonperiodic_verdict(cw, k, cs):
         return False
     stretch = window_stats(cw.revs, k - cs.window_revolutions, cs.window_revolutions)[5]
     return (chaos_due and stretch > cs.chaos_lyapunov) or (qp_due and abs(stretch) <= cs.lyap_tol)
+
+
+@inlined
+def transient_fixed(cw, p, opt, cs, want_stats, step_budget):
+    """cs.max_revolutions plain revolutions, then a window with variational equations.
+
+    Returns (status, k, period) with the period from the plain repeat test.
+    """
+    k = 0
+    total = cs.max_revolutions + cs.window_revolutions
+    while k < total:
+        variational = k >= cs.max_revolutions
+        if k == cs.max_revolutions:
+            share_step_size(cw.w2, cw.w6)
+        status = step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget)
+        if status != OK:
+            return status, k, 0
+        k += 1
+    period = repeat_period(cw.xs, cs.max_revolutions, k, cs.n_max, cs.period_tol)
+    return OK, k, period
 
 
 @inlined
@@ -372,10 +333,15 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     cw.u[0] = 1.0
     cw.u[1] = 0.0
     flags = 0
-    status, k, n, base, jumps = transient(cw, p, opt, cs, want_stats, step_budget)
-    if jumps > 0:
-        flags |= FLAG_NEWTON
-    variational_from = 0 if cs.transient == CONVERGED else cs.max_revolutions
+    if cs.transient == CONVERGED:
+        status, k, n, base, jumps = transient_converged(cw, p, opt, cs, want_stats, step_budget)
+        if jumps > 0:
+            flags |= FLAG_NEWTON
+        variational_from = 0
+    else:
+        status, k, n = transient_fixed(cw, p, opt, cs, want_stats, step_budget)
+        base = cs.max_revolutions
+        variational_from = cs.max_revolutions
     steps = c2[0] + c6[0] - steps0
     if status != OK:
         fail_cell(out, i, status, k, steps)
