@@ -74,6 +74,30 @@ def test_serial_run_equals_tiles_computed_directly(write_job):
     assert outcomes(job.store) == ["complete"]
 
 
+@pytest.mark.parametrize("load_fails", [False, True])
+def test_a_preloading_lane_computes_tiles_as_run_tile_does(write_job, monkeypatch, load_fails):
+    """A worker's lane loads the kernel first (runner.run_job); if that fails, its tiles
+    still run (and would report the error themselves)."""
+    _, job = write_job()
+    loaded = []
+
+    def load(j):
+        loaded.append(j.name)
+        if load_fails:
+            raise RuntimeError("no kernel")
+
+    monkeypatch.setattr(runner, "load_kernel", load)
+    lane = runner.ThreadLane(job, "rank 1 on here", preload=True)
+    tile = plan_tiles(job)[2]
+    lane.start(tile)
+    out = lane.poll(timeout=60.0)
+    lane.close()
+    assert loaded == [job.name] and out is not None and out.error is None
+    want = run_tile(job, tile)
+    for name in array_names(job):
+        np.testing.assert_array_equal(out.arrays[name], want[name])
+
+
 def test_a_job_without_store_is_a_job_error_and_creates_nothing(write_job, tmp_path):
     _, job = write_job(store=None)
     before = sorted(tmp_path.iterdir())

@@ -46,7 +46,7 @@ from .plan import Tile, auto_tile_rows, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
 from .signals import Signals, early_interruption
 from .store import open_store, read_store, takes_direct_writes
-from .tile import run_tile
+from .tile import load_kernel, run_tile
 from .wire import (
     Backoff,
     Outcome,
@@ -70,8 +70,10 @@ SIGNAL_CHECK_SECONDS = 0.05  # a serial run's idle wait: signals are seen within
 class ThreadLane:
     """Runs tiles on a daemon thread so the calling thread stays free for MPI and signals."""
 
-    def __init__(self, job: Job, where: str):
-        self.job, self.where = job, where
+    def __init__(self, job: Job, where: str, preload: bool = False):
+        """With ``preload`` the thread first loads the kernel (``load_kernel``) while the
+        caller waits for the master; tiles queue behind it."""
+        self.job, self.where, self.preload = job, where, preload
         self.busy: int | None = None
         self.seconds = 0.0
         # queue.Queue, not SimpleQueue: CPython 3.11's SimpleQueue.get(timeout) can block
@@ -98,6 +100,11 @@ class ThreadLane:
         self._inbox.put(None)
 
     def _loop(self):
+        try:
+            if self.preload:
+                load_kernel(self.job)
+        except Exception:  # the first tile meets the same error and reports it
+            log.debug("loading the kernel ahead failed", exc_info=True)
         while (tile := self._inbox.get()) is not None:
             start = time.perf_counter()
             try:
@@ -113,14 +120,14 @@ class ThreadLane:
 class Master:
     """Hands pending tiles to lanes, writes results, and stops on request."""
 
-    def __init__(self, job, store, tiles, progress, grace, comm=None, direct=False):
+    def __init__(self, job, store, tiles, progress, grace, lane, comm=None, direct=False):
         self.job, self.store, self.progress, self.grace = job, store, progress, grace
         self.tiles = plan_tiles(job)
         self.queue = deque(tiles)
         self.failed_on: dict[int, list[int]] = {}  # tile → lanes (ranks) it failed on
         self.tiles_by_lane = Counter()
         self.host = socket.gethostname()
-        self.local = ThreadLane(job, f"rank 0 on {self.host}")
+        self.local = lane
         self.workers = Workers(comm, job) if comm is not None else None
         self.stop_reason: str | None = None
         self.failure: str | None = None
@@ -289,23 +296,22 @@ def run_job(
         if job.tiles.rows == "auto":  # every rank the same number (rank 0's), then the budget
             job = job.with_tile_rows(agreed_tile_rows(job, path, comm, overwrite))
             check_budget(job, max_store=max_store, max_memory=max_memory)
+        where = f"on {socket.gethostname()}"
         if comm is not None and comm.Get_rank() > 0:
+            # The worker's lane loads the kernel while rank 0 opens the store (~0.3 s each:
+            # in rank 0's own process the two would take turns on the GIL).
+            lane = ThreadLane(job, f"rank {comm.Get_rank()} {where}", preload=True)
             direct = receive_outcome(comm)  # of opening the store: where to write, if at all
-            work(
-                comm,
-                job,
-                signals,
-                ThreadLane(job, f"rank {comm.Get_rank()} on {socket.gethostname()}"),
-                direct,
-            )
+            work(comm, job, signals, lane, direct)
             receive_outcome(comm)  # of the run
             return RunSummary("worker", {})
+        lane = ThreadLane(job, f"rank 0 {where}")
         opened = {}
         with share_outcome(comm, opened):
             store = open_store(path, job, overwrite=overwrite)
             opened["text"] = direct_path(store)
         with store, share_outcome(comm):
-            return run_master(job, store, signals, comm, grace, bool(opened["text"]))
+            return run_master(job, store, signals, comm, grace, lane, bool(opened["text"]))
 
 
 # Errors a worker re-raises after the master (by index); others arrive as CamparError.
@@ -338,14 +344,14 @@ def stored_tile_rows(job: Job, path) -> tuple[int, str]:
     return 0, ""
 
 
-def run_master(job, store, signals, comm, grace, direct=False) -> RunSummary:
+def run_master(job, store, signals, comm, grace, lane, direct=False) -> RunSummary:
     tiles = pending_tiles(job, store.done)
     all_tiles = plan_tiles(job)
     n_rows, n_omega = job.shape
     done_cells = sum(t.n_rows for t in all_tiles if store.done[t.index]) * n_omega
     total_cells = n_rows * n_omega * len(job.directions)
     progress = Progress(len(all_tiles), total_cells, len(all_tiles) - len(tiles), done_cells)
-    master = Master(job, store, tiles, progress, grace, comm, direct)
+    master = Master(job, store, tiles, progress, grace, lane, comm, direct)
     if not tiles:
         log.info("%s: all %d tiles are done already", store.path, len(all_tiles))
         master.run(signals)  # dismisses the workers

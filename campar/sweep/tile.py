@@ -153,6 +153,23 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     return result
 
 
+def load_kernel(job: Job) -> None:
+    """Bring the job's compiled kernel into this process (numba's on-disk cache, or a
+    compile) and compute its chains' starts, as a first tile would: a runner calls it on
+    a lane's thread while the store opens, so the first tile starts at full speed
+    (~0.3 s a process, benchmarks/RESULTS.md). A chain of no cells: nothing is computed."""
+    ensure_fresh_cache()
+    if job.chains.direction == "both":
+        job = job.one_direction(job.directions[0])
+    settings = cell_settings(job)
+    x_init = np.array([job.initial.y, job.initial.v])
+    none = np.empty(0)
+    run_chain(none, none, none, none, none, job.model.law, x_init, solver_options(job),
+              settings, allocate_outputs(0, settings.output_bits, job.n_sections))  # fmt: skip
+    if job.kind != "basin":  # a basin's chains start from its grid of initial states
+        chain_starts(job)
+
+
 def census_of(job: Job, par: dict, state: np.ndarray) -> dict[str, np.ndarray]:
     """The ``attractors`` census arrays of a chain (``multistable.census_row``); {} if off."""
     if job.attractors is None:
