@@ -9,8 +9,14 @@ import argparse
 import os
 import sys
 
-from . import __version__
-from .errors import CamparError, Interrupted, JobError
+# Before numpy is imported: one OpenBLAS thread. campar's work runs on its own threads and
+# ranks, and BLAS only ever sees tiny matrices; numpy's and SciPy's OpenBLAS pools (SciPy
+# comes with numba's BLAS check) spin idle after their start, ~0.13 s of CPU a process
+# taken from the kernel's cores (benchmarks/RESULTS.md). The caller's setting wins.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+from . import __version__  # noqa: E402
+from .errors import CamparError, Interrupted, JobError  # noqa: E402
 
 # Registered subcommands, in the order ``campar --help`` lists them.
 SUBCOMMANDS = []

@@ -64,3 +64,24 @@ def test_bad_input_exits_2_naming_the_parameter(args, needle):
     assert out.returncode == 2
     assert needle in out.stderr
     assert out.stdout == ""
+
+
+@pytest.mark.parametrize("preset", [None, "3"])
+def test_the_campar_process_runs_one_blas_thread_unless_told_otherwise(preset):
+    """OpenBLAS's idle pools spin beside the kernel's threads (campar.cli): the command's
+    process starts one BLAS thread, or what the caller's OPENBLAS_NUM_THREADS says."""
+    import os
+
+    if preset and (os.cpu_count() or 1) < 2:
+        pytest.skip("OpenBLAS starts no pool on one core")
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if preset:
+        env["OPENBLAS_NUM_THREADS"] = preset
+    probe = ("import campar.cli, os, numpy; print(os.environ['OPENBLAS_NUM_THREADS'], "
+             "open('/proc/self/status').read().split('Threads:')[1].split()[0])")  # fmt: skip
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         env=env, timeout=60, check=True)  # fmt: skip
+    setting, threads = out.stdout.split()
+    assert setting == (preset or "1")
+    # OpenBLAS caps its pool at the cores: with "3" the process has more than one thread
+    assert (int(threads) == 1) == (preset is None)
