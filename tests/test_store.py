@@ -347,6 +347,33 @@ class TestZarrStore(StoreSuite):
         assert group["sections"].chunks == (2, 7, 3, 2)
         assert group["done"].chunks == (1,)
 
+    @pytest.mark.parametrize("direction", ["down", "both"])
+    def test_tile_chunks_are_zarrs_own_bytes(self, path, direction, monkeypatch):
+        """_chunks.DirectChunk writes the files zarr's setitem writes, byte for byte: full
+        chunks, the edge chunk of a last tile with fewer rows, a direction axis, and a chunk
+        holding only the fill (left out, as zarr leaves it)."""
+        from campar.sweep.store._chunks import DirectChunk
+        from campar.sweep.store._zarr import ZarrTileArrays
+
+        job = make_job(chains__direction=direction, classify__n_max=3)
+        files = {}
+        for way in ("direct", "zarr"):
+            if way == "zarr":
+                monkeypatch.setattr(DirectChunk, "for_array", classmethod(lambda *_: None))
+            store_path = path.with_name(f"{way}{self.suffix}")
+            with open_store(store_path, job) as store:
+                writer = ZarrTileArrays(store.real, job)
+                assert all(writer.direct.values()) == (way == "direct")
+                for tile in plan_tiles(job):
+                    arrays = fake_tile(job, tile, tile.index)
+                    arrays["multipliers"][:] = np.nan  # the fill: no file
+                    store.write_tile(tile, arrays)
+            chunks = [f for f in store_path.rglob("*") if "c" in f.relative_to(store_path).parts]
+            files[way] = {f.relative_to(store_path): f.read_bytes() for f in chunks if f.is_file()}
+        assert len(plan_tiles(job)) == 3 * len(job.directions)  # rows 2, 2, 1: an edge chunk
+        assert not any(f.parts[0] == "multipliers" for f in files["zarr"])
+        assert files["direct"] == files["zarr"]
+
     def test_partial_files_of_a_killed_writer_are_cleaned_on_resume(self, path, job):
         with open_store(path, job):
             pass

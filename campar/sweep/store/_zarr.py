@@ -38,6 +38,7 @@ from ...errors import StoreDamaged
 from ..job import Job
 from ..plan import Tile, plan_tiles
 from ._base import Store, StoreReader, tile_values
+from ._chunks import DirectChunk
 from ._integrity import Verification, describe_exception
 from ._lock import StoreLock
 from ._schema import (
@@ -172,14 +173,25 @@ class ZarrTileArrays:
     def __init__(self, real: Path, job: Job, group=None):
         self.real, self.job = real, job
         group = group if group is not None else zarr.open_group(real, mode="r+")
-        self.arrays = {a.name: group[a.name] for a in cell_arrays(job)}
+        self.schemas = {a.name: a for a in cell_arrays(job)}
+        self.arrays = {name: group[name] for name in self.schemas}
+        self.direct = {name: DirectChunk.for_array(real / name, array)
+                       for name, array in self.arrays.items()}  # fmt: skip
 
     def write(self, tile: Tile, arrays: dict[str, np.ndarray]) -> None:
         try:
-            # Every array's chunk of the tile in one call of zarr's event loop: one call per
-            # array costs each its own round trip through the loop (docs/scaling.md).
-            sync(_all_at_once(self.arrays[k].async_array.setitem(tile.region, v)
-                              for k, v in arrays.items()))  # fmt: skip
+            lead = 0 if tile.layer is None else 1
+            rest = {}  # what DirectChunk cannot write goes through zarr
+            for name, values in arrays.items():
+                chunk = self.direct[name]
+                coords = chunk_coords(self.job, tile, self.schemas[name])
+                if chunk is None or not chunk.write(coords, lead, values):
+                    rest[name] = values
+            # The rest in one call of zarr's event loop: one call per array costs each its
+            # own round trip through the loop (docs/scaling.md).
+            if rest:
+                sync(_all_at_once(self.arrays[k].async_array.setitem(tile.region, v)
+                                  for k, v in rest.items()))  # fmt: skip
         except OSError:
             clean_leftovers(self.real, self.job)  # a failed write's .partial files
             raise
