@@ -209,6 +209,8 @@ class ZarrStore(Store):
         self._schemas = cell_arrays(job)
         self._checksums = group["checksum"]
         self._flags = group["done"]
+        self._tile_direct = {a.basename: DirectChunk.for_array(real / a.basename, a)
+                             for a in (self._checksums, self._flags)}  # fmt: skip
         self._done = np.array(done, bool)
         self._clear(np.flatnonzero(~self._done))
 
@@ -232,18 +234,25 @@ class ZarrStore(Store):
         self._commit([(tile, checksum)])
 
     def _commit(self, written: list[tuple[Tile, int]]) -> None:
-        # Each tile's checksum and flag is a chunk of its own: the checksums in one call of
-        # zarr's loop, then the flags in another, after them (the commit of each tile).
+        # Each tile's checksum and flag is a chunk of its own: every checksum, then the flags
+        # after them (the commit of each tile); directly (DirectChunk) where it can.
         try:
-            sync(_all_at_once(self._checksums.async_array.setitem(tile.index, np.uint64(value))
-                              for tile, value in written))  # fmt: skip
-            sync(_all_at_once(self._flags.async_array.setitem(tile.index, np.int8(1))
-                              for tile, _ in written))  # fmt: skip
+            self._set_each(self._checksums, [(t.index, np.uint64(v)) for t, v in written])
+            self._set_each(self._flags, [(t.index, np.int8(1)) for t, _ in written])
         except OSError:
             clean_leftovers(self.real, self.job)
             raise
         for tile, _ in written:
             self._done[tile.index] = True
+
+    def _set_each(self, array, values: list[tuple[int, np.generic]]) -> None:
+        """Set elements of a per-tile array (one chunk each); the ones DirectChunk cannot
+        write in one call of zarr's loop."""
+        direct = self._tile_direct[array.basename]
+        rest = [(i, v) for i, v in values
+                if direct is None or not direct.write((i,), 0, np.array([v]))]  # fmt: skip
+        if rest:
+            sync(_all_at_once(array.async_array.setitem(i, v) for i, v in rest))
 
     def _write_runs(self, runs: list[dict]) -> None:
         try:
