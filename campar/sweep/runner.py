@@ -194,10 +194,6 @@ class Master:
     def _loop(self, signals: Signals) -> None:
         backoff = Backoff()
         while True:
-            if signals.count:
-                self.stop(signal.Signals(signals.last).name)
-                if signals.insist:
-                    self.abandon_at = time.monotonic()
             # Idle waits happen here, on the compute thread's outbox: woken at once by it.
             # Serial runs have no messages to probe for: they only check signals now and then.
             if self.workers:
@@ -206,6 +202,11 @@ class Master:
                 timeout = SIGNAL_CHECK_SECONDS if self.local.busy is not None else 0.0
             events = [out] if (out := self.local.poll(timeout)) else []
             events += self.workers.poll() if self.workers else []
+            # After the wait, before any hand-out: a signal that came during it hands out nothing
+            if signals.count:
+                self.stop(signal.Signals(signals.last).name)
+                if signals.insist:
+                    self.abandon_at = time.monotonic()
             for event in events:
                 self.handle(event)
             self.hand_out()  # before writing: no lane waits for the store
