@@ -58,12 +58,13 @@ class Tile:
 # (benchmarks/RESULTS.md): a revolution costs ~17.5 µs of a core and a converged map cell
 # takes ~8 (the (ω, μcn) plane: 22 CPU s, 160,000 cells, 7.9 revolutions a cell), a fixed
 # transient its revolutions and window; a census cell K + 1 cells, a basin cell (a cold
-# start) ~4; the master commits ~300 tiles/s when workers write their own tiles (Zarr),
-# ~60 when it writes every tile (HDF5, or CAMPAR_WRITER=master): ``campar bench master``.
+# start) ~4; the master commits ~550 tiles/s when workers write their own tiles (Zarr,
+# its chunks written directly: 559–1,018 measured), ~60 when it writes every tile (HDF5;
+# Zarr with CAMPAR_WRITER=master: 166–253): ``campar bench master``.
 REVOLUTION_SECONDS = 1.75e-5
 CONVERGED_REVOLUTIONS = 8
 BASIN_CELL_FACTOR = 4.0
-COMMITS_PER_SECOND = {True: 300.0, False: 60.0}  # by "workers write their own tiles"
+COMMITS_PER_SECOND = {True: 550.0, False: 60.0}  # by "workers write their own tiles"
 WRITER_HEADROOM = 3.0  # tiles arrive at most at a third of that rate
 TILES_PER_LANE = 4  # for the last tiles' tail: each lane gets at least this many
 DEFAULT_ROWS = 4  # the default of tiles.rows: what auto keeps where nothing asks for other
