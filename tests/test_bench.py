@@ -19,6 +19,7 @@ HEADERS = {
     "map": ["agree %", "adjud. %", "mu_cn     default", "mu_cn     rtol 1e-6", "audit: "],
     "scaling": ["cells/s", "speed-up", "1 process", "mpirun -n 2", "same map"],
     "directions": ["CPU / down", "both / down", "bit for bit: yes", "hysteretic cells"],
+    "master": ["tiles/s", "capacity tiles/s", "workers", "master"],  # its stand-in kernel too
 }
 REPO = Path(__file__).resolve().parents[1]
 
