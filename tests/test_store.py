@@ -374,6 +374,37 @@ class TestZarrStore(StoreSuite):
         assert not any(f.parts[0] == "multipliers" for f in files["zarr"])
         assert files["direct"] == files["zarr"]
 
+    @pytest.mark.parametrize("failing_write", [8, 20])
+    def test_a_creation_that_fails_leaves_nothing_though_zarr_still_writes(
+        self, path, job, monkeypatch, failing_write
+    ):
+        """A full disk fails one of zarr's writes while others of the same gather still run
+        (seen once under mpirun): create waits for them before deleting what it built."""
+        import errno
+        import threading
+
+        import zarr.storage._local as local
+
+        from campar.sweep.store import _zarr
+
+        put, calls, lock = local._put, [0], threading.Lock()
+
+        def full_disk_once(file, value, *args, **kwargs):
+            with lock:
+                calls[0] += 1
+                call = calls[0]
+            if call == failing_write:
+                raise OSError(errno.ENOSPC, "No space left on device")
+            if call > failing_write:
+                time.sleep(0.2)  # still writing when the failure reaches create
+            return put(file, value, *args, **kwargs)
+
+        monkeypatch.setattr(local, "_put", full_disk_once)
+        with pytest.raises(OSError, match="No space left"):
+            _zarr.create(path, job)
+        time.sleep(0.5)
+        assert list(path.parent.iterdir()) == []
+
     def test_partial_files_of_a_killed_writer_are_cleaned_on_resume(self, path, job):
         with open_store(path, job):
             pass

@@ -83,8 +83,23 @@ def create(path: Path, job: Job) -> None:
         _build(tmp, job)
         os.rename(tmp, path)
     except BaseException:
+        _settle()
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+def _settle(seconds: float = 30.0) -> None:
+    """Wait for zarr's writes still running: a failed write inside zarr (a gather without
+    ``return_exceptions``) raises at once while the others go on, and one that ended after
+    the clean-up left a file in a store being deleted (seen on a full disk, under mpirun)."""
+
+    async def others_done():
+        me = asyncio.current_task()
+        pending = [t for t in asyncio.all_tasks() if t is not me]
+        if pending:
+            await asyncio.wait(pending, timeout=seconds)
+
+    sync(others_done())
 
 
 def _build(tmp: Path, job: Job) -> None:
