@@ -182,10 +182,6 @@ class StoreSuite:
         other = make_job(integrator__rtol=1e-9)
         with open_store(path, other, overwrite=True) as store:
             assert not store.done.any()
-        # Zarr deletes the old store on a thread; close waits for it: nothing is left beside
-        assert sorted(p.name for p in path.parent.iterdir() if p.name.startswith(path.name)) \
-            == [path.name]  # fmt: skip
-        assert store.deleting is None or not store.deleting.is_alive()
         with read_store(path) as reader:
             assert reader.job == other
 

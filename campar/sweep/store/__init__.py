@@ -112,7 +112,6 @@ def open_store(path: str | Path, job: Job, *, overwrite: bool = False) -> Store:
     path = Path(path)
     backend, real = _backend(path), real_path(path)
     lock = StoreLock.acquire(real)
-    deleting = None  # the thread deleting a store this one replaces (Zarr)
     try:
         _remove_aside(real)
         attrs = _read_attrs_for(path, real, backend, job)
@@ -126,7 +125,7 @@ def open_store(path: str | Path, job: Job, *, overwrite: bool = False) -> Store:
         if attrs is None and real.exists():
             real.rmdir()  # an empty directory
         elif attrs is not None and overwrite:
-            deleting = backend.remove(real)  # the target: a link to it stays, finds the new one
+            backend.remove(real)  # the target: a link to it stays, and finds the new store
         if not real.exists():
             backend.create(real, job)
             done = np.zeros(len(plan_tiles(job)), bool)
@@ -136,21 +135,13 @@ def open_store(path: str | Path, job: Job, *, overwrite: bool = False) -> Store:
         if done is None:  # kept aside, beyond repair: the map starts again
             backend.create(real, job)
             done = np.zeros(len(plan_tiles(job)), bool)
-        store = _STORES[backend](path, job, lock, done, real)
-        store.deleting = deleting
-        return store
+        return _STORES[backend](path, job, lock, done, real)
     except OSError as exc:
-        _release(lock, deleting)
+        lock.release()
         raise io_error(f"cannot open the store {path}", exc) from None
     except BaseException:
-        _release(lock, deleting)
+        lock.release()
         raise
-
-
-def _release(lock: StoreLock, deleting) -> None:
-    if deleting is not None:  # before the lock goes: nobody else sees the deletion half done
-        deleting.join()
-    lock.release()
 
 
 def _read_attrs_for(path: Path, real: Path, backend, job: Job) -> dict | None:

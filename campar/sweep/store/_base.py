@@ -205,7 +205,6 @@ class Store(ABC):
         self._lock = lock
         self._runs = list(runs)
         self._closed = False
-        self.deleting = None  # the thread deleting the store this one replaced (Zarr)
 
     @property
     @abstractmethod
@@ -265,8 +264,6 @@ class Store(ABC):
         except OSError as exc:
             raise io_error(f"cannot flush the store {self.path}", exc) from None
         finally:
-            if self.deleting is not None:  # before the lock goes: nobody else sees it half done
-                self.deleting.join()
             with contextlib.suppress(OSError):  # a lock that cannot go is reported stale later
                 self._lock.release()
 

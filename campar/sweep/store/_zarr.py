@@ -24,7 +24,6 @@ import os
 import re
 import shutil
 import struct
-import threading
 import warnings
 from pathlib import Path
 
@@ -138,19 +137,11 @@ def zarr_attrs(attrs: dict, dtype: np.dtype) -> dict:
     return out
 
 
-def remove(path: Path) -> threading.Thread:
-    """Rename the store aside, then delete it on a thread the new store's ``close`` joins:
-    a map's ~1,500 chunk files take 0.2–0.4 s to delete, which its first tiles need not
-    wait for. A kill mid-delete leaves a leftover (``open_store`` removes it), never a
-    half store."""
+def remove(path: Path) -> None:
+    # Renamed first so a kill mid-delete leaves a leftover, never a half store.
     doomed = path.with_name(f"{path.name}.deleting-{os.getpid()}")
     os.rename(path, doomed)
-    deleting = threading.Thread(
-        target=shutil.rmtree, args=(doomed,), kwargs={"ignore_errors": True},
-        name="campar-delete",
-    )  # fmt: skip
-    deleting.start()
-    return deleting
+    shutil.rmtree(doomed)
 
 
 def clean_leftovers(path: Path, job: Job) -> list[Path]:
