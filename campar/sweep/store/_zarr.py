@@ -187,17 +187,11 @@ class ZarrTileArrays:
     def write(self, tile: Tile, arrays: dict[str, np.ndarray]) -> None:
         try:
             lead = 0 if tile.layer is None else 1
-            rest = {}  # what DirectChunk cannot write goes through zarr
-            for name, values in arrays.items():
-                chunk = self.direct[name]
-                coords = chunk_coords(self.job, tile, self.schemas[name])
-                if chunk is None or not chunk.write(coords, lead, values):
-                    rest[name] = values
-            # The rest in one call of zarr's event loop: one call per array costs each its
-            # own round trip through the loop (docs/scaling.md).
-            if rest:
-                sync(_all_at_once(self.arrays[k].async_array.setitem(tile.region, v)
-                                  for k, v in rest.items()))  # fmt: skip
+            write_chunks([
+                (self.arrays[name], self.direct[name], tile.region,
+                 chunk_coords(self.job, tile, self.schemas[name]), lead, values)
+                for name, values in arrays.items()
+            ])  # fmt: skip
         except OSError:
             clean_leftovers(self.real, self.job)  # a failed write's .partial files
             raise
@@ -212,7 +206,7 @@ class ZarrStore(Store):
         self._group = group
         self._tile_arrays = ZarrTileArrays(real, job, group)
         self._arrays = self._tile_arrays.arrays
-        self._schemas = cell_arrays(job)
+        self._schemas = self._tile_arrays.schemas.values()
         self._checksums = group["checksum"]
         self._flags = group["done"]
         self._tile_direct = {a.basename: DirectChunk.for_array(real / a.basename, a)
@@ -252,13 +246,9 @@ class ZarrStore(Store):
             self._done[tile.index] = True
 
     def _set_each(self, array, values: list[tuple[int, np.generic]]) -> None:
-        """Set elements of a per-tile array (one chunk each); the ones DirectChunk cannot
-        write in one call of zarr's loop."""
+        """Set elements of a per-tile array, one chunk each (``write_chunks``)."""
         direct = self._tile_direct[array.basename]
-        rest = [(i, v) for i, v in values
-                if direct is None or not direct.write((i,), 0, np.array([v]))]  # fmt: skip
-        if rest:
-            sync(_all_at_once(array.async_array.setitem(i, v) for i, v in rest))
+        write_chunks([(array, direct, i, (i,), 0, np.array([v])) for i, v in values])
 
     def _write_runs(self, runs: list[dict]) -> None:
         try:
@@ -269,6 +259,17 @@ class ZarrStore(Store):
 
     def _close(self) -> None:
         pass  # every write is already a whole file on disk
+
+
+def write_chunks(chunks) -> None:
+    """Write chunks given as (array, its DirectChunk or None, region, chunk coordinates,
+    leading length-1 axes, values): each by DirectChunk where it can, the rest through
+    zarr in one call of its event loop (one call per chunk costs each its own round trip
+    through the loop, docs/scaling.md)."""
+    rest = [(array, region, values) for array, direct, region, coords, lead, values in chunks
+            if direct is None or not direct.write(coords, lead, values)]  # fmt: skip
+    if rest:
+        sync(_all_at_once(a.async_array.setitem(r, v) for a, r, v in rest))
 
 
 async def _all_at_once(writes) -> None:
