@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 
 from campar.core import analysis as A
 from campar.core.codes import CHAOTIC, QUASIPERIODIC, UNCONVERGED
+from campar.core.jit import through_numba
 
 
 def linear_history(z, L, x0, revolutions):
@@ -21,7 +22,9 @@ def linear_history(z, L, x0, revolutions):
 
 def assess(xs, jac, k, base=0, conv_tol=1e-9):
     est = np.full((32, 32, 3), -1.0)
-    return A.assess_revolution(xs, jac, est, k, base, 32, conv_tol, 1e-6, 0.05, 0.02, 0.0)
+    return through_numba(A.assess_revolution)(
+        xs, jac, est, k, base, 32, conv_tol, 1e-6, 0.05, 0.02, 0.0
+    )
 
 
 def test_slow_one_cycle_is_not_taken_for_a_two_cycle():
@@ -62,7 +65,8 @@ def test_unstable_cycle_is_never_accepted():
 def assess_each_revolution(xs, jac, agree):
     """assess_revolution after every revolution, as the kernel calls it (one est buffer)."""
     est = np.full((32, 32, 3), -1.0)
-    return [A.assess_revolution(xs, jac, est, k, 0, 32, 1e-9, 1e-6, 1e-3, 0.02, agree)
+    assess_revolution = through_numba(A.assess_revolution)
+    return [assess_revolution(xs, jac, est, k, 0, 32, 1e-9, 1e-6, 1e-3, 0.02, agree)
             for k in range(1, xs.shape[0])]  # fmt: skip
 
 
@@ -97,8 +101,8 @@ def test_estimates_that_disagree_are_not_trusted():
 
 def test_distinct_period_merges_points_within_tolerance():
     xs = np.array([[0, 0], [1, 0], [0, 0], [1 + 1e-8, 0], [0, 1e-9]], float)
-    assert A.distinct_period(xs, 4, 4, 1e-6) == 2
-    assert A.distinct_period(xs, 4, 4, 1e-10) == 4
+    assert through_numba(A.distinct_period)(xs, 4, 4, 1e-6) == 2
+    assert through_numba(A.distinct_period)(xs, 4, 4, 1e-10) == 4
 
 
 def test_a_two_cycle_within_reach_of_a_stable_one_cycle_is_the_one_cycle():
@@ -109,7 +113,9 @@ def test_a_two_cycle_within_reach_of_a_stable_one_cycle_is_the_one_cycle():
         a, b = np.array([0.19, -1.12]), np.array([0.19 + gap, -1.12])
         xs = np.array([a, b, a, b, a])
         jac = np.tile(np.diag([multiplier, 0.1]).ravel(), (4, 1))
-        return A.stable_subperiod(xs, jac, 4, A.distinct_period(xs, 4, 2, 1e-6), 1e-5)
+        return through_numba(A.stable_subperiod)(
+            xs, jac, 4, through_numba(A.distinct_period)(xs, 4, 2, 1e-6), 1e-5
+        )
 
     assert cycle(2e-6, -0.979) == 1
     assert cycle(2e-6, -1.02) == 2
@@ -125,7 +131,7 @@ def test_quintic_extremum_matches_a_sampled_quintic():
         dq, ddq = q.deriv(), q.deriv(2)
         ends = (q(0), dq(0), ddq(0), q(1), dq(1), ddq(1))
         for want_min in (True, False):
-            t, value = A.quintic_extremum(*ends, want_min)
+            t, value = through_numba(A.quintic_extremum)(*ends, want_min)
             if t <= 0.0:
                 continue  # no interior extremum of that kind in the cubic through the ends
             # a true local extremum of the quintic (not just a value of it), located to 1e-9
@@ -139,15 +145,15 @@ def test_quintic_extremum_matches_a_sampled_quintic():
 def test_repeat_period_needs_two_full_periods():
     cycle = np.array([[0, 0], [1, 0], [2, 0]], float)
     xs = np.vstack([cycle] * 3)
-    assert A.repeat_period(xs, 0, 8, 32, 1e-9) == 3
-    assert A.repeat_period(xs, 0, 4, 32, 1e-9) == 0  # fewer than 2 periods seen
+    assert through_numba(A.repeat_period)(xs, 0, 8, 32, 1e-9) == 3
+    assert through_numba(A.repeat_period)(xs, 0, 4, 32, 1e-9) == 0  # fewer than 2 periods seen
 
 
 @given(st.lists(st.floats(-10, 10), min_size=4, max_size=4))
 @settings(max_examples=200, deadline=None)
 def test_eig2_matches_numpy(entries):
     m = np.array(entries).reshape(2, 2)
-    re0, im0, re1, im1 = A.eig2(tuple(entries))
+    re0, im0, re1, im1 = through_numba(A.eig2)(tuple(entries))
     ours = sorted([complex(re0, im0), complex(re1, im1)], key=lambda c: (c.real, c.imag))
     ref = sorted(np.linalg.eigvals(m), key=lambda c: (c.real, c.imag))
     scale = 1 + np.abs(m).max()
@@ -166,19 +172,19 @@ def test_cubic_extremes_bracket_a_sampled_cubic():
     h00, h10 = 2 * th**3 - 3 * th**2 + 1, th**3 - 2 * th**2 + th
     h01, h11 = -2 * th**3 + 3 * th**2, th**3 - th**2
     g = h00 * g0 + h10 * d0 + h01 * g1 + h11 * d1
-    lo, hi = A.cubic_extremes(g0, d0, g1, d1)
+    lo, hi = through_numba(A.cubic_extremes)(g0, d0, g1, d1)
     assert lo == pytest.approx(g.min(), abs=1e-7)
     assert hi == pytest.approx(g.max(), abs=1e-7)
 
 
 def test_nonperiodic_kind_thresholds():
-    assert A.nonperiodic_kind(0.2, 0.01) == CHAOTIC
-    assert A.nonperiodic_kind(0.004, 0.01) == QUASIPERIODIC
-    assert A.nonperiodic_kind(-0.3, 0.01) == UNCONVERGED
+    assert through_numba(A.nonperiodic_kind)(0.2, 0.01) == CHAOTIC
+    assert through_numba(A.nonperiodic_kind)(0.004, 0.01) == QUASIPERIODIC
+    assert through_numba(A.nonperiodic_kind)(-0.3, 0.01) == UNCONVERGED
 
 
 def test_lyapunov_of_a_constant_map_is_log_of_its_spectral_radius():
     jac = np.array([2.0, 1.0, 0.0, 0.5])
     u = np.array([1.0, 1.0]) / np.sqrt(2)
-    logs = [A.stretch_tangent(jac, u) for _ in range(200)]
+    logs = [through_numba(A.stretch_tangent)(jac, u) for _ in range(200)]
     assert np.mean(logs[50:]) == pytest.approx(np.log(2.0), abs=1e-9)

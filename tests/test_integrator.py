@@ -8,6 +8,7 @@ import pytest
 from numba import njit
 
 from campar.core import integrator as I
+from campar.core.jit import through_numba
 
 
 class Omega(NamedTuple):
@@ -130,7 +131,7 @@ def test_hermite_extremum_of_a_known_cubic():
     # g(θ) = (θ - 0.5)² - 0.01 has its minimum -0.01 at θ = 0.5
     g0, g1 = 0.24, 0.24
     d0, d1 = -1.0, 1.0
-    theta, value = I.hermite_extremum(g0, d0, g1, d1, True)
+    theta, value = through_numba(I.hermite_extremum)(g0, d0, g1, d1, True)
     assert theta == pytest.approx(0.5)
     assert value == pytest.approx(-0.01)
-    assert I.hermite_extremum(g0, d0, g1, d1, False)[0] == -1.0
+    assert through_numba(I.hermite_extremum)(g0, d0, g1, d1, False)[0] == -1.0

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from campar.bench.scipy_model import Model, duty_cycle, integrate
+from campar.core.jit import through_numba
 from campar.core.kernel import trace_orbit
 from campar.core.model import (
     LAW_CAM_LITERAL,
@@ -161,8 +162,8 @@ def test_point_reports_its_options():
 
 def test_an_impact_enters_slack_only_under_the_clamp_with_a_negative_bracket():
     clamped = make_params(3.0, 0.2, 0.5, 0.8, 0.9, LAW_CLAMP | LAW_CAM_LITERAL)
-    assert impact_mode(-1.0 / clamped.c - 1e-9, clamped) == SLACK
-    assert impact_mode(-1.0 / clamped.c + 1e-9, clamped) == PUSH
+    assert through_numba(impact_mode)(-1.0 / clamped.c - 1e-9, clamped) == SLACK
+    assert through_numba(impact_mode)(-1.0 / clamped.c + 1e-9, clamped) == PUSH
     allowed = make_params(3.0, 0.2, 0.5, 0.8, 0.9, LAW_CAM_LITERAL)
-    assert impact_mode(-10.0, allowed) == PUSH  # unclamped, the force pulls instead
+    assert through_numba(impact_mode)(-10.0, allowed) == PUSH  # unclamped, the force pulls instead
     assert clamped.vcam == 1.0 and make_params(3.0, 0.2, 0.5, 0.8, 0.9, 1).vcam == 3.0

@@ -29,7 +29,7 @@ import numpy as np
 from . import dop853, entry_steps
 from .codes import NONFINITE, OK, STEP_UNDERFLOW
 from .hermite import hermite_extremum
-from .jit import hot
+from .jit import entry, hot
 
 DP54 = 0
 RK4 = 1
@@ -150,7 +150,7 @@ def make_work(n, max_events, h0) -> StepWork:
     return w
 
 
-@hot
+@entry
 def restart_control(w, h0):
     """Step control as at a start: next step h0, no error history, no reusable events."""
     w.ctrl[CTRL_H] = h0

@@ -1,6 +1,6 @@
 """How campar compiles its numerical core (see jitcache for keeping the cache honest).
 
-Two decorators. ``hot`` for the per-step path: numba's reference counting off.
+Three decorators. ``hot`` for the per-step path: numba's reference counting off.
 Each array passed down a call (and the stepper passes ~10 of them, in named
 tuples) otherwise costs an atomic increment and decrement that numba's pruning
 pass does not remove across calls; measured with numba 0.68 on this machine,
@@ -18,9 +18,52 @@ module), and numba compiled literal-argument variants of some (four of
 ``step_revolution``): 22.7 → 17.9 CPU s of compilation with an empty cache
 (measured with numba 0.68). Only for functions with few call sites: inlining
 the integrator too made the entry point's compilation slower (27.6 s).
+
+``hot`` functions have no CPython wrapper and no C callback (numba's ``@overload``
+default, for functions only compiled code calls). A dispatcher otherwise compiles both,
+which unbox every argument (named tuples of ~10 arrays): more IR for LLVM to optimise
+and turn into machine code in every library; without them a cold ``campar point``
+compiled in 13.3 s instead of 16.4 s (numba 0.68). Without a wrapper numba's entry
+pointer is null and a call from Python would crash the interpreter, so a ``hot``
+function raises TypeError there: Python calls ``entry`` functions, and tests reach
+the others through ``through_numba``.
+
+``entry`` for the few ``hot``-like functions Python calls (the buffers' set-up); the
+kernel's entry points (``chain_compiled``, ``trace_compiled``) have their own options.
 """
 
-from numba import njit
+import functools
 
-hot = njit(cache=True, _nrt=False)
+from numba import njit
+from numba.core.registry import CPUDispatcher
+
+
+class CompiledCallersOnly(CPUDispatcher):
+    """A dispatcher without a Python entry: compiled callers only."""
+
+    def __call__(self, *args, **kwargs):
+        raise TypeError(f"{self.py_func.__qualname__} is compiled for compiled callers only "
+                        "(campar.core.jit.hot): call it through through_numba")  # fmt: skip
+
+
+def hot(function):
+    options = {"nopython": True, "_nrt": False, "no_cpython_wrapper": True,
+               "no_cfunc_wrapper": True}  # fmt: skip
+    dispatcher = CompiledCallersOnly(py_func=function, locals={}, targetoptions=options)
+    dispatcher.enable_caching()
+    return dispatcher
+
+
 inlined = njit(_nrt=False, inline="always")
+entry = njit(cache=True, _nrt=False)
+
+
+@functools.cache
+def through_numba(function):
+    """``function`` (a ``hot`` one) callable from Python: a compiled trampoline to it."""
+
+    @njit
+    def trampoline(*args):
+        return function(*args)
+
+    return trampoline

@@ -30,7 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .jit import hot
+from .jit import entry, hot
 
 # Cam phases of the cosine-acceleration law with stroke 1.
 RISE = 0
@@ -93,7 +93,7 @@ class ModelParams(NamedTuple):
     dc_force: bool  # True: the duty cycle counts the time with Pn = 0 (ε ≤ 0 or SLACK)
 
 
-@hot
+@entry
 def make_params(omega, zeta, f0, mu_kn, mu_cn, law):
     """Pack the physical parameters (μkn, μcn ∈ (0, 1)) into ModelParams.
 
