@@ -5,7 +5,9 @@ when a function it inlined from another file does: after an edit of
 core/integrator.py, kernel.run_chain would still load the old integrator from the
 cache. So before the kernel is first used, a digest of every compiled module
 is compared with the one the cache was built from, and a mismatch clears the
-cached entries of those modules.
+cached entries of those modules. jit.py is part of the digest: numba's index keys
+an entry by signature and CPU only, not by the options it was compiled with (a
+``hot`` function's entry without a CPython wrapper would load into an ``entry``).
 """
 
 import functools
@@ -29,11 +31,15 @@ def core_digest() -> str:
 
 
 def cache_dirs() -> list[Path]:
-    """Where numba keeps this package's cache: beside the sources, or NUMBA_CACHE_DIR."""
-    dirs = [PACKAGE / "__pycache__"]
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        dirs.append(Path(os.environ["NUMBA_CACHE_DIR"]))
-    return dirs
+    """Where numba keeps the core's compiled functions: the directory its cache locator
+    chose for the core's sources (beside them; under NUMBA_CACHE_DIR, a subdirectory named
+    after the source directory and its hash; numba's user-wide cache for a read-only
+    install), and the in-tree ``__pycache__``. Every module of the core shares it."""
+    from .kernel import chain_compiled  # defines the dispatchers, compiles nothing
+
+    located = Path(chain_compiled._cache.cache_path)
+    in_tree = PACKAGE / "__pycache__"
+    return [in_tree] if located == in_tree else [in_tree, located]
 
 
 @functools.cache

@@ -1,0 +1,38 @@
+"""The core's numba cache is cleared where numba keeps it when the core's sources change."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+CHECK = textwrap.dedent("""
+    import os, sys
+    from pathlib import Path
+    from campar.core import jitcache
+    from campar.core.kernel import chain_compiled
+
+    located = Path(chain_compiled._cache.cache_path)  # numba's own choice of directory
+    assert located.is_relative_to(os.environ["NUMBA_CACHE_DIR"]), located
+    assert located in jitcache.cache_dirs()
+    located.mkdir(parents=True, exist_ok=True)
+    ours = [located / "kernel.chain_compiled-429.py311.nbi",
+            located / "integrator.advance-464.py311.1.nbc"]
+    theirs = located / "elsewhere.f-1.py311.nbi"  # not a module of the core
+    for path in [*ours, theirs]:
+        path.write_bytes(b"stale")
+    (located / jitcache.STAMP).write_text("a digest of other sources")
+    jitcache.ensure_fresh_cache()
+    assert not any(path.exists() for path in ours)
+    assert theirs.exists()
+    assert (located / jitcache.STAMP).read_text() == jitcache.core_digest()
+    print("ok")
+""")
+
+
+def test_stale_entries_are_cleared_under_numba_cache_dir(tmp_path):
+    # numba keeps entries in NUMBA_CACHE_DIR/<source dir>_<hash>/, not at its top
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    run = subprocess.run([sys.executable, "-c", CHECK], env=env, capture_output=True,
+                         text=True, timeout=120)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == "ok"
