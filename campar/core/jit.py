@@ -39,7 +39,18 @@ from numba.core.registry import CPUDispatcher
 
 
 class CompiledCallersOnly(CPUDispatcher):
-    """A dispatcher without a Python entry: compiled callers only."""
+    """A dispatcher without a Python entry: compiled callers only.
+
+    ``awaiting``: a function to call once before this dispatcher next compiles (the
+    split compile waits there for a helper that puts it into the on-disk cache)."""
+
+    awaiting = None
+
+    def compile(self, sig):
+        if self.awaiting is not None:
+            wait, self.awaiting = self.awaiting, None
+            wait()
+        return super().compile(sig)
 
     def __call__(self, *args, **kwargs):
         raise TypeError(f"{self.py_func.__qualname__} is compiled for compiled callers only "

@@ -8,6 +8,7 @@ depend on the number of ranks or on interruptions.
 
 import numpy as np
 
+from ..core import split_compile
 from ..core.integrator import DOP853, DP54, RK4, SolverOptions
 from ..core.jitcache import ensure_fresh_cache
 from ..core.kernel import (
@@ -158,16 +159,27 @@ def load_kernel(job: Job) -> None:
     compile) and compute its chains' starts, as a first tile would: a runner calls it on
     a lane's thread while the store opens, so the first tile starts at full speed
     (~0.3 s a process, benchmarks/RESULTS.md). A chain of no cells: nothing is computed."""
-    ensure_fresh_cache()
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
-    settings = cell_settings(job)
-    x_init = np.array([job.initial.y, job.initial.v])
-    none = np.empty(0)
-    run_chain(none, none, none, none, none, job.model.law, x_init, solver_options(job),
-              settings, allocate_outputs(0, settings.output_bits, job.n_sections))  # fmt: skip
+    compile_kernel(job)
     if job.kind != "basin":  # a basin's chains start from its grid of initial states
         chain_starts(job)
+
+
+def compile_kernel(job: Job) -> None:
+    """Load the job's compiled chain, or compile it: on two cores with an empty cache in a
+    process that may fork (campar.core.split_compile), else here. A chain of no cells."""
+    ensure_fresh_cache()
+    settings = cell_settings(job)
+    solver = solver_options(job)
+    out = allocate_outputs(0, settings.output_bits, job.n_sections)
+    helper = split_compile.start_helper(solver, settings, job.model.law)
+    if helper is not None:
+        split_compile.prime_here(solver, settings, out, job.model.law)
+    x_init = np.array([job.initial.y, job.initial.v])
+    none = np.empty(0)
+    run_chain(none, none, none, none, none, job.model.law, x_init, solver, settings, out)
+    split_compile.reap(helper)
 
 
 def census_of(job: Job, par: dict, state: np.ndarray) -> dict[str, np.ndarray]:
@@ -227,6 +239,7 @@ def warm_up() -> float:
         },
         source="warm-up",
     )
+    compile_kernel(job)
     run_tile(job, Tile(0, 0, 1))
     par = chain_parameters(job, 0)
     trace_orbit(

@@ -25,7 +25,7 @@ from ..sweep.job import (
     with_paper_values,
 )
 from ..sweep.plan import Tile
-from ..sweep.tile import cell_settings, run_tile, solver_options
+from ..sweep.tile import cell_settings, compile_kernel, run_tile, solver_options
 
 # Event codes of a trace: 2·(contact mode before) + (event index), see core.revolution.Trace.
 EVENT_NAMES = {0: "impact", 2: "detachment", 3: "force zero", 4: "detachment", 5: "force resumes"}
@@ -204,6 +204,7 @@ def simulate_point(
     if lyapunov:
         outputs.append("lyapunov")
     job = point_job(omega=omega, outputs=outputs, **settings)
+    compile_kernel(job)  # on two cores if the cache is empty
     cell = {name: arr[0, 0] for name, arr in run_tile(job, Tile(0, 0, 1)).items()}
     result = point_result(job, cell)
     if trace and result.kind != KIND_NAMES[Kind.FAILED]:

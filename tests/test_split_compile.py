@@ -1,0 +1,79 @@
+"""A cold compile split over two processes loads what the helper compiled and gives the
+kernel a serial compile gives."""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+import threading
+
+import pytest
+
+from campar.core import split_compile
+from campar.sweep.tile import cell_settings, solver_options
+from campar.views.point import point_job
+
+COLD_POINT = textwrap.dedent("""
+    import json, sys
+    from campar.core import analysis, integrator, revolution, split_compile
+    from campar.sweep import tile
+    from campar.views.point import simulate_point
+
+    forked = []
+    start = split_compile.start_helper
+    def start_helper(*args):
+        if sys.argv[1] == "serial":
+            return None
+        forked.append(start(*args))
+        return forked[-1]
+    split_compile.start_helper = start_helper
+    result = simulate_point(3.0, mu_cn=0.75, multipliers=True)
+    primed = [analysis.add_step_stats, analysis.assess_revolution, analysis.window_stats,
+              analysis.repeat_period, analysis.distinct_period, analysis.stable_subperiod,
+              analysis.cycle_jacobian, analysis.near_unit_circle, analysis.multipliers_of,
+              analysis.spectral_radius, analysis.slow_cycle_nearby, analysis.nonperiodic_kind,
+              analysis.stretch_tangent, integrator.step_error, integrator.dense_eval]
+    stats = revolution.run_revolution.stats
+    print(json.dumps({
+        "forked": [pid is not None for pid in forked],
+        "hits": sum(stats.cache_hits.values()), "misses": sum(stats.cache_misses.values()),
+        "signatures": {d.py_func.__name__: len(d.signatures) for d in primed},
+        "result": result.to_dict(),
+    }))
+""")
+
+
+def cold_point(mode: str, cache) -> dict:
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    run = subprocess.run([sys.executable, "-c", COLD_POINT, mode], env=env, text=True,
+                         capture_output=True, timeout=300)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    return json.loads(run.stdout)
+
+
+@pytest.mark.slow
+def test_split_compile_loads_the_helpers_revolution_and_matches_a_serial_compile(tmp_path):
+    split = cold_point("split", tmp_path / "split")
+    serial = cold_point("serial", tmp_path / "serial")
+    assert split["forked"] == [True] and serial["forked"] == []
+    # the chain loaded run_revolution from the helper's cache entry, compiled no variant
+    assert (split["hits"], split["misses"]) == (1, 0)
+    assert (serial["hits"], serial["misses"]) == (0, 1)
+    # each primed function compiled once: the chain used the primer's signature
+    assert set(split["signatures"].values()) == {1}, split["signatures"]
+    assert split["result"] == serial["result"]
+
+
+def test_no_helper_where_forking_is_unsafe():
+    job = point_job(omega=3.0)
+    solver, settings = solver_options(job), cell_settings(job)
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        assert not split_compile.can_fork()
+        assert split_compile.start_helper(solver, settings, job.model.law) is None
+    finally:
+        stop.set()
+        other.join()
