@@ -7,6 +7,7 @@ import subprocess
 import sys
 import textwrap
 import threading
+import time
 
 import pytest
 
@@ -77,3 +78,16 @@ def test_no_helper_where_forking_is_unsafe():
     finally:
         stop.set()
         other.join()
+
+
+def test_a_stuck_helper_is_killed_and_reaped(monkeypatch):
+    monkeypatch.setattr(split_compile, "HELPER_SECONDS", 0.2)
+    pid = os.fork()
+    if pid == 0:  # a helper that never finishes
+        time.sleep(60)
+        os._exit(0)
+    started = time.monotonic()
+    split_compile.wait_for(pid)
+    assert time.monotonic() - started < 5
+    with pytest.raises(ChildProcessError):  # reaped: no zombie left behind
+        os.waitpid(pid, 0)

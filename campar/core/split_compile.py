@@ -19,8 +19,10 @@ ranks and lanes compile as before. With a warm cache nothing is forked.
 """
 
 import os
+import signal
 import sys
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -47,6 +49,8 @@ from .integrator import dense_eval, step_error
 from .kernel import OUT_STATS, PERIOD_REACH, SLOW_MARGIN, SLOW_REACH, make_chain_work
 from .model import make_params, released
 from .revolution import run_revolution, scale_solver_options
+
+HELPER_SECONDS = 300.0  # a helper takes ~6 s here; one still running after this is stuck
 
 
 @njit(_nrt=False)
@@ -132,11 +136,21 @@ def start_helper(solver, cs, law) -> int | None:
         finally:
             os._exit(status)
 
-    def wait() -> None:
-        os.waitpid(pid, 0)  # its exit status does not matter: a miss compiles here
-
-    run_revolution.awaiting = wait
+    run_revolution.awaiting = lambda: wait_for(pid)
     return pid
+
+
+def wait_for(pid: int) -> None:
+    """Until the helper exits, or HELPER_SECONDS: a helper that hangs is killed and this
+    process compiles what it did not deliver. Its exit status does not matter either way:
+    whatever is missing from the cache is compiled here."""
+    deadline = time.monotonic() + HELPER_SECONDS
+    while os.waitpid(pid, os.WNOHANG) == (0, 0):
+        if time.monotonic() > deadline:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+            return
+        time.sleep(0.005)
 
 
 def prime_here(solver, cs, out, law) -> None:
@@ -151,4 +165,4 @@ def reap(pid: int | None) -> None:
     """Wait for the helper if the chain's compile did not (the chain was cached meanwhile)."""
     if pid is not None and run_revolution.awaiting is not None:
         run_revolution.awaiting = None
-        os.waitpid(pid, 0)
+        wait_for(pid)
