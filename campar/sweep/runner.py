@@ -46,7 +46,7 @@ from .plan import Tile, auto_tile_rows, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
 from .signals import Signals, early_interruption
 from .store import open_store, read_store, takes_direct_writes
-from .tile import load_kernel, run_tile
+from .tile import compile_kernel, load_kernel, run_tile
 from .wire import (
     Backoff,
     Outcome,
@@ -306,6 +306,8 @@ def run_job(
             work(comm, job, signals, lane, direct)
             receive_outcome(comm)  # of the run
             return RunSummary("worker", {})
+        if comm is None:  # before the lane's thread starts: a cold compile may fork a helper
+            compile_kernel(job)
         lane = ThreadLane(job, f"rank 0 {where}")
         opened = {}
         with share_outcome(comm, opened):

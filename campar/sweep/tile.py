@@ -170,6 +170,8 @@ def compile_kernel(job: Job) -> None:
     """Load the job's compiled chain, or compile it: on two cores with an empty cache in a
     process that may fork (campar.core.split_compile), else here. A chain of no cells."""
     ensure_fresh_cache()
+    if job.chains.direction == "both":
+        job = job.one_direction(job.directions[0])
     settings = cell_settings(job)
     solver = solver_options(job)
     out = allocate_outputs(0, settings.output_bits, job.n_sections)
