@@ -12,7 +12,8 @@ jobs, files, MPI or figures:
 - ``dop853``: the Dormand–Prince 8(5,3) tableau, its step, error estimate and dense output;
 - ``analysis``: section maps, period and detachments, multipliers, Lyapunov exponent;
 - ``revolution``: one cam revolution of the hybrid system, and its trace;
-- ``kernel``: one cell, a continuation chain of cells, one traced orbit.
+- ``kernel``: one cell, a continuation chain of cells, one traced orbit;
+- ``split_compile``: a cold compile of the kernel on two cores (a forked helper).
 
 May import: numpy, numba, ``campar.errors`` and itself. Nothing else of campar.
 """
