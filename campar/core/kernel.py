@@ -433,7 +433,9 @@ def chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out, 
     """run_chain's compiled body, with the chain's buffers ``cw`` (make_chain_work)."""
     x_start = cw.x_start
     prev = cw.prev
-    streak = 0  # how many of them are cycles of one period in a row (0: restart)
+    # how many of them are cycles of one period in a row (0: restart); not a literal 0:
+    # numba would compile extrapolation_order for it too (as for every literal argument)
+    streak = np.int64(0)
     prev_n = 0
     h_started = False
     for i in range(omega.shape[0]):
@@ -458,7 +460,7 @@ def chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out, 
             cw.x2[0] = x_start[0]
             cw.x2[1] = x_start[1]
             cw.mode[0] = RISE
-            eps, deps = gap(0.0, cw.x2, p, RISE)
+            eps, deps = gap(0.0, cw.x2, p, cw.mode[0])  # not RISE: no literal variant of gap
             cw.mode[1] = contact_mode(eps, deps, p)
             model.rhs(0.0, cw.x2, p, cw.mode, cw.f2)
             h0 = initial_step(
@@ -470,7 +472,7 @@ def chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out, 
         status, final = run_cell(x_start, p, opt, cs, cw, out, i)
         out.flags[i] |= flags
         if status != OK:
-            streak = 0
+            streak = np.int64(0)
             h_started = False  # a failure can leave the step size below its floor
             continue
         periodic = out.kind[i] == PERIODIC
@@ -530,7 +532,8 @@ def trace_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x, solver, cs, revolution
     """trace_orbit's compiled body: integrates in place on x with the buffers w, f, mode, row."""
     p = make_params(omega, zeta, f0, mu_kn, mu_cn, law)
     opt = scale_solver_options(solver, omega, cs.rk4_steps)
-    eps, deps = gap(0.0, x, p, RISE)
+    mode[0] = RISE
+    eps, deps = gap(0.0, x, p, mode[0])  # not RISE: numba would compile a variant for the literal
     mode[1] = contact_mode(eps, deps, p)
     model.rhs(0.0, x, p, mode, f)
     w.ctrl[CTRL_H] = initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol, 2, 0.1)

@@ -123,7 +123,8 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
         x[4] = 0.0
         x[5] = 1.0
     reset_revolution_stats(row)
-    eps, deps = gap(0.0, x, p, RISE)
+    mode[0] = RISE
+    eps, deps = gap(0.0, x, p, mode[0])  # not RISE: numba would compile a variant for the literal
     mode[1] = contact_mode(eps, deps, p)
     t = 0.0
     e0 = de0 = dde0 = pn0 = dpn0 = 0.0
