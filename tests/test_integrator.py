@@ -74,7 +74,7 @@ def run_compiled(rhs, events, y, t_end, p, opt, max_steps, w):
 
 
 def options(method=I.DP54, rtol=1e-10, h_fixed=0.0):
-    return I.SolverOptions(method, rtol, rtol * 1e-2, h_fixed, 1e-14, 1e-13, 2)
+    return I.SolverOptions(I.method_tag(method), rtol, rtol * 1e-2, h_fixed, 1e-14, 1e-13, 2)
 
 
 def test_tableau_invariants():

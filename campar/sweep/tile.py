@@ -9,7 +9,7 @@ depend on the number of ranks or on interruptions.
 import numpy as np
 
 from ..core import split_compile
-from ..core.integrator import DOP853, DP54, RK4, SolverOptions
+from ..core.integrator import DOP853, DP54, RK4, SolverOptions, method_tag
 from ..core.jitcache import ensure_fresh_cache
 from ..core.kernel import (
     CONVERGED,
@@ -51,7 +51,7 @@ def solver_options(job: Job) -> SolverOptions:
     to each cell's period (core.revolution.scale_solver_options)."""
     integ = job.integrator
     return SolverOptions(
-        method=METHODS[integ.method],
+        method=method_tag(METHODS[integ.method]),
         rtol=integ.rtol,
         atol=integ.atol,
         h_fixed=0.0,
