@@ -40,6 +40,8 @@ COLD_POINT = textwrap.dedent("""
         "forked": [pid is not None for pid in forked],
         "hits": sum(stats.cache_hits.values()), "misses": sum(stats.cache_misses.values()),
         "signatures": {d.py_func.__name__: len(d.signatures) for d in primed},
+        # a DOP853 job's kernel has no other stepper (integrator.method_tag)
+        "other_steppers": len(integrator.rk4_step.signatures + integrator.error_norm.signatures),
         "result": result.to_dict(),
     }))
 """)
@@ -64,6 +66,9 @@ def test_split_compile_loads_the_helpers_revolution_and_matches_a_serial_compile
     # each primed function compiled once: the chain used the primer's signature
     assert set(split["signatures"].values()) == {1}, split["signatures"]
     assert split["result"] == serial["result"]
+    # the serial compile typed the whole kernel in this process: DP5(4)'s error estimate and
+    # RK4's step were pruned before typing, never compiled
+    assert serial["other_steppers"] == 0
 
 
 def test_no_helper_where_forking_is_unsafe():
