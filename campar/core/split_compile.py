@@ -4,18 +4,20 @@ numba compiles a function's callees while it types the function, one after the
 other in one process: a cold ``campar point`` spent ~13 s compiling
 ``chain_compiled`` on one core while the other idled. Here a forked helper
 compiles one revolution (``run_revolution`` with the integrator under it, ~45 % of
-the work) into numba's on-disk cache, while this process compiles the cell's
-classification (the analysis functions the chain calls), then the chain itself.
-Where the chain's typing reaches ``run_revolution`` it waits for the helper
-(``CompiledCallersOnly.awaiting``) and loads the helper's result from the cache.
+the work) into numba's on-disk cache, while this process compiles the revolution's
+cacheable leaves and the cell's classification (the analysis functions the chain
+calls), then the chain itself. Where the chain's typing reaches ``run_revolution``
+it waits for the helper (``CompiledCallersOnly.awaiting``) and loads the helper's
+result from the cache: 13.3 → 9.9 s (benchmarks/RESULTS.md).
 
 The primers below call those functions with the argument types the chain passes
 (``kernel.step_revolution``, ``kernel.run_cell``). If a primer drifts from the
 chain, the chain compiles its own variant: slower, never wrong (tests/test_split_compile
 checks that the chain loads every primed function instead).
 
-Forking is safe only in a process with one thread and without MPI: the runner's
-ranks and lanes compile as before. With a warm cache nothing is forked.
+Forking is safe only in a process with one thread and without MPI (``campar point``,
+``campar warm-up``, a serial run before its lane starts): MPI ranks compile as before.
+With a warm cache nothing is forked.
 """
 
 import os
