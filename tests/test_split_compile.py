@@ -10,9 +10,12 @@ import threading
 import time
 
 import pytest
+from numba import typeof
 
 from campar.core import split_compile
-from campar.sweep.tile import cell_settings, solver_options
+from campar.core.kernel import chain_compiled, chain_loaded
+from campar.sweep.plan import Tile
+from campar.sweep.tile import cell_settings, compile_kernel, run_tile, solver_options
 from campar.views.point import point_job
 
 COLD_POINT = textwrap.dedent("""
@@ -96,3 +99,20 @@ def test_a_stuck_helper_is_killed_and_reaped(monkeypatch):
     assert time.monotonic() - started < 5
     with pytest.raises(ChildProcessError):  # reaped: no zombie left behind
         os.waitpid(pid, 0)
+
+
+def test_a_loaded_chain_serves_every_job_of_its_method():
+    # compile_kernel returns at once when chain_loaded: only the solver options' type may
+    # differ between jobs' chains, so other outputs, transients and laws add no signature
+    compile_kernel(point_job(omega=3.0))
+    signatures = len(chain_compiled.signatures)
+    other = point_job(omega=2.0, outputs=("label", "dc", "sections", "multipliers", "lyapunov"),
+                      transient="fixed", revolutions=20, tensile="allow")  # fmt: skip
+    assert chain_loaded(solver_options(other))
+    run_tile(other, Tile(0, 0, 1))
+    assert len(chain_compiled.signatures) == signatures
+    # another method is another chain (whether this process holds it depends on the tests
+    # before): its options' type differs, so the DOP853 chain never stands in for it
+    assert typeof(solver_options(point_job(omega=3.0, method="rk4"))) != typeof(
+        solver_options(other)
+    )

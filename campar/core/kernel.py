@@ -17,7 +17,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, typeof
 
 from . import model
 from .analysis import (
@@ -418,6 +418,14 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out):
     """
     chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law_bits(law), x_init, solver, cs, out,
                    make_chain_work(cs))  # fmt: skip
+
+
+def chain_loaded(solver) -> bool:
+    """This process holds ``chain_compiled`` for these solver options: compiled here or
+    loaded from the cache. Of the chain's arguments only the solver options' type differs
+    between jobs (its method tag, integrator.method_tag); every other one is fixed."""
+    solver_type = typeof(solver)
+    return any(signature[7] == solver_type for signature in chain_compiled.signatures)
 
 
 def law_bits(law) -> np.int64:

@@ -20,6 +20,7 @@ from ..core.kernel import (
     OUT_STATS,
     CellOutputs,
     CellSettings,
+    chain_loaded,
     run_chain,
     trace_orbit,
 )
@@ -168,12 +169,15 @@ def load_kernel(job: Job) -> None:
 
 def compile_kernel(job: Job) -> None:
     """Load the job's compiled chain, or compile it: on two cores with an empty cache in a
-    process that may fork (campar.core.split_compile), else here. A chain of no cells."""
+    process that may fork (campar.core.split_compile), else here. A chain of no cells; at
+    once if this process holds the chain already (a point called again and again)."""
     ensure_fresh_cache()
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
-    settings = cell_settings(job)
     solver = solver_options(job)
+    if chain_loaded(solver):
+        return
+    settings = cell_settings(job)
     out = allocate_outputs(0, settings.output_bits, job.n_sections)
     helper = split_compile.start_helper(solver, settings, job.model.law)
     if helper is not None:
