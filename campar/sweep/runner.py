@@ -306,7 +306,11 @@ def run_job(
             work(comm, job, signals, lane, direct)
             receive_outcome(comm)  # of the run
             return RunSummary("worker", {})
-        if comm is None:  # before the lane's thread starts: a cold compile may fork a helper
+        # Serial: compiled before the store opens and before the lane's thread starts, while
+        # this process has one thread (zarr starts one of its own when the store opens), so a
+        # cold compile may fork a helper (campar.core.split_compile). A store with nothing
+        # pending then has loaded the kernel for nothing (~0.3 s; a compile if the cache is cold).
+        if comm is None:
             compile_kernel(job)
         lane = ThreadLane(job, f"rank 0 {where}")
         opened = {}
