@@ -9,6 +9,7 @@ import socket
 import subprocess
 import sys
 import textwrap
+import time
 
 import pytest
 from conftest import (
@@ -118,6 +119,47 @@ def test_a_signal_to_mpirun_exits_75_and_a_serial_run_resumes(write_job, signum)
     with read_store(job.store) as reader:
         assert_same_map(reader, job)
         assert [r["outcome"] for r in reader.attrs["runs"]] == ["interrupted", "complete"]
+
+
+@slow
+def test_a_stop_takes_back_the_tiles_queued_on_lanes(write_job, tmp_path):
+    """Lanes hold their next tile (TILES_HELD): on a signal the master takes the queued
+    ones back (WITHDRAW), so no tile starts after it and every started one is collected."""
+    path, job = write_job()
+    starts = tmp_path / "starts"
+    script = textwrap.dedent(f"""
+        import sys, time
+        import campar.sweep.runner as runner
+        from campar.cli import main
+        from campar.sweep.job import load_job
+        from campar.sweep.plan import plan_tiles
+        from campar.sweep.tile import run_tile
+        first = run_tile(load_job({str(path)!r}), plan_tiles(load_job({str(path)!r}))[0])
+        def slow_tile(job, tile):  # every tile is one chain: the same shapes
+            with open({str(starts)!r}, "a") as log:
+                log.write(f"{{tile.index}} {{time.monotonic()}}\\n")
+            time.sleep(1.5)
+            return {{name: a.copy() for name, a in first.items()}}
+        runner.run_tile = slow_tile
+        sys.exit(main(["run", {str(path)!r}]))
+    """)
+    proc = subprocess.Popen(
+        [*mpirun(2), sys.executable, "-c", script], stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, text=True, env=subprocess_env(), start_new_session=True,
+    )  # fmt: skip
+    wait_for_tiles(job.store, 1, proc)  # ~1.5 s: two tiles run, two are queued
+    time.sleep(0.5)
+    signalled = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 75, stderr
+    started = {
+        int(i): float(t) for i, t in (line.split() for line in starts.read_text().splitlines())
+    }
+    assert max(started.values()) < signalled, (started, signalled)  # queued ones never ran
+    with read_store(job.store) as reader:
+        done = {int(i) for i in reader.done.nonzero()[0]}
+    assert done == set(started) and len(done) == 4, (done, started)
 
 
 def run_with_faults(ranks, job_path, fault) -> subprocess.CompletedProcess:

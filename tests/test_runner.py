@@ -107,11 +107,14 @@ def test_a_job_without_store_is_a_job_error_and_creates_nothing(write_job, tmp_p
     assert sorted(tmp_path.iterdir()) == before
 
 
-def signal_during(monkeypatch, index, *, sleep=0.0, again_after=None, signum=signal.SIGTERM):
-    """Make run_tile signal this process while computing tile ``index``."""
+def signal_during(
+    monkeypatch, index, *, sleep=0.0, again_after=None, signum=signal.SIGTERM, after=0.0
+):
+    """Make run_tile signal this process while computing tile ``index``, ``after`` s in."""
 
     def tile_with_signal(job, tile):
         if tile.index == index:
+            time.sleep(after)
             os.kill(os.getpid(), signum)
             if again_after is not None:
                 time.sleep(again_after)
@@ -125,7 +128,7 @@ def signal_during(monkeypatch, index, *, sleep=0.0, again_after=None, signum=sig
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT, signal.SIGUSR1])
 def test_a_signal_collects_the_tile_in_flight_then_interrupts(write_job, monkeypatch, signum):
     _, job = write_job()
-    signal_during(monkeypatch, 1, signum=signum)
+    signal_during(monkeypatch, 1, signum=signum, sleep=0.2)  # its handler runs meanwhile
     handler = signal.getsignal(signum)
     with pytest.raises(Interrupted, match=f"stopped by {signum.name} .* resume") as err:
         runner.run_job(job)
@@ -138,6 +141,16 @@ def test_a_signal_collects_the_tile_in_flight_then_interrupts(write_job, monkeyp
     with read_store(job.store) as reader:
         assert_same_map(reader, job)
     assert outcomes(job.store) == ["interrupted", "complete"]
+
+
+def test_a_signal_takes_back_the_tile_queued_on_the_lane(write_job, monkeypatch):
+    """The lane holds tile 2 behind tile 1 (TILES_HELD) when the signal comes: only the
+    started tile is collected."""
+    _, job = write_job()
+    signal_during(monkeypatch, 1, after=0.5, sleep=0.5)
+    with pytest.raises(Interrupted):
+        runner.run_job(job)
+    assert tiles_done(job.store) == [True, True, False, False, False, False]
 
 
 def test_a_second_signal_abandons_the_tile_in_flight(write_job, monkeypatch):
@@ -189,7 +202,11 @@ def test_a_tile_that_keeps_failing_ends_the_run_with_where_and_why(write_job, mo
     message = str(err.value)
     assert "tile 2 failed 2×" in message
     assert f"rank 0 on {socket.gethostname()}" in message and "ZeroDivisionError" in message
-    assert tiles_done(job.store) == [True, True, False, False, False, False]
+    # The lane held tile 3 behind tile 2 (TILES_HELD): it ran while 2 waited for its retry.
+    # Tile 4, queued behind the retry, runs if the lane started it before the master saw
+    # the second failure, else it is taken back; tile 5 is never handed out.
+    done = tiles_done(job.store)
+    assert done[:4] == [True, True, False, True] and not done[5], done
     assert outcomes(job.store) == ["failed"]
 
 

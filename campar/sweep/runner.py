@@ -13,12 +13,18 @@ The kernel's ``run_chain`` releases the GIL, so the master's compute thread
 keeps a core busy while its main thread does every MPI call, store write and
 signal check: with two ranks on two cores both cores compute.
 
+Every lane holds its next tile as well (``TILES_HELD``, while the queue has one for
+every lane): it starts it the moment the last one is done, whatever the master is
+doing. Without it a lane waited 3–6 ms a tile for the master's answer and the GIL
+(0.45 lane-seconds of a 7.5 s plane on two ranks); with it the master probes for
+messages every few ms, not every 1 ms, while no worker waits for a tile.
+
 The wire protocol between the master and its worker ranks is ``campar.sweep.wire``'s.
 
 Signals (SIGTERM, SIGINT, SIGUSR1 — mpich's mpirun forwards all three to every
-rank): the first one stops handing out tiles and collects those in flight
-for up to ``grace`` seconds; a second one, or the end of the grace, abandons
-them. The run is logged and ``Interrupted`` (exit 75) raised; running the same
+rank): the first one stops handing out tiles, takes back those queued on lanes and
+collects those being computed for up to ``grace`` seconds; a second one, or the end of
+the grace, abandons them. The run is logged and ``Interrupted`` (exit 75) raised; running the same
 command again resumes with the tiles whose ``done`` is unset.
 
 mpi4py is imported only by ``wire``, and only when the process was started by an
@@ -48,6 +54,8 @@ from .signals import Signals, early_interruption
 from .store import open_store, read_store, takes_direct_writes
 from .tile import compile_kernel, load_kernel, run_tile
 from .wire import (
+    BACKOFF_SECONDS,
+    TILES_HELD,
     Backoff,
     Outcome,
     Workers,
@@ -65,25 +73,44 @@ log = logging.getLogger("campar.run")
 MAX_ATTEMPTS = 2  # a tile that fails on two lanes ends the run
 BYE_SECONDS = 10.0  # how long the master waits for workers to leave after STOP
 SIGNAL_CHECK_SECONDS = 0.05  # a serial run's idle wait: signals are seen within this
+PATIENT_WAIT_SECONDS = 0.01  # the master's longest wait while every lane holds its next tile
 
 
 class ThreadLane:
-    """Runs tiles on a daemon thread so the calling thread stays free for MPI and signals."""
+    """Runs tiles on a daemon thread so the calling thread stays free for MPI and signals.
 
-    def __init__(self, job: Job, where: str, preload: bool = False):
+    It holds up to ``TILES_HELD`` tiles: the one it computes and the next, which it
+    starts the moment the first is done, without waiting for the master (which may be
+    writing a tile, holding the GIL, or busy with other ranks) — unless ``halted()``
+    says a stop signal came: then the next waits for the master to take it back."""
+
+    def __init__(self, job: Job, where: str, preload: bool = False, halted=lambda: False):
         """With ``preload`` the thread first loads the kernel (``load_kernel``) while the
         caller waits for the master; tiles queue behind it."""
-        self.job, self.where, self.preload = job, where, preload
-        self.busy: int | None = None
+        self.job, self.where, self.preload, self.halted = job, where, preload, halted
+        self.held: list[int] = []  # tiles started or queued, not yet reported, in order
         self.seconds = 0.0
+        self._queued: deque = deque()  # tiles not started, then None once closed
+        self._changed = threading.Condition()
         # queue.Queue, not SimpleQueue: CPython 3.11's SimpleQueue.get(timeout) can block
         # for good when a signal interrupts it (measured), which would deafen the master.
-        self._inbox, self._outbox = queue.Queue(), queue.Queue()
+        self._outbox = queue.Queue()
         threading.Thread(target=self._loop, daemon=True, name="campar-compute").start()
 
     def start(self, tile: Tile) -> None:
-        self.busy = tile.index
-        self._inbox.put(tile)
+        """Compute ``tile`` after those the lane holds."""
+        self.held.append(tile.index)
+        self._put(tile)
+
+    def withdraw(self) -> list[Tile]:
+        """Take back the tiles queued and not yet started (a stop: only started ones run)."""
+        with self._changed:
+            taken = [tile for tile in self._queued if tile is not None]
+            self._queued = deque(tile for tile in self._queued if tile is None)
+            self._changed.notify()
+        for tile in taken:
+            self.held.remove(tile.index)
+        return taken
 
     def poll(self, timeout: float = 0.0) -> Outcome | None:
         """The finished tile, waiting up to ``timeout`` s for it (woken the moment it is)."""
@@ -91,13 +118,27 @@ class ThreadLane:
             out = self._outbox.get(timeout=timeout) if timeout > 0 else self._outbox.get_nowait()
         except queue.Empty:
             return None
-        self.busy = None
+        self.held.remove(out.index)
         self.seconds += out.seconds
         return out
 
     def close(self) -> None:
-        # A tile in progress is abandoned: the daemon thread dies with the process.
-        self._inbox.put(None)
+        # Queued tiles are dropped; one in progress is abandoned (the daemon thread dies
+        # with the process).
+        self.withdraw()
+        self._put(None)
+
+    def _put(self, tile: Tile | None) -> None:
+        with self._changed:
+            self._queued.append(tile)
+            self._changed.notify()
+
+    def _next(self) -> Tile | None:
+        """The next tile to compute (None: closed); a tile waits while ``halted()``."""
+        with self._changed:
+            while not self._queued or (self._queued[0] is not None and self.halted()):
+                self._changed.wait()  # woken by start, withdraw or close
+            return self._queued.popleft()
 
     def _loop(self):
         try:
@@ -105,7 +146,7 @@ class ThreadLane:
                 load_kernel(self.job)
         except Exception:  # the first tile meets the same error and reports it
             log.debug("loading the kernel ahead failed", exc_info=True)
-        while (tile := self._inbox.get()) is not None:
+        while (tile := self._next()) is not None:
             start = time.perf_counter()
             try:
                 arrays, error = run_tile(self.job, tile), None
@@ -134,22 +175,30 @@ class Master:
         self.abandon_at = None
         self.cpu = time.process_time()  # at the start of the run
         self.direct = direct  # the workers write their own tiles (the master commits them)
+        self.shortest_tile = float("inf")  # seconds, of the local lane's tiles
 
     def stop(self, reason: str) -> None:
+        """Hand out no more tiles and take back those queued on lanes: only the started
+        ones are collected."""
         if self.stop_reason is None:
             self.stop_reason = reason
             self.abandon_at = time.monotonic() + self.grace
             log.warning("%s: no more tiles handed out; waiting for tiles in flight", reason)
+            self.queue.extendleft(reversed(self.local.withdraw()))
+            if self.workers:
+                self.workers.withdraw()  # their answers come as "withdrawn" events
 
     @property
     def in_flight(self) -> int:
-        """Tiles handed out and not yet back: computing, or written by their worker."""
-        workers = len(self.workers.busy) + len(self.workers.writing) if self.workers else 0
-        return (self.local.busy is not None) + workers
+        """Tiles handed out and not yet back: computing, queued on a lane, or written by
+        their worker."""
+        return len(self.local.held) + (self.workers.in_flight if self.workers else 0)
 
     def handle(self, out) -> None:
         """Act on a notice or a failure; results are only counted (``write`` stores them)."""
-        if isinstance(out, tuple):  # a worker's signal notice
+        if isinstance(out, tuple) and out[0] == "withdrawn":  # back from a worker's lane
+            self.queue.extendleft(self.tiles[i] for i in reversed(out[1]))
+        elif isinstance(out, tuple):  # a worker's signal notice
             self.stop(f"{signal.Signals(out[1]).name} at a worker")
         elif out.error is None:
             return
@@ -197,10 +246,12 @@ class Master:
             # Idle waits happen here, on the compute thread's outbox: woken at once by it.
             # Serial runs have no messages to probe for: they only check signals now and then.
             if self.workers:
-                timeout = backoff.delay()
+                timeout = backoff.delay() if self.hurried else self.patient_wait()
             else:  # an idle lane gets its tile without waiting
-                timeout = SIGNAL_CHECK_SECONDS if self.local.busy is not None else 0.0
+                timeout = SIGNAL_CHECK_SECONDS if self.local.held else 0.0
             events = [out] if (out := self.local.poll(timeout)) else []
+            if out:
+                self.shortest_tile = min(self.shortest_tile, out.seconds)
             events += self.workers.poll() if self.workers else []
             # After the wait, before any hand-out: a signal that came during it hands out nothing
             if signals.count:
@@ -222,6 +273,25 @@ class Master:
     def n_lanes(self) -> int:
         return 1 + (self.workers.comm.Get_size() - 1 if self.workers else 0)
 
+    @property
+    def hurried(self) -> bool:
+        """Whether a worker may be waiting for a tile: the master then probes at its fastest
+        (``Backoff``). Not while every lane holds its next tile, nor once the queue is empty."""
+        if not self.queue or not self.workers.all_ready:
+            return bool(self.queue)
+        ranks = self.workers.open_ranks()
+        return any(self.workers.holding(rank) < TILES_HELD for rank in ranks)
+
+    def patient_wait(self) -> float:
+        """The master's wait between probes while no worker waits for a tile: a tenth of the
+        shortest tile yet (a worker's queued tile lasts that long; ``BACKOFF_SECONDS``
+        before any is known), at most ``PATIENT_WAIT_SECONDS``. The local lane's results
+        wake it at once."""
+        shortest = min(self.shortest_tile, self.workers.shortest_tile)
+        if shortest == float("inf"):
+            return BACKOFF_SECONDS
+        return min(PATIENT_WAIT_SECONDS, max(BACKOFF_SECONDS, shortest / 10))
+
     def next_tile(self, lane: int) -> Tile | None:
         """The first pending tile that did not fail on ``lane`` (a retry goes elsewhere)."""
         for i, tile in enumerate(self.queue):
@@ -231,17 +301,23 @@ class Master:
         return None
 
     def hand_out(self) -> None:
-        if self.stop_reason is not None:
-            for rank in list(self.workers.idle if self.workers else ()):
-                self.workers.stop(rank)
-            return
-        if self.local.busy is None and (tile := self.next_tile(0)):
-            self.local.start(tile)
-        for rank in list(self.workers.idle if self.workers else ()):
-            if tile := self.next_tile(rank):
-                self.workers.assign(rank, tile)
-            elif not self.queue:
-                self.workers.stop(rank)
+        """Every lane its next tile; then, while the queue holds one for every lane, one
+        more to keep (``TILES_HELD``). A worker holding nothing once the queue is empty is
+        told to stop."""
+        ranks = self.workers.open_ranks() if self.workers else []
+        if self.stop_reason is None:
+            for depth in range(1, TILES_HELD + 1):
+                if depth > 1 and len(self.queue) < self.n_lanes:
+                    break  # near the end a queued tile would wait for its lane: no lane keeps one
+                if len(self.local.held) < depth and (tile := self.next_tile(0)):
+                    self.local.start(tile)
+                for rank in ranks:
+                    if self.workers.holding(rank) < depth and (tile := self.next_tile(rank)):
+                        self.workers.assign(rank, tile)
+        if self.stop_reason is not None or not self.queue:
+            for rank in ranks:
+                if not self.workers.holding(rank):
+                    self.workers.stop(rank)
 
     def dismiss_workers(self) -> None:
         """STOP every worker (busy ones abandon their tile) and wait for each to say BYE."""
@@ -298,21 +374,26 @@ def run_job(
             job = job.with_tile_rows(agreed_tile_rows(job, path, comm, overwrite))
             check_budget(job, max_store=max_store, max_memory=max_memory)
         where = f"on {socket.gethostname()}"
+
+        def halted() -> bool:  # a lane starts no tile once a stop signal came
+            return signals.count > 0
+
         if comm is not None and comm.Get_rank() > 0:
             # The worker's lane loads the kernel while rank 0 opens the store (~0.3 s each:
             # in rank 0's own process the two would take turns on the GIL).
-            lane = ThreadLane(job, f"rank {comm.Get_rank()} {where}", preload=True)
+            lane = ThreadLane(job, f"rank {comm.Get_rank()} {where}", True, halted)
             direct = receive_outcome(comm)  # of opening the store: where to write, if at all
             work(comm, job, signals, lane, direct)
             receive_outcome(comm)  # of the run
             return RunSummary("worker", {})
-        # Serial: compiled before the store opens and before the lane's thread starts, while
-        # this process has one thread (zarr starts one of its own when the store opens), so a
-        # cold compile may fork a helper (campar.core.split_compile). A store with nothing
-        # pending then has loaded the kernel for nothing (~0.3 s; a compile if the cache is cold).
-        if comm is None:
-            compile_kernel(job)
-        lane = ThreadLane(job, f"rank 0 {where}")
+        # Compiled (or loaded) before the store opens and before the lane's thread starts:
+        # a serial process then has one thread (zarr starts one of its own when the store
+        # opens), so a cold compile may fork a helper (campar.core.split_compile); under MPI
+        # the workers load theirs meanwhile, and rank 0's first tile runs at full speed (its
+        # lane loading inside it was 0.22 s of a 7.4 s plane). A store with nothing pending
+        # then has loaded the kernel for nothing (~0.3 s; a compile if the cache is cold).
+        compile_kernel(job)
+        lane = ThreadLane(job, f"rank 0 {where}", halted=halted)
         opened = {}
         with share_outcome(comm, opened):
             store = open_store(path, job, overwrite=overwrite)

@@ -8,11 +8,17 @@ know from the job (``pack``/``unpack``), never as pickles:
     worker → master   READY (host)  |  RESULT [tile, ns] + arrays  |  ERROR [tile, ns] + text
                       COMPUTED [tile, ns]  |  WRITTEN [tile, checksum]  |  IO_ERROR [tile] + text
                       NOTICE [signal]  |  BYE [peak RSS kB, CPU ns]
-    master → worker   TILE [index], or TILE [STOP]
+                      WITHDRAWN [tile, …]
+    master → worker   TILE [index]  |  TILE [WITHDRAW]  |  TILE [STOP]
 
 (COMPUTED, WRITTEN and IO_ERROR where workers write their own tiles: COMPUTED frees
 the rank for its next tile, WRITTEN lets the master commit the tile, IO_ERROR ends
 the run as a failed write of the master's own would, exit 74.)
+
+A worker holds up to ``TILES_HELD`` tiles: the one its lane computes and the next,
+which the lane starts the moment the first is done, whatever the master is doing. On a
+stop the master sends WITHDRAW: the worker takes back the tiles its lane has not
+started and names them (WITHDRAWN, perhaps none); only started tiles are collected.
 
 Every rank learns the outcome of what the master does alone — opening the store,
 then the run — as one broadcast (``share_outcome``/``receive_outcome``): all ranks of
@@ -54,14 +60,16 @@ from .store import cell_arrays, lock_path, tile_shape
 log = logging.getLogger("campar.run")
 
 TAG_READY, TAG_TILE, TAG_RESULT, TAG_ERROR, TAG_NOTICE, TAG_BYE = range(11, 17)
-TAG_COMPUTED, TAG_WRITTEN, TAG_IO_ERROR = range(17, 20)
+TAG_COMPUTED, TAG_WRITTEN, TAG_IO_ERROR, TAG_WITHDRAWN = range(17, 21)
 WRITER_ENV = "CAMPAR_WRITER"  # "master": the master writes every tile, whatever the backend
-STOP = -1
+STOP, WITHDRAW = -1, -2
+TILES_HELD = 2  # tiles a lane holds: the one it computes and the one it starts next
 BACKOFF_SECONDS = 1e-3  # longest sleep of an idle loop between probes (mpi4py.futures)
-# A worker whose lane computes and whose writer is idle expects nothing from the master
-# but STOP (tiles come only in answer to its results): it waits on its lane, woken the
-# moment the tile is done, and looks for STOP and signals this often (not 1000× a second:
-# hundreds of ranks polling would take the cores their lanes compute on).
+# A worker whose lane holds all the tiles it may and whose writer is idle expects nothing
+# from the master but STOP or WITHDRAW (tiles come only in answer to its results): it waits
+# on its lane, woken the moment a tile is done, and looks for messages and signals this
+# often (not 1000× a second: hundreds of ranks polling would take the cores their lanes
+# compute on).
 COMPUTING_WAIT_SECONDS = 0.05
 # An idle worker's probes for its next tile: from ~1 µs, doubling, up to this. The master
 # answers a result at once (a tile or STOP), so a longer wait means it is busy: probing
@@ -135,7 +143,8 @@ def unpack(job: Job, tile: Tile, payload: np.ndarray) -> dict[str, np.ndarray]:
 
 
 class Workers:
-    """Master side of the wire protocol: which rank is idle, busy, told to stop, gone."""
+    """Master side of the wire protocol: which rank is ready, holds which tiles, was told
+    to stop, is gone."""
 
     def __init__(self, comm, job: Job):
         from mpi4py import MPI
@@ -143,8 +152,8 @@ class Workers:
         self.MPI, self.comm, self.job = MPI, comm, job
         self.tiles = plan_tiles(job)
         self.status = MPI.Status()
-        self.idle: list[int] = []
-        self.busy: dict[int, int] = {}
+        self.ready: list[int] = []  # ranks that asked for tiles, in that order
+        self.held: dict[int, list[int]] = {}  # rank → tiles it computes or queues, in order
         self.writing: dict[int, int] = {}  # tile → the rank writing its arrays
         self.writers: dict[int, str] = {}  # rank → "worker" (wrote its tiles) or "master"
         self.stopped: set[int] = set()
@@ -153,9 +162,11 @@ class Workers:
         self.rss: dict[int, float] = {}
         self.cpu: dict[int, float] = {}
         self.seconds = 0.0
+        self.shortest_tile = float("inf")  # seconds, of the workers' tiles
 
     def poll(self) -> list:
-        """Every message waiting now: Outcomes, and ("signal", signum) notices."""
+        """Every message waiting now: Outcomes, ("signal", signum) notices and
+        ("withdrawn", [tile, …]) answers to WITHDRAW."""
         events = []
         MPI = self.MPI
         while self.comm.Iprobe(MPI.ANY_SOURCE, MPI.ANY_TAG, self.status):
@@ -165,12 +176,11 @@ class Workers:
             head = buf[:16].view(np.int64) if buf.nbytes >= 16 else None
             if tag == TAG_READY:
                 self.hosts[rank] = buf.tobytes().decode()
-                self.idle.append(rank)
+                self.ready.append(rank)
+                self.held[rank] = []
             elif tag in (TAG_RESULT, TAG_ERROR):
                 index, seconds = int(head[0]), head[1] / 1e9
-                self.busy.pop(rank, None)
-                self.idle.append(rank)
-                self.seconds += seconds
+                self._computed(rank, index, seconds)
                 if tag == TAG_RESULT:
                     self.writers[rank] = "master"
                     arrays = unpack(self.job, self.tiles[index], buf[16:])
@@ -180,9 +190,7 @@ class Workers:
                     events.append(Outcome(index, None, text, seconds, rank))
             elif tag == TAG_COMPUTED:  # the rank writes it now and is free for another
                 index, seconds = int(head[0]), head[1] / 1e9
-                self.busy.pop(rank, None)
-                self.idle.append(rank)
-                self.seconds += seconds
+                self._computed(rank, index, seconds)
                 self.writing[index] = rank
                 self.writers[rank] = "worker"
             elif tag == TAG_WRITTEN:
@@ -196,16 +204,47 @@ class Workers:
                 events.append(Outcome(index, None, text, 0.0, rank, io_error=True))
             elif tag == TAG_NOTICE:
                 events.append(("signal", int(buf.view(np.int64)[0])))
+            elif tag == TAG_WITHDRAWN:
+                taken = [int(i) for i in buf.view(np.int64)]
+                for index in taken:
+                    self.held[rank].remove(index)
+                events.append(("withdrawn", taken))
             elif tag == TAG_BYE:
                 rss, cpu = buf.view(np.int64) / (1024, 1e9)
                 self.rss[rank], self.cpu[rank] = round(rss, 1), round(cpu, 3)
                 self.gone.add(rank)
         return events
 
+    def _computed(self, rank: int, index: int, seconds: float) -> None:
+        self.held[rank].remove(index)
+        self.seconds += seconds
+        self.shortest_tile = min(self.shortest_tile, seconds)
+
+    def open_ranks(self) -> list[int]:
+        """Ranks that take tiles: ready, not told to stop."""
+        return [rank for rank in self.ready if rank not in self.stopped]
+
+    def holding(self, rank: int) -> int:
+        return len(self.held.get(rank, ()))
+
+    @property
+    def all_ready(self) -> bool:
+        return len(self.ready) == self.comm.Get_size() - 1
+
+    @property
+    def in_flight(self) -> int:
+        """Tiles handed out and not back: held by a lane, or being written by its worker."""
+        return sum(map(len, self.held.values())) + len(self.writing)
+
     def assign(self, rank: int, tile: Tile) -> None:
-        self.idle.remove(rank)
-        self.busy[rank] = tile.index
+        self.held[rank].append(tile.index)
         self._send(rank, tile.index)
+
+    def withdraw(self) -> None:
+        """Ask every rank holding a tile it has not started for it back (a stop)."""
+        for rank in self.open_ranks():
+            if self.holding(rank) > 1:
+                self._send(rank, WITHDRAW)
 
     def stop(self, rank: int) -> None:
         if rank not in self.stopped:
@@ -288,17 +327,14 @@ def work(comm, job: Job, signals, lane, direct: str = "") -> None:
             wait(comm.Isend([buf, MPI.BYTE], 0, TAG_IO_ERROR))
 
     comm.Send([np.frombuffer(host.encode(), np.uint8), MPI.BYTE], 0, TAG_READY)
-    index = np.empty(1, np.int64)
     backoff, forwarded = Backoff(IDLE_WORKER_BACKOFF_SECONDS), 0
     while True:
-        active = False
-        if comm.Iprobe(0, TAG_TILE):
-            comm.Recv([index, MPI.BYTE], 0, TAG_TILE)
-            if index[0] == STOP:
-                break
-            lane.start(tiles[int(index[0])])
-            active = True
-        waiting = lane.busy is not None and not (writer is not None and writer.pending)
+        orders = take_orders(comm, lane, tiles)
+        if orders == "stop":
+            break
+        active = orders == "taken"
+        full = len(lane.held) == TILES_HELD
+        waiting = full and not (writer is not None and writer.pending)
         if out := lane.poll(COMPUTING_WAIT_SECONDS if waiting else backoff.delay()):
             head = [out.index, int(out.seconds * 1e9)]
             if out.error is not None:
@@ -325,6 +361,25 @@ def work(comm, job: Job, signals, lane, direct: str = "") -> None:
         writer.close()
     usage = [int(peak_rss_mb() * 1024), int((time.process_time() - cpu) * 1e9)]
     comm.Send([np.array(usage, np.int64), MPI.BYTE], 0, TAG_BYE)
+
+
+def take_orders(comm, lane, tiles: list[Tile]) -> str:
+    """A worker's messages from the master: tiles go to ``lane``, WITHDRAW is answered.
+    "stop" on STOP, else "taken" if anything came, "" if nothing did."""
+    from mpi4py import MPI
+
+    order, taken = np.zeros(1, np.int64), ""
+    while comm.Iprobe(0, TAG_TILE):
+        comm.Recv([order, MPI.BYTE], 0, TAG_TILE)
+        if order[0] == STOP:
+            return "stop"
+        if order[0] == WITHDRAW:
+            back = np.array([tile.index for tile in lane.withdraw()], np.int64)
+            wait(comm.Isend([back, MPI.BYTE], 0, TAG_WITHDRAWN))
+        else:
+            lane.start(tiles[int(order[0])])
+        taken = "taken"
+    return taken
 
 
 def wait(request) -> None:
