@@ -16,8 +16,10 @@ signal check: with two ranks on two cores both cores compute.
 Every lane holds its next tile as well (``TILES_HELD``, while the queue has one for
 every lane): it starts it the moment the last one is done, whatever the master is
 doing. Without it a lane waited 3–6 ms a tile for the master's answer and the GIL
-(0.45 lane-seconds of a 7.5 s plane on two ranks); with it the master probes for
-messages every few ms, not every 1 ms, while no worker waits for a tile.
+(0.45 lane-seconds of a 7.5 s plane on two ranks). The master still probes every
+≤ 1 ms: one that waited 10 ms between probes while every lane was full fell behind
+(``campar bench master``, 16 ranks: 89 → 57 tiles/s, commits ~250 ms after the tile
+instead of ~7), and two ranks gained nothing measurable from the CPU it saved.
 
 The wire protocol between the master and its worker ranks is ``campar.sweep.wire``'s.
 
@@ -54,7 +56,6 @@ from .signals import Signals, early_interruption
 from .store import open_store, read_store, takes_direct_writes
 from .tile import compile_kernel, load_kernel, run_tile
 from .wire import (
-    BACKOFF_SECONDS,
     TILES_HELD,
     Backoff,
     Outcome,
@@ -73,7 +74,6 @@ log = logging.getLogger("campar.run")
 MAX_ATTEMPTS = 2  # a tile that fails on two lanes ends the run
 BYE_SECONDS = 10.0  # how long the master waits for workers to leave after STOP
 SIGNAL_CHECK_SECONDS = 0.05  # a serial run's idle wait: signals are seen within this
-PATIENT_WAIT_SECONDS = 0.01  # the master's longest wait while every lane holds its next tile
 
 
 class ThreadLane:
@@ -175,7 +175,6 @@ class Master:
         self.abandon_at = None
         self.cpu = time.process_time()  # at the start of the run
         self.direct = direct  # the workers write their own tiles (the master commits them)
-        self.shortest_tile = float("inf")  # seconds, of the local lane's tiles
 
     def stop(self, reason: str) -> None:
         """Hand out no more tiles and take back those queued on lanes: only the started
@@ -246,12 +245,10 @@ class Master:
             # Idle waits happen here, on the compute thread's outbox: woken at once by it.
             # Serial runs have no messages to probe for: they only check signals now and then.
             if self.workers:
-                timeout = backoff.delay() if self.hurried else self.patient_wait()
+                timeout = backoff.delay()
             else:  # an idle lane gets its tile without waiting
                 timeout = SIGNAL_CHECK_SECONDS if self.local.held else 0.0
             events = [out] if (out := self.local.poll(timeout)) else []
-            if out:
-                self.shortest_tile = min(self.shortest_tile, out.seconds)
             events += self.workers.poll() if self.workers else []
             # After the wait, before any hand-out: a signal that came during it hands out nothing
             if signals.count:
@@ -272,25 +269,6 @@ class Master:
     @property
     def n_lanes(self) -> int:
         return 1 + (self.workers.comm.Get_size() - 1 if self.workers else 0)
-
-    @property
-    def hurried(self) -> bool:
-        """Whether a worker may be waiting for a tile: the master then probes at its fastest
-        (``Backoff``). Not while every lane holds its next tile, nor once the queue is empty."""
-        if not self.queue or not self.workers.all_ready:
-            return bool(self.queue)
-        ranks = self.workers.open_ranks()
-        return any(self.workers.holding(rank) < TILES_HELD for rank in ranks)
-
-    def patient_wait(self) -> float:
-        """The master's wait between probes while no worker waits for a tile: a tenth of the
-        shortest tile yet (a worker's queued tile lasts that long; ``BACKOFF_SECONDS``
-        before any is known), at most ``PATIENT_WAIT_SECONDS``. The local lane's results
-        wake it at once."""
-        shortest = min(self.shortest_tile, self.workers.shortest_tile)
-        if shortest == float("inf"):
-            return BACKOFF_SECONDS
-        return min(PATIENT_WAIT_SECONDS, max(BACKOFF_SECONDS, shortest / 10))
 
     def next_tile(self, lane: int) -> Tile | None:
         """The first pending tile that did not fail on ``lane`` (a retry goes elsewhere)."""
