@@ -162,6 +162,35 @@ def test_a_stop_takes_back_the_tiles_queued_on_lanes(write_job, tmp_path):
     assert done == set(started) and len(done) == 4, (done, started)
 
 
+@slow
+def test_one_probe_loop_takes_in_every_waiting_message():
+    """mpich's Iprobe can bring a message in and still answer no: the master's loop must
+    not stop at the first no, or a backlog of messages drains one per poll."""
+    script = textwrap.dedent("""
+        import time
+        import numpy as np
+        from mpi4py import MPI
+        from campar.sweep.wire import waiting_messages
+        comm = MPI.COMM_WORLD
+        if comm.Get_rank():
+            for i in range(3):
+                request = comm.Isend(np.array([i], np.int64), 0, 5)
+                while not request.Test():
+                    time.sleep(0.0005)
+            time.sleep(1.0)  # no MPI call: nothing pushes the messages on from here
+        else:
+            time.sleep(0.5)
+            status, taken = MPI.Status(), 0
+            for _ in waiting_messages(comm, MPI.ANY_SOURCE, 5, status):
+                comm.Recv(np.empty(1, np.int64), status.Get_source(), 5)
+                taken += 1
+            print("taken", taken, "of", 3 * (comm.Get_size() - 1), flush=True)
+    """)
+    result = run_mpi(4, "-c", script, command=[sys.executable], timeout=120)
+    assert "taken 9 of 9" in result.stdout, result.stdout  # a loop that stops early: 1 of 9
+    assert result.returncode == 0, result.stderr
+
+
 def run_with_faults(ranks, job_path, fault) -> subprocess.CompletedProcess:
     """campar run under mpirun with run_tile replaced by one that raises per ``fault``."""
     script = textwrap.dedent(f"""
