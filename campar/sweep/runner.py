@@ -16,8 +16,10 @@ signal check: with two ranks on two cores both cores compute.
 Every lane holds its next tile as well (``TILES_HELD``, while the queue has one for
 every lane): it starts it the moment the last one is done, whatever the master is
 doing. Without it a lane waited 3–6 ms a tile for the master's answer and the GIL
-(0.45 lane-seconds of a 7.5 s plane on two ranks), and the master probes for messages
-at most every ``MASTER_PROBE_SECONDS`` (4 ms, was 1).
+(0.45 lane-seconds of a 7.5 s plane on two ranks). The master still probes every
+≤ 1 ms: one that waited 10 ms between probes while every lane was full fell behind
+(``campar bench master``, 16 ranks: 89 → 57 tiles/s, commits ~250 ms after the tile
+instead of ~7), and two ranks gained nothing measurable from the CPU it saved.
 
 The wire protocol between the master and its worker ranks is ``campar.sweep.wire``'s.
 
@@ -72,10 +74,6 @@ log = logging.getLogger("campar.run")
 MAX_ATTEMPTS = 2  # a tile that fails on two lanes ends the run
 BYE_SECONDS = 10.0  # how long the master waits for workers to leave after STOP
 SIGNAL_CHECK_SECONDS = 0.05  # a serial run's idle wait: signals are seen within this
-# The master's longest wait between probes (its own lane's results wake it at once). Lanes
-# hold their next tile, so a slower answer rarely idles one: 4 ms instead of 1 took its
-# CPU on the 2-rank plane from 0.43 to 0.25 s and cost nothing at 16–64 stand-in ranks.
-MASTER_PROBE_SECONDS = 4e-3
 
 
 class ThreadLane:
@@ -242,7 +240,7 @@ class Master:
             self.progress.tile_done(self.tiles[out.index].n_rows * self.job.shape[1])
 
     def _loop(self, signals: Signals) -> None:
-        backoff = Backoff(MASTER_PROBE_SECONDS)
+        backoff = Backoff()
         while True:
             # Idle waits happen here, on the compute thread's outbox: woken at once by it.
             # Serial runs have no messages to probe for: they only check signals now and then.

@@ -2,9 +2,8 @@
 
 Wire protocol (mpi4py.futures style: plain data, ``STOP`` ends a worker, the
 master never blocks in a receive — it probes and sleeps with a backoff capped
-at a few ms, ``runner.MASTER_PROBE_SECONDS``). Results travel as one packed byte
-buffer whose layout both sides know from the job (``pack``/``unpack``), never as
-pickles:
+at 1 ms). Results travel as one packed byte buffer whose layout both sides
+know from the job (``pack``/``unpack``), never as pickles:
 
     worker → master   READY (host)  |  RESULT [tile, ns] + arrays  |  ERROR [tile, ns] + text
                       COMPUTED [tile, ns]  |  WRITTEN [tile, checksum]  |  IO_ERROR [tile] + text
