@@ -290,7 +290,7 @@ class Master:
                 if len(self.local.held) < depth and (tile := self.next_tile(0)):
                     self.local.start(tile)
                 for rank in ranks:
-                    if self.workers.holding(rank) < depth and (tile := self.next_tile(rank)):
+                    if self.workers.room(rank, depth) and (tile := self.next_tile(rank)):
                         self.workers.assign(rank, tile)
         if self.stop_reason is not None or not self.queue:
             for rank in ranks:
