@@ -76,7 +76,7 @@ def serve(job_path: str, store: str, seconds: float, report: str) -> None:
     kernel_free = types.ModuleType("campar.sweep.tile")
     kernel_free.run_tile = stand_in_tile(seconds)
     kernel_free.load_kernel = lambda job: None  # a worker's lane preloads the kernel
-    kernel_free.compile_kernel = lambda job: None  # a serial run compiles before its lane
+    kernel_free.compile_kernel = lambda job: None  # rank 0 compiles before its store opens
     sys.modules["campar.sweep.tile"] = kernel_free
     from campar.sweep import runner
     from campar.sweep.job import load_job

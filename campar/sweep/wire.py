@@ -157,8 +157,7 @@ class Workers:
         self.status = MPI.Status()
         self.ready: list[int] = []  # ranks that asked for tiles, in that order
         self.held: dict[int, list[int]] = {}  # rank → tiles it computes or queues, in order
-        self.writing: dict[int, int] = {}  # tile → the rank writing its arrays
-        self.writes = Counter()  # rank → tiles it is writing
+        self.writing = Counter()  # rank → tiles whose arrays it is writing
         self.writers: dict[int, str] = {}  # rank → "worker" (wrote its tiles) or "master"
         self.stopped: set[int] = set()
         self.gone: set[int] = set()
@@ -194,18 +193,15 @@ class Workers:
             elif tag == TAG_COMPUTED:  # the rank writes it now and is free for another
                 index, seconds = int(head[0]), head[1] / 1e9
                 self._computed(rank, index, seconds)
-                self.writing[index] = rank
-                self.writes[rank] += 1
+                self.writing[rank] += 1
                 self.writers[rank] = "worker"
             elif tag == TAG_WRITTEN:
                 index, checksum = int(head[0]), int(head[1:2].view(np.uint64)[0])
-                self.writing.pop(index, None)
-                self.writes[rank] -= 1
+                self.writing[rank] -= 1
                 events.append(Outcome(index, None, None, 0.0, rank, checksum))
             elif tag == TAG_IO_ERROR:
                 index = int(buf[:8].view(np.int64)[0])
-                self.writing.pop(index, None)
-                self.writes[rank] -= 1
+                self.writing[rank] -= 1
                 text = buf[8:].tobytes().decode()
                 events.append(Outcome(index, None, text, 0.0, rank, io_error=True))
             elif tag == TAG_NOTICE:
@@ -237,12 +233,12 @@ class Workers:
         it writes none. A worker whose writes fall behind its lane gets no tiles ahead of
         them (64 stand-in ranks on 2 cores: commits 2.3–2.8 s after their tile without it,
         0.7 s with it)."""
-        return self.holding(rank) < depth and (depth == 1 or not self.writes[rank])
+        return self.holding(rank) < depth and (depth == 1 or not self.writing[rank])
 
     @property
     def in_flight(self) -> int:
         """Tiles handed out and not back: held by a lane, or being written by its worker."""
-        return sum(map(len, self.held.values())) + len(self.writing)
+        return sum(map(len, self.held.values())) + self.writing.total()
 
     def assign(self, rank: int, tile: Tile) -> None:
         self.held[rank].append(tile.index)
