@@ -347,7 +347,8 @@ class TestZarrStore(StoreSuite):
     def test_tile_chunks_are_zarrs_own_bytes(self, path, direction, monkeypatch):
         """_chunks.DirectChunk writes the files zarr's setitem writes, byte for byte: full
         chunks, the edge chunk of a last tile with fewer rows, a direction axis, and a chunk
-        holding only the fill (left out, as zarr leaves it)."""
+        holding only the fill (left out, as zarr leaves it), and chunks that begin with the
+        fill but hold numbers after it (written: the first element alone decides nothing)."""
         from campar.sweep.store._chunks import DirectChunk
         from campar.sweep.store._zarr import ZarrTileArrays
 
@@ -363,11 +364,14 @@ class TestZarrStore(StoreSuite):
                 for tile in plan_tiles(job):
                     arrays = fake_tile(job, tile, tile.index)
                     arrays["multipliers"][:] = np.nan  # the fill: no file
+                    arrays["dc"].flat[0] = np.nan  # the fill, then numbers
+                    arrays["n"].flat[0] = -1
                     store.write_tile(tile, arrays)
             chunks = [f for f in store_path.rglob("*") if "c" in f.relative_to(store_path).parts]
             files[way] = {f.relative_to(store_path): f.read_bytes() for f in chunks if f.is_file()}
         assert len(plan_tiles(job)) == 3 * len(job.directions)  # rows 2, 2, 1: an edge chunk
         assert not any(f.parts[0] == "multipliers" for f in files["zarr"])
+        assert sum(f.parts[0] in ("dc", "n") for f in files["zarr"]) == 2 * len(plan_tiles(job))
         assert files["direct"] == files["zarr"]
 
     @pytest.mark.parametrize("failing_write", [8, 20])

@@ -198,7 +198,8 @@ class TileWriter:
     def __init__(self, real: str | Path, job: Job):
         self.path, self.job = Path(real), job
         self.tiles = plan_tiles(job)
-        self._names = [a.name for a in cell_arrays(job)]
+        self._cell_arrays = cell_arrays(job)
+        self._names = [a.name for a in self._cell_arrays]
         try:
             self._arrays = _zarr.ZarrTileArrays(self.path, job)
         except OSError as exc:
@@ -209,7 +210,7 @@ class TileWriter:
         commit records. StoreIOError (exit 74) when the write fails."""
         if tile != self.tiles[tile.index]:
             raise ValueError(f"{tile} is not tile {tile.index} of job {self.job.name}")
-        check_tile_arrays(self.job, tile, arrays)
+        check_tile_arrays(self.job, tile, arrays, self._cell_arrays)
         try:
             self._arrays.write(tile, arrays)
         except OSError as exc:

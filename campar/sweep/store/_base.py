@@ -202,6 +202,7 @@ class Store(ABC):
         self.real = real or path  # where the files are
         self.job = job
         self.tiles = plan_tiles(job)
+        self._cell_arrays = cell_arrays(job)
         self._lock = lock
         self._runs = list(runs)
         self._closed = False
@@ -215,8 +216,8 @@ class Store(ABC):
         """Store a tile's arrays (as ``run_tile`` returns them), then commit its flag."""
         if tile != self.tiles[tile.index]:
             raise ValueError(f"{tile} is not tile {tile.index} of job {self.job.name}")
-        check_tile_arrays(self.job, tile, arrays)
-        names = [a.name for a in cell_arrays(self.job)]
+        check_tile_arrays(self.job, tile, arrays, self._cell_arrays)
+        names = [a.name for a in self._cell_arrays]
         try:
             self._write_tile(tile, arrays, tile_checksum(arrays, names))
         except OSError as exc:

@@ -12,6 +12,7 @@ place — and leaves out a chunk that holds only the fill, as zarr does
 is written through zarr.
 """
 
+import contextlib
 import os
 import uuid
 from pathlib import Path
@@ -55,26 +56,46 @@ class DirectChunk:
         inner = self.shape[lead:]
         if values.shape[1:] != inner[1:] or values.shape[0] > inner[0]:
             return False
-        chunk = self.fill.copy()
-        chunk[(0,) * lead][: values.shape[0]] = values
-        path = self.folder / self.array.metadata.encode_chunk_key(coords)
+        if values.shape[0] == inner[0] and values.dtype == self.fill.dtype:  # the usual tile
+            chunk = values.reshape(self.shape)
+        else:
+            chunk = self.fill.copy()
+            chunk[(0,) * lead][: values.shape[0]] = values
+        path = os.path.join(self.folder, self.array.metadata.encode_chunk_key(coords))
         if not self.write_empty and self._is_fill(chunk):
-            path.unlink(missing_ok=True)  # as zarr deletes a chunk that became the fill
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(path)  # as zarr deletes a chunk that became the fill
             return True
         data = np.ascontiguousarray(chunk, chunk.dtype.newbyteorder("<"))
         body = self.zstd.encode(data) if self.zstd is not None else data.tobytes()
-        path.parent.mkdir(parents=True, exist_ok=True)
-        aside = path.with_name(f"{path.name}.{uuid.uuid4().hex}.partial")
-        with open(aside, "wb") as file:
-            file.write(body)
-            file.write(google_crc32c.value(body).to_bytes(4, "little"))
+        aside = f"{path}.{uuid.uuid4().hex}.partial"
+        try:
+            _put(aside, body)
+        except FileNotFoundError:  # the chunk's first write: its folder is made then
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            _put(aside, body)
         os.replace(aside, path)
         return True
 
     def _is_fill(self, chunk: np.ndarray) -> bool:
-        """zarr's test (``NDBuffer.all_equal``): NaN equals NaN; a fill of 0.0 by its bits."""
+        """zarr's test (``NDBuffer.all_equal``): NaN equals NaN; a fill of 0.0 by its bits.
+        The first element decides most chunks alone (a tile of numbers: not the fill)."""
+        first = (slice(0, 1),) * chunk.ndim  # a view, never a copy
+        if not self._is_fill_exact(chunk[first], self.fill[first]):
+            return False
+        return self._is_fill_exact(chunk, self.fill)
+
+    @staticmethod
+    def _is_fill_exact(chunk: np.ndarray, fill: np.ndarray) -> bool:
         if chunk.dtype.kind != "f":
-            return bool(np.array_equal(chunk, self.fill))
-        if self.fill.flat[0] == 0.0:
-            return chunk.tobytes() == self.fill.tobytes()
-        return bool(np.array_equal(chunk, self.fill, equal_nan=True))
+            return bool(np.array_equal(chunk, fill))
+        if fill.flat[0] == 0.0:
+            return chunk.tobytes() == fill.tobytes()
+        return bool(np.array_equal(chunk, fill, equal_nan=True))
+
+
+def _put(path: str, body: bytes) -> None:
+    """A chunk file: its encoded bytes, then their CRC32C (zarr's ``Crc32cCodec``)."""
+    with open(path, "wb") as file:
+        file.write(body)
+        file.write(google_crc32c.value(body).to_bytes(4, "little"))
