@@ -372,6 +372,56 @@ def test_an_idle_master_does_not_spin(write_job, monkeypatch):
     assert cpu < 0.25 * wall, (cpu, wall)
 
 
+class StubWorkers:
+    """The master's view of two worker ranks (``wire.Workers``), set by hand."""
+
+    def __init__(self, held: dict[int, int], writing: dict[int, int], shortest: float):
+        from collections import Counter
+        from types import SimpleNamespace
+
+        self.comm = SimpleNamespace(Get_size=lambda: 3)
+        self.held, self.writing, self.shortest_tile = held, Counter(writing), shortest
+
+    def open_ranks(self):
+        return list(self.held)
+
+    def holding(self, rank):
+        return self.held[rank]
+
+
+@pytest.mark.parametrize(
+    "local, held, writing, stopped, patient",
+    [
+        (2, {1: 2, 2: 2}, {}, False, True),  # every lane holds its next tile
+        (1, {1: 2, 2: 2}, {}, False, False),  # the master's own lane wants one
+        (2, {1: 2, 2: 1}, {}, False, False),  # rank 2 wants one
+        (2, {1: 2, 2: 2}, {2: 1}, False, False),  # rank 2's WRITTEN is due, a tile with it
+        (2, {1: 2}, {}, False, False),  # rank 2 has not asked yet (or was stopped)
+        (2, {1: 2, 2: 2}, {}, True, False),  # a stop: answers to WITHDRAW are due
+    ],
+)
+def test_the_master_waits_long_only_while_every_lane_is_provided_for(
+    write_job, local, held, writing, stopped, patient
+):
+    """Between probes the master waits up to a quarter of the shortest tile (≤ 20 ms) only
+    while no lane can need it soon; else it probes within ``BACKOFF_SECONDS``."""
+    from types import SimpleNamespace
+
+    _, job = write_job()
+    lane = SimpleNamespace(held=list(range(local)), withdraw=lambda: [])
+    master = runner.Master(job, None, [], None, 1.0, lane)
+    master.workers = StubWorkers(held, writing, shortest=0.04)
+    if stopped:
+        master.stop_reason = "SIGTERM"
+    assert master.provided_for is patient
+    master.shortest_tile = 0.2  # the local lane's: the workers' 0.04 s is shorter
+    assert master.patient_wait() == pytest.approx(0.01)
+    master.workers.shortest_tile = 1.0
+    assert master.patient_wait() == runner.PATIENT_WAIT_SECONDS == 0.02
+    master.shortest_tile = master.workers.shortest_tile = float("inf")  # none back yet
+    assert master.patient_wait() == wire.BACKOFF_SECONDS
+
+
 def test_a_worker_writes_into_the_store_only_where_it_sees_the_masters_lock(tmp_path):
     """``seen_store``: the lock file at the store's path must hold the master's text (the
     same file system); else the worker sends its tiles to the master to write."""

@@ -56,6 +56,7 @@ from .signals import Signals, early_interruption
 from .store import open_store, read_store, takes_direct_writes
 from .tile import compile_kernel, load_kernel, run_tile
 from .wire import (
+    BACKOFF_SECONDS,
     TILES_HELD,
     Backoff,
     Outcome,
@@ -74,6 +75,7 @@ log = logging.getLogger("campar.run")
 MAX_ATTEMPTS = 2  # a tile that fails on two lanes ends the run
 BYE_SECONDS = 10.0  # how long the master waits for workers to leave after STOP
 SIGNAL_CHECK_SECONDS = 0.05  # a serial run's idle wait: signals are seen within this
+PATIENT_WAIT_SECONDS = 0.02  # the master's longest wait while every lane is provided for
 
 
 class ThreadLane:
@@ -175,6 +177,7 @@ class Master:
         self.abandon_at = None
         self.cpu = time.process_time()  # at the start of the run
         self.direct = direct  # the workers write their own tiles (the master commits them)
+        self.shortest_tile = float("inf")  # seconds, of the local lane's tiles
 
     def stop(self, reason: str) -> None:
         """Hand out no more tiles and take back those queued on lanes: only the started
@@ -245,10 +248,12 @@ class Master:
             # Idle waits happen here, on the compute thread's outbox: woken at once by it.
             # Serial runs have no messages to probe for: they only check signals now and then.
             if self.workers:
-                timeout = backoff.delay()
+                timeout = self.patient_wait() if self.provided_for else backoff.delay()
             else:  # an idle lane gets its tile without waiting
                 timeout = SIGNAL_CHECK_SECONDS if self.local.held else 0.0
             events = [out] if (out := self.local.poll(timeout)) else []
+            if out:
+                self.shortest_tile = min(self.shortest_tile, out.seconds)
             events += self.workers.poll() if self.workers else []
             # After the wait, before any hand-out: a signal that came during it hands out nothing
             if signals.count:
@@ -269,6 +274,28 @@ class Master:
     @property
     def n_lanes(self) -> int:
         return 1 + (self.workers.comm.Get_size() - 1 if self.workers else 0)
+
+    @property
+    def provided_for(self) -> bool:
+        """Whether no lane can need the master soon: every one holds its next tile and no
+        worker writes (its WRITTEN is due within milliseconds, and a tile ahead with it)."""
+        if self.stop_reason is not None or len(self.local.held) < TILES_HELD:
+            return False
+        ranks = self.workers.open_ranks()
+        return len(ranks) == self.n_lanes - 1 and all(
+            self.workers.holding(rank) >= TILES_HELD and not self.workers.writing[rank]
+            for rank in ranks
+        )
+
+    def patient_wait(self) -> float:
+        """The master's wait between probes while every lane is provided for: a quarter of
+        the shortest tile yet (the least a lane's queued tile keeps it busy) — the local
+        lane's result wakes it at once —, at most ``PATIENT_WAIT_SECONDS``; before any
+        tile is back, ``BACKOFF_SECONDS``."""
+        shortest = min(self.shortest_tile, self.workers.shortest_tile)
+        if shortest == float("inf"):
+            return BACKOFF_SECONDS
+        return min(PATIENT_WAIT_SECONDS, max(BACKOFF_SECONDS, shortest / 4))
 
     def next_tile(self, lane: int) -> Tile | None:
         """The first pending tile that did not fail on ``lane`` (a retry goes elsewhere)."""

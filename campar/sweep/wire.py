@@ -165,6 +165,7 @@ class Workers:
         self.rss: dict[int, float] = {}
         self.cpu: dict[int, float] = {}
         self.seconds = 0.0
+        self.shortest_tile = float("inf")  # seconds, of the workers' tiles
 
     def poll(self) -> list:
         """Every message waiting now: Outcomes, ("signal", signum) notices and
@@ -220,6 +221,7 @@ class Workers:
     def _computed(self, rank: int, index: int, seconds: float) -> None:
         self.held[rank].remove(index)
         self.seconds += seconds
+        self.shortest_tile = min(self.shortest_tile, seconds)
 
     def open_ranks(self) -> list[int]:
         """Ranks that take tiles: ready, not told to stop."""
