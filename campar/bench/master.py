@@ -15,6 +15,9 @@ capacity test of the master, not of the kernel). Reported per R:
 - the master's CPU time per tile (rank 0's process: its own compute lane only
   sleeps), and its inverse, the tiles/s one core can write — the capacity that
   oversubscription on a small machine hides behind the ranks' own polling;
+- the CPU of every rank per tile (the stand-in's random arrays, the workers' writes
+  and polls, the master): what a tile costs the machine beside its kernel — on an
+  oversubscribed machine, what bounds the tiles/s;
 - each for both writers (``--writer``): the workers writing their own tiles' chunks
   and the master committing them in groups, or the master writing every tile
   (``CAMPAR_WRITER=master``, and always for HDF5); "write ms" is the master's share
@@ -159,13 +162,14 @@ def run(args) -> int:
             idle = 1 - entry["compute_seconds"] / (entry["seconds"] * ranks)
             rss = [mb for mb in entry["peak_rss_mb"] if mb is not None]
             master_cpu = entry["cpu_seconds"][0] / entry["tiles"]  # its compute lane sleeps
+            all_cpu = sum(c for c in entry["cpu_seconds"] if c is not None) / entry["tiles"]
             rows.append([
                 f"{ranks}", entry.get("writer", writer), f"{sustained:.1f}", f"{ideal:.1f}",
                 f"{100 * idle:.1f} %",
                 f"{1e3 * statistics.median(latency):.1f}",
                 f"{1e3 * latency[int(0.95 * (len(latency) - 1))]:.1f}",
                 f"{1e3 * statistics.median(result['write']):.2f}",
-                f"{1e3 * master_cpu:.1f}", f"{1 / master_cpu:.0f}",
+                f"{1e3 * master_cpu:.1f}", f"{1 / master_cpu:.0f}", f"{1e3 * all_cpu:.1f}",
                 f"{rss[0]:.0f} / {max(rss[1:], default=0):.0f}",
                 f"{store_bytes(store) / 2**20:.1f}",
             ])  # fmt: skip
@@ -176,7 +180,8 @@ def run(args) -> int:
           "(ranks beyond them oversubscribed: they sleep)\n")  # fmt: skip
     print(format_table(
         ["ranks", "writer", "tiles/s", "ideal", "idle", "result→disk ms (median)", "p95 ms",
-         "write ms", "master CPU ms/tile", "capacity tiles/s", "RSS MB rank 0 / worker max",
+         "write ms", "master CPU ms/tile", "capacity tiles/s", "all ranks CPU ms/tile",
+         "RSS MB rank 0 / worker max",
          "store MiB"], rows,
     ))  # fmt: skip
     return 0
