@@ -116,3 +116,25 @@ def test_a_loaded_chain_serves_every_job_of_its_method():
     assert typeof(solver_options(point_job(omega=3.0, method="rk4"))) != typeof(
         solver_options(other)
     )
+
+
+def test_a_chain_cached_beside_the_sources_leaves_numba_cache_dir_cold(tmp_path):
+    """Under NUMBA_CACHE_DIR numba reads only that directory: a chain cached in the source
+    tree's ``__pycache__`` (a run without it) must not stop the helper's fork."""
+    from campar.core import jitcache
+
+    in_tree = jitcache.PACKAGE / "__pycache__"
+    fake = in_tree / "kernel.chain_compiled-0.py311.nbi"  # no function is at line 0
+    if not os.access(jitcache.PACKAGE, os.W_OK):
+        pytest.skip("the package's directory is read-only")
+    in_tree.mkdir(exist_ok=True)
+    fake.write_bytes(b"")
+    try:
+        code = "from campar.core import split_compile; print(split_compile.cache_is_cold())"
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+        run = subprocess.run([sys.executable, "-c", code], env=env, text=True,
+                             capture_output=True, timeout=120)  # fmt: skip
+        assert run.returncode == 0, run.stderr
+        assert run.stdout.split() == ["True"]
+    finally:
+        fake.unlink(missing_ok=True)

@@ -35,11 +35,15 @@ def cache_dirs() -> list[Path]:
     chose for the core's sources (beside them; under NUMBA_CACHE_DIR, a subdirectory named
     after the source directory and its hash; numba's user-wide cache for a read-only
     install), and the in-tree ``__pycache__``. Every module of the core shares it."""
+    located, in_tree = located_cache_dir(), PACKAGE / "__pycache__"
+    return [in_tree] if located == in_tree else [in_tree, located]
+
+
+def located_cache_dir() -> Path:
+    """The one directory numba reads the core's compiled functions from in this process."""
     from .kernel import chain_compiled  # defines the dispatchers, compiles nothing
 
-    located = Path(chain_compiled._cache.cache_path)
-    in_tree = PACKAGE / "__pycache__"
-    return [in_tree] if located == in_tree else [in_tree, located]
+    return Path(chain_compiled._cache.cache_path)
 
 
 @functools.cache

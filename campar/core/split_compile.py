@@ -25,7 +25,6 @@ import signal
 import sys
 import threading
 import time
-from pathlib import Path
 
 import numpy as np
 from numba import njit, typeof, types
@@ -106,8 +105,9 @@ def prime_classification(cs, cw, out):
 
 
 def cache_is_cold() -> bool:
-    """No compiled chain in numba's cache (after jitcache dropped stale entries)."""
-    return not any(any(Path(d).glob("kernel.chain_compiled-*.nbi")) for d in jitcache.cache_dirs())
+    """No compiled chain where numba will look for it (after jitcache dropped stale entries):
+    under NUMBA_CACHE_DIR, a chain cached beside the sources does not count."""
+    return not any(jitcache.located_cache_dir().glob("kernel.chain_compiled-*.nbi"))
 
 
 def can_fork() -> bool:
