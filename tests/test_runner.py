@@ -293,7 +293,9 @@ def test_sigterm_exits_75_and_the_same_command_resumes(write_job):
 
 @pytest.mark.slow  # ~4 s; the store suite checks the lock of another process in 0.5 s
 def test_a_concurrent_run_is_refused_with_host_and_pid(write_job):
-    path, job = write_job(slow=True)
+    # 24 tiles: the first run is still busy when the second has started (with 6 it once
+    # finished them all first, on a loaded machine); SIGTERM ends it either way
+    path, job = write_job(slow=True, sweep={"mu_cn": {"points": 24}})
     first = start_campar("run", path)
     try:
         wait_for_tiles(job.store, 1, first)

@@ -165,7 +165,12 @@ def _scaling_arguments(p):
     p.add_argument("--rows", type=int, help="chains per tile (default: the job's)")
     p.add_argument("--ranks", type=ints, default=[1, 2, 3], help="launches (1,2,3)")
     p.add_argument("--suffix", default=".zarr", help="store type: .zarr (default) or .h5")
-    p.add_argument("--repeat", type=int, default=1, help="runs per launch, fastest kept (1)")
+    p.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        help="rounds, the launches taking turns: fastest kept, and paired (1)",
+    )
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
