@@ -115,9 +115,12 @@ class Backoff:
 # -- packing tile arrays into one buffer -----------------------------------------------
 
 
-def tile_layout(job: Job, tile: Tile) -> list[tuple[str, np.dtype, tuple[int, ...]]]:
-    """(name, dtype, shape) of each array of a tile, in ``array_names`` order."""
-    return [(a.name, a.dtype, tile_shape(a, tile)) for a in cell_arrays(job)]
+def tile_layout(
+    job: Job, tile: Tile, schemas: list | None = None
+) -> list[tuple[str, np.dtype, tuple[int, ...]]]:
+    """(name, dtype, shape) of each array of a tile, in ``array_names`` order (``schemas``:
+    the job's ``cell_arrays``, if the caller has them: ~0.2 ms to make)."""
+    return [(a.name, a.dtype, tile_shape(a, tile)) for a in (schemas or cell_arrays(job))]
 
 
 def pack(header: list[int], arrays: list[np.ndarray]) -> np.ndarray:
@@ -127,8 +130,8 @@ def pack(header: list[int], arrays: list[np.ndarray]) -> np.ndarray:
     return np.concatenate(parts)
 
 
-def unpack(job: Job, tile: Tile, payload: np.ndarray) -> dict[str, np.ndarray]:
-    layout = tile_layout(job, tile)
+def unpack(job: Job, tile: Tile, payload: np.ndarray, schemas=None) -> dict[str, np.ndarray]:
+    layout = tile_layout(job, tile, schemas)
     expected = sum(np.dtype(d).itemsize * int(np.prod(s)) for _, d, s in layout)
     if payload.nbytes != expected:
         raise CamparError(
@@ -154,6 +157,7 @@ class Workers:
 
         self.MPI, self.comm, self.job = MPI, comm, job
         self.tiles = plan_tiles(job)
+        self.schemas = cell_arrays(job)  # to unpack the tiles sent for the master to write
         self.status = MPI.Status()
         self.ready: list[int] = []  # ranks that asked for tiles, in that order
         self.held: dict[int, list[int]] = {}  # rank → tiles it computes or queues, in order
@@ -186,7 +190,7 @@ class Workers:
                 self._computed(rank, index, seconds)
                 if tag == TAG_RESULT:
                     self.writers[rank] = "master"
-                    arrays = unpack(self.job, self.tiles[index], buf[16:])
+                    arrays = unpack(self.job, self.tiles[index], buf[16:], self.schemas)
                     events.append(Outcome(index, arrays, None, seconds, rank))
                 else:
                     text = buf[16:].tobytes().decode()
