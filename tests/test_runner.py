@@ -410,17 +410,17 @@ def test_the_master_waits_long_only_while_every_lane_is_provided_for(
     from types import SimpleNamespace
 
     _, job = write_job()
-    lane = SimpleNamespace(held=list(range(local)), withdraw=lambda: [])
+    lane = SimpleNamespace(held=list(range(local)), withdraw=lambda: [], shortest_tile=0.2)
     master = runner.Master(job, None, [], None, 1.0, lane)
     master.workers = StubWorkers(held, writing, shortest=0.04)
     if stopped:
         master.stop_reason = "SIGTERM"
     assert master.provided_for is patient
-    master.shortest_tile = 0.2  # the local lane's: the workers' 0.04 s is shorter
+    # the local lane's 0.2 s: the workers' 0.04 s is shorter
     assert master.patient_wait() == pytest.approx(0.01)
     master.workers.shortest_tile = 1.0
     assert master.patient_wait() == runner.PATIENT_WAIT_SECONDS == 0.02
-    master.shortest_tile = master.workers.shortest_tile = float("inf")  # none back yet
+    lane.shortest_tile = master.workers.shortest_tile = float("inf")  # none back yet
     assert master.patient_wait() == wire.BACKOFF_SECONDS
 
 

@@ -94,6 +94,7 @@ class ThreadLane:
         self.job, self.where, self.preload, self.halted = job, where, preload, halted
         self.held: list[int] = []  # tiles started or queued, not yet reported, in order
         self.seconds = 0.0
+        self.shortest_tile = float("inf")  # seconds, of the tiles it reported
         self._queued: deque = deque()  # tiles not started, then None once closed
         self._changed = threading.Condition()
         # queue.Queue, not SimpleQueue: CPython 3.11's SimpleQueue.get(timeout) can block
@@ -124,6 +125,7 @@ class ThreadLane:
             return None
         self.held.remove(out.index)
         self.seconds += out.seconds
+        self.shortest_tile = min(self.shortest_tile, out.seconds)
         return out
 
     def close(self) -> None:
@@ -179,7 +181,6 @@ class Master:
         self.abandon_at = None
         self.cpu = time.process_time()  # at the start of the run
         self.direct = direct  # the workers write their own tiles (the master commits them)
-        self.shortest_tile = float("inf")  # seconds, of the local lane's tiles
 
     def stop(self, reason: str) -> None:
         """Hand out no more tiles and take back those queued on lanes: only the started
@@ -254,8 +255,6 @@ class Master:
             else:  # an idle lane gets its tile without waiting
                 timeout = SIGNAL_CHECK_SECONDS if self.local.held else 0.0
             events = [out] if (out := self.local.poll(timeout)) else []
-            if out:
-                self.shortest_tile = min(self.shortest_tile, out.seconds)
             events += self.workers.poll() if self.workers else []
             # After the wait, before any hand-out: a signal that came during it hands out nothing
             if signals.count:
@@ -294,7 +293,7 @@ class Master:
         the shortest tile yet (the least a lane's queued tile keeps it busy) — the local
         lane's result wakes it at once —, at most ``PATIENT_WAIT_SECONDS``; before any
         tile is back, ``BACKOFF_SECONDS``."""
-        shortest = min(self.shortest_tile, self.workers.shortest_tile)
+        shortest = min(self.local.shortest_tile, self.workers.shortest_tile)
         if shortest == float("inf"):
             return BACKOFF_SECONDS
         return min(PATIENT_WAIT_SECONDS, max(BACKOFF_SECONDS, shortest / 4))
