@@ -54,8 +54,8 @@ def zarr_chunks(path: Path, job: Job, index: int) -> list[Path]:
         names = [*reader.names, "checksum", "done"]
     found = []
     for name in names:
-        chunk = path / name / "c" / str(index)
-        found += [chunk] if chunk.is_file() else sorted(f for f in chunk.rglob("*") if f.is_file())
+        folder = path / name  # chunk files c.<tile> (per-tile arrays), c.<tile>.<j>…
+        found += sorted(folder.glob(f"c.{index}")) + sorted(folder.glob(f"c.{index}.*"))
     return found
 
 

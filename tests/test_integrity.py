@@ -60,7 +60,7 @@ def test_a_damaged_zarr_chunk_is_found_reported_and_recomputed(tmp_path, how):
     path = tmp_path / "s.zarr"
     job = synthetic_store(path)
     rng = np.random.default_rng(len(how))
-    n_chunk = [f for f in zarr_chunks(path, job, 1) if f.parts[-4] == "n"][0]
+    n_chunk = [f for f in zarr_chunks(path, job, 1) if f.parent.name == "n"][0]
     damage_file(n_chunk, how, rng)
     with read_store(path) as reader:
         report = verify_store(reader)
@@ -81,9 +81,9 @@ def test_a_damaged_zarr_chunk_is_found_reported_and_recomputed(tmp_path, how):
 def test_a_damaged_done_flag_or_checksum_makes_the_tile_pending(tmp_path):
     path = tmp_path / "s.zarr"
     job = synthetic_store(path)
-    (path / "done" / "c" / "0").write_bytes(b"")  # truncated: the flag cannot be read
+    (path / "done" / "c.0").write_bytes(b"")  # truncated: the flag cannot be read
     zarr.open_group(path, mode="r+")["done"][2] = 7  # neither 0 nor 1 (a valid chunk)
-    (path / "checksum" / "c" / "1").write_bytes(b"\0" * 3)
+    (path / "checksum" / "c.1").write_bytes(b"\0" * 3)
     with read_store(path) as reader:
         report = verify_store(reader)
         assert not reader.done[0] and not reader.done[2]
@@ -203,7 +203,7 @@ def test_status_reports_damage_and_verify_lists_it_then_run_repairs(write_job, c
     runner.run_job(job)
     path = Path(job.store)
     for name, index in (("n", 1), ("dc", 2)):
-        (path / name / "c" / str(index) / "0").unlink()  # rm S.zarr/n/c/1/0 …
+        (path / name / f"c.{index}.0").unlink()  # rm S.zarr/n/c.1.0 …
     status = run_campar("status", path)
     assert status.returncode == 0, status.stderr
     assert "tiles   1/3 done, 2 damaged (tiles 1, 2" in status.stdout

@@ -343,15 +343,20 @@ class TestZarrStore(StoreSuite):
         assert group["sections"].chunks == (2, 7, 3, 2)
         assert group["done"].chunks == (1,)
 
+    @pytest.mark.parametrize("separator", [".", "/"])
     @pytest.mark.parametrize("direction", ["down", "both"])
-    def test_tile_chunks_are_zarrs_own_bytes(self, path, direction, monkeypatch):
+    def test_tile_chunks_are_zarrs_own_bytes(self, path, direction, separator, monkeypatch):
         """_chunks.DirectChunk writes the files zarr's setitem writes, byte for byte: full
         chunks, the edge chunk of a last tile with fewer rows, a direction axis, and a chunk
         holding only the fill (left out, as zarr leaves it), and chunks that begin with the
-        fill but hold numbers after it (written: the first element alone decides nothing)."""
+        fill but hold numbers after it (written: the first element alone decides nothing);
+        with campar's chunk keys (c.<i>.<j>) and with those of stores made before them
+        (c/<i>/<j>: a folder per chunk row, made at its first write)."""
+        from campar.sweep.store import _zarr
         from campar.sweep.store._chunks import DirectChunk
         from campar.sweep.store._zarr import ZarrTileArrays
 
+        monkeypatch.setattr(_zarr, "CHUNK_KEYS", {"name": "default", "separator": separator})
         job = make_job(chains__direction=direction, classify__n_max=3)
         files = {}
         for way in ("direct", "zarr"):
@@ -367,12 +372,14 @@ class TestZarrStore(StoreSuite):
                     arrays["dc"].flat[0] = np.nan  # the fill, then numbers
                     arrays["n"].flat[0] = -1
                     store.write_tile(tile, arrays)
-            chunks = [f for f in store_path.rglob("*") if "c" in f.relative_to(store_path).parts]
-            files[way] = {f.relative_to(store_path): f.read_bytes() for f in chunks if f.is_file()}
+            chunks = [f.relative_to(store_path) for f in store_path.rglob("*") if f.is_file()]
+            chunks = [f for f in chunks if len(f.parts) > 2 or f.name.startswith("c.")]  # c/…, c.…
+            files[way] = {f: (store_path / f).read_bytes() for f in chunks}
         assert len(plan_tiles(job)) == 3 * len(job.directions)  # rows 2, 2, 1: an edge chunk
         assert not any(f.parts[0] == "multipliers" for f in files["zarr"])
         assert sum(f.parts[0] in ("dc", "n") for f in files["zarr"]) == 2 * len(plan_tiles(job))
         assert files["direct"] == files["zarr"]
+        assert all((len(f.parts) == 2) == (separator == ".") for f in files["direct"])
 
     @pytest.mark.parametrize("failing_write", [8, 20])
     def test_a_creation_that_fails_leaves_nothing_though_zarr_still_writes(
@@ -408,8 +415,7 @@ class TestZarrStore(StoreSuite):
     def test_partial_files_of_a_killed_writer_are_cleaned_on_resume(self, path, job):
         with open_store(path, job):
             pass
-        leftover = path / "n" / "c" / "0" / f"0.{'ab' * 16}.partial"
-        leftover.parent.mkdir(parents=True, exist_ok=True)
+        leftover = path / "n" / f"c.0.0.{'ab' * 16}.partial"
         leftover.write_bytes(b"half a chunk")
         with open_store(path, job):
             assert not leftover.exists()
