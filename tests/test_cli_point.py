@@ -85,3 +85,20 @@ def test_the_campar_process_runs_one_blas_thread_unless_told_otherwise(preset):
     assert setting == (preset or "1")
     # OpenBLAS caps its pool at the cores: with "3" the process has more than one thread
     assert (int(threads) == 1) == (preset is None)
+
+
+def test_the_readme_tour_shows_what_campar_point_prints():
+    """The README's first example is this kernel's output, character for character (it
+    went stale once: 209 steps in the README where the DOP853 kernel takes 233)."""
+    from pathlib import Path
+
+    readme = (Path(__file__).parents[1] / "README.md").read_text().splitlines()
+    start = readme.index("    $ campar point --omega 3") + 1
+    shown = []
+    for line in readme[start:]:
+        if line.lstrip().startswith("$ "):
+            break
+        shown.append(line[4:])
+    out = campar("point", "--omega", "3")
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.splitlines() == shown
