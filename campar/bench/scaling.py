@@ -99,9 +99,10 @@ def run(args) -> int:
         (tmp / "warm").mkdir()
         warm = write_job(Path(args.job), tmp / "warm", 2, 1)
         launch(warm, tmp / "warm.zarr", 1)  # compiles if the cache is cold
-        # A fresh store each run: overwriting one deletes ~1,300 chunk files, and on a file
-        # system that discards freed blocks (ext4 -o discard, as here) the next run's file
-        # creations pay for it (the plane: +0.35–0.45 s of system time a rank).
+        # A fresh store each run, so that no run pays for deleting the last one's files: with
+        # a folder per chunk row (stores before 8e4b7cb) on a file system that discards freed
+        # blocks (ext4 -o discard, as here) an overwrite cost the next run +0.35–0.45 s of
+        # system time a rank; with flat chunk files no cost was measured (RESULTS.md).
         runs = {ranks: [] for ranks in args.ranks}  # ranks → [(entry, wall, store)] by round
         for round_ in range(args.repeat):
             for ranks in args.ranks:
