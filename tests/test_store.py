@@ -381,6 +381,28 @@ class TestZarrStore(StoreSuite):
         assert files["direct"] == files["zarr"]
         assert all((len(f.parts) == 2) == (separator == ".") for f in files["direct"])
 
+    def test_a_store_with_the_older_chunk_keys_resumes_and_reads(self, path, job, monkeypatch):
+        """Stores made before the flat keys have c/<i>/<j> (a folder per chunk row): a run
+        of today's campar resumes one, writing its missing tiles under its own keys."""
+        from campar.sweep.store import _zarr
+
+        tiles = plan_tiles(job)
+        with monkeypatch.context() as older:
+            older.setattr(_zarr, "CHUNK_KEYS", {"name": "default", "separator": "/"})
+            with open_store(path, job) as store:
+                store.write_tile(tiles[0], fake_tile(job, tiles[0], 0))
+        assert (path / "n" / "c" / "0" / "0").is_file()
+        with open_store(path, job) as store:
+            assert list(store.done) == [True] + [False] * (len(tiles) - 1)
+            for tile in tiles[1:]:
+                store.write_tile(tile, fake_tile(job, tile, tile.index))
+        assert (path / "n" / "c" / "1" / "0").is_file() and not any(path.glob("n/c.*"))
+        with read_store(path) as reader:
+            assert reader.done.all()
+            for tile in tiles:
+                assert np.array_equal(reader.read_rows("n", tile.rows),
+                                      fake_tile(job, tile, tile.index)["n"])  # fmt: skip
+
     @pytest.mark.parametrize("failing_write", [8, 20])
     def test_a_creation_that_fails_leaves_nothing_though_zarr_still_writes(
         self, path, job, monkeypatch, failing_write
