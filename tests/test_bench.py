@@ -17,7 +17,15 @@ HEADERS = {
     "stress": ["labels (rtols)", "worst time per cell", "label changes"],
     "cells": ["cold ms", "warm revs", "ms/cell", "rev/cell"],
     "map": ["agree %", "adjud. %", "mu_cn     default", "mu_cn     rtol 1e-6", "audit: "],
-    "scaling": ["cells/s", "speed-up", "paired", "1 process", "mpirun -n 2", "same map"],
+    "scaling": [
+        "cells/s",
+        "speed-up",
+        "paired",
+        "1 process",
+        "mpirun -n 2",
+        "same map",
+        "speed-up over one process, by round:",
+    ],
     "directions": ["CPU / down", "both / down", "bit for bit: yes", "hysteretic cells"],
     "master": ["tiles/s", "capacity tiles/s", "workers", "master"],  # its stand-in kernel too
 }

@@ -11,7 +11,8 @@ writes. Reported per configuration:
   first, and "paired": the median over rounds of each round's ratio. With ``--repeat``
   the launches take turns (1, 2, 3, 1, 2, 3, …), so a VM whose speed drifts over minutes
   (this one's one-process run: 13.7–16.8 s within an hour) moves both runs of a round
-  alike; the fastest-of-each figure mixes minutes;
+  alike; the fastest-of-each figure mixes minutes. Each round's own speed-up is printed
+  below the table, so the spread behind the median shows;
 - outside kernel: the share of (wall time × compute lanes) not spent inside
   ``run_tile`` — the runner's own cost plus lanes idle at the end of the run
   (target ≤ 3 %);
@@ -40,7 +41,7 @@ from .common import machine_line
 MPIRUN = Path(sys.executable).parent / "mpirun"
 
 
-QUICK = {"size": 8, "ranks": [1, 2], "repeat": 1}
+QUICK = {"size": 8, "ranks": [1, 2], "repeat": 2}
 
 
 def write_job(source: Path, directory: Path, size: int, rows: int | None) -> Path:
@@ -110,13 +111,15 @@ def run(args) -> int:
                 runs[ranks].append((*launch(job, store, ranks), store))
         rows, first = [], runs[args.ranks[0]]
         first_best = max(first, key=lambda run: run[0]["cells_per_s"])
+        by_round = {ranks: [r[0]["cells_per_s"] / f[0]["cells_per_s"]
+                            for r, f in zip(runs[ranks], first, strict=True)]
+                    for ranks in args.ranks}  # fmt: skip
         for ranks in args.ranks:
             entry, wall, store = max(runs[ranks], key=lambda run: run[0]["cells_per_s"])
             lanes = entry["ranks"]
             outside = 1 - entry["compute_seconds"] / (entry["seconds"] * lanes)
             speedup = entry["cells_per_s"] / first_best[0]["cells_per_s"]
-            paired = np.median([r[0]["cells_per_s"] / f[0]["cells_per_s"]
-                                for r, f in zip(runs[ranks], first, strict=True)])  # fmt: skip
+            paired = np.median(by_round[ranks])
             rows.append(
                 (
                     "1 process" if ranks == 1 else f"mpirun -n {ranks}",
@@ -145,4 +148,9 @@ def run(args) -> int:
     widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
     for line in (header, *rows):
         print("  ".join(cell.rjust(w) for cell, w in zip(line, widths, strict=True)))
+    if args.repeat > 1:  # the spread behind "paired": each round's speed-up, in order
+        base = "one process" if args.ranks[0] == 1 else f"mpirun -n {args.ranks[0]}"
+        print(f"\nspeed-up over {base}, by round:")
+        for ranks in args.ranks[1:]:
+            print(f"  mpirun -n {ranks}: " + " ".join(f"{x:.2f}×" for x in by_round[ranks]))
     return 0 if all(r[-1] == "yes" for r in rows) else 1
