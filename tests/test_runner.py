@@ -25,7 +25,7 @@ from campar.errors import CamparError, Interrupted
 from campar.sweep.arrays import array_names
 from campar.sweep.plan import plan_tiles
 from campar.sweep.progress import Progress, format_duration
-from campar.sweep.store import read_store
+from campar.sweep.store import cell_arrays, read_store
 from campar.sweep.tile import run_tile
 
 
@@ -47,16 +47,17 @@ def test_pack_and_unpack_round_trip_a_tile(write_job):
     tile = plan_tiles(job)[3]
     rng = np.random.default_rng(0)
     arrays = {}
-    for name, dtype, shape in wire.tile_layout(job, tile):
+    schemas = cell_arrays(job)
+    for name, dtype, shape in wire.tile_layout(schemas, tile):
         arrays[name] = (rng.normal(size=shape) * 100).astype(dtype)
     buf = wire.pack([3, 42], [arrays[n] for n in array_names(job)])
     assert buf.dtype == np.uint8 and buf[:16].view(np.int64).tolist() == [3, 42]
-    back = wire.unpack(job, tile, buf[16:])
+    back = wire.unpack(schemas, tile, buf[16:])
     for name, values in arrays.items():
         assert back[name].dtype == values.dtype
         np.testing.assert_array_equal(back[name], values)
     with pytest.raises(CamparError, match="bytes received"):
-        wire.unpack(job, tile, buf[17:])
+        wire.unpack(schemas, tile, buf[17:])
 
 
 def test_serial_run_equals_tiles_computed_directly(write_job):
