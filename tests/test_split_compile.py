@@ -33,16 +33,19 @@ COLD_POINT = textwrap.dedent("""
         return forked[-1]
     split_compile.start_helper = start_helper
     result = simulate_point(3.0, mu_cn=0.75, multipliers=True)
-    primed = [analysis.add_step_stats, analysis.assess_revolution, analysis.window_stats,
-              analysis.repeat_period, analysis.distinct_period, analysis.stable_subperiod,
-              analysis.cycle_jacobian, analysis.near_unit_circle, analysis.multipliers_of,
-              analysis.spectral_radius, analysis.slow_cycle_nearby, analysis.nonperiodic_kind,
-              analysis.stretch_tangent, integrator.step_error, integrator.dense_eval]
+    chain_side = [analysis.assess_revolution, analysis.window_stats, analysis.repeat_period,
+                  analysis.distinct_period, analysis.stable_subperiod, analysis.cycle_jacobian,
+                  analysis.near_unit_circle, analysis.multipliers_of, analysis.spectral_radius,
+                  analysis.slow_cycle_nearby, analysis.nonperiodic_kind, analysis.stretch_tangent]
+    revolution_side = [analysis.add_step_stats, integrator.step_error, integrator.dense_eval,
+                       integrator.advance]
     stats = revolution.run_revolution.stats
     print(json.dumps({
         "forked": [pid is not None for pid in forked],
         "hits": sum(stats.cache_hits.values()), "misses": sum(stats.cache_misses.values()),
-        "signatures": {d.py_func.__name__: len(d.signatures) for d in primed},
+        "revolutions": len(revolution.run_revolution.signatures),
+        "chain_side": {d.py_func.__name__: len(d.signatures) for d in chain_side},
+        "revolution_side": {d.py_func.__name__: len(d.signatures) for d in revolution_side},
         # a DOP853 job's kernel has no other stepper (integrator.method_tag)
         "other_steppers": len(integrator.rk4_step.signatures + integrator.error_norm.signatures),
         "result": result.to_dict(),
@@ -63,11 +66,13 @@ def test_split_compile_loads_the_helpers_revolution_and_matches_a_serial_compile
     split = cold_point("split", tmp_path / "split")
     serial = cold_point("serial", tmp_path / "serial")
     assert split["forked"] == [True] and serial["forked"] == []
-    # the chain loaded run_revolution from the helper's cache entry, compiled no variant
-    assert (split["hits"], split["misses"]) == (1, 0)
-    assert (serial["hits"], serial["misses"]) == (0, 1)
-    # each primed function compiled once: the chain used the primer's signature
-    assert set(split["signatures"].values()) == {1}, split["signatures"]
+    # this process loaded run_revolution from the helper's cache entry and compiled nothing
+    # under it: the chain calls it through its address and links none of its code
+    assert (split["hits"], split["misses"], split["revolutions"]) == (1, 0, 1)
+    assert set(split["revolution_side"].values()) == {0}, split["revolution_side"]
+    assert (serial["hits"], serial["misses"], serial["revolutions"]) == (0, 1, 1)
+    # the chain's classification compiled once per function, in this process
+    assert set(split["chain_side"].values()) == {1}, split["chain_side"]
     assert split["result"] == serial["result"]
     # the serial compile typed the whole kernel in this process: DP5(4)'s error estimate and
     # RK4's step were pruned before typing, never compiled
@@ -82,7 +87,7 @@ def test_no_helper_where_forking_is_unsafe():
     other.start()
     try:
         assert not split_compile.can_fork()
-        assert split_compile.start_helper(solver, settings, job.model.law) is None
+        assert split_compile.start_helper(solver, settings) is None
     finally:
         stop.set()
         other.join()

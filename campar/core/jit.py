@@ -32,7 +32,9 @@ the others through ``through_numba``.
 kernel's entry points (``chain_compiled``, ``trace_compiled``) have their own options.
 """
 
+import contextlib
 import functools
+import gc
 
 from numba import njit
 from numba.core.registry import CPUDispatcher
@@ -63,6 +65,22 @@ def hot(function):
     dispatcher = CompiledCallersOnly(py_func=function, locals={}, targetoptions=options)
     dispatcher.enable_caching()
     return dispatcher
+
+
+@contextlib.contextmanager
+def collector_paused():
+    """Python's cyclic garbage collector off while numba compiles. A cold kernel compile
+    builds millions of objects (types, IR, LLVM wrappers) that live until it ends, and the
+    collector's full passes walk them again and again: a cold ``campar point`` took
+    7.8–8.1 s with it and 6.7–7.0 s without (~48 MB more at its peak), measured with
+    numba 0.68 on this machine. The cycles it leaves are collected once it is back on."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
 
 
 inlined = njit(_nrt=False, inline="always")

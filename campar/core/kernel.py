@@ -60,6 +60,7 @@ from .model import (
     make_params,
 )
 from .revolution import run_revolution, scale_solver_options
+from .revolution_call import call_revolution, revolution_link
 
 # Transient policies.
 CONVERGED = 0  # stop once the section has converged to a cycle (Newton-accelerated)
@@ -145,6 +146,7 @@ class ChainWork(NamedTuple):
     u: np.ndarray  # tangent vector for the Lyapunov exponent
     x_start: np.ndarray  # (2,) the start of the current cell
     prev: np.ndarray  # (3, 2) final states of the last three cells, newest first
+    revolution: np.ndarray  # int64 [address, fingerprint] of run_revolution (revolution_call)
 
 
 def make_chain_work(cs) -> ChainWork:
@@ -166,6 +168,7 @@ def make_chain_work(cs) -> ChainWork:
         u=np.array([1.0, 0.0]),
         x_start=np.empty(2),
         prev=np.empty((3, 2)),
+        revolution=np.zeros(2, dtype=np.int64),  # linked by run_chain
     )
 
 
@@ -179,7 +182,7 @@ def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
     x[0] = cw.xs[k, 0]
     x[1] = cw.xs[k, 1]
     limit = w.counts[0] + w.counts[1] + (step_budget - spend(cw))
-    status = run_revolution(x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit, None)
+    status = call_revolution(cw.revolution, x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit)
     if status != OK:
         return status
     if not (math.isfinite(x[0]) and math.isfinite(x[1])):
@@ -416,8 +419,20 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out):
     as for cell 0. Releases the GIL, so a thread can compute while another one
     talks MPI.
     """
-    chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law_bits(law), x_init, solver, cs, out,
-                   make_chain_work(cs))  # fmt: skip
+    cw = make_chain_work(cs)
+    cw.revolution[:] = revolution_link(solver, cs, cw)
+    chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law_bits(law), x_init, solver, cs, out, cw)
+
+
+def compile_chain(law, x_init, solver, cs, out) -> None:
+    """Compile (or load) the chain for these arguments, then the revolution it calls: in
+    this order a cold chain compiles while a forked helper compiles the revolution
+    (campar.core.split_compile), and waits for it only at the end."""
+    none = np.empty(0)
+    cw = make_chain_work(cs)
+    args = (none, none, none, none, none, law_bits(law), x_init, solver, cs, out, cw)
+    chain_compiled.compile(tuple(typeof(a) for a in args))
+    revolution_link(solver, cs, cw)
 
 
 def chain_loaded(solver) -> bool:

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..core import split_compile
 from ..core.integrator import DOP853, DP54, RK4, SolverOptions, method_tag
+from ..core.jit import collector_paused
 from ..core.jitcache import ensure_fresh_cache
 from ..core.kernel import (
     CONVERGED,
@@ -21,6 +22,7 @@ from ..core.kernel import (
     CellOutputs,
     CellSettings,
     chain_loaded,
+    compile_chain,
     run_chain,
     trace_orbit,
 )
@@ -179,13 +181,11 @@ def compile_kernel(job: Job) -> None:
         return
     settings = cell_settings(job)
     out = allocate_outputs(0, settings.output_bits, job.n_sections)
-    helper = split_compile.start_helper(solver, settings, job.model.law)
-    if helper is not None:
-        split_compile.prime_here(solver, settings, out, job.model.law)
     x_init = np.array([job.initial.y, job.initial.v])
-    none = np.empty(0)
-    run_chain(none, none, none, none, none, job.model.law, x_init, solver, settings, out)
-    split_compile.reap(helper)
+    with collector_paused():
+        helper = split_compile.start_helper(solver, settings)
+        compile_chain(job.model.law, x_init, solver, settings, out)
+        split_compile.reap(helper)
 
 
 def census_of(job: Job, par: dict, state: np.ndarray) -> dict[str, np.ndarray]:

@@ -1,0 +1,98 @@
+"""The chain calls one revolution through its machine-code address, not by name.
+
+numba compiles a callee while it types the caller, and links the callee's code into
+the caller's module, where LLVM optimises it and turns it into machine code again. For
+``run_revolution`` (the integrator, the field and the events under it: ~40 % of the
+kernel's compile) that meant a cold chain compile could not start its own typing past
+the first revolution before the revolution was compiled, and then compiled it twice.
+Called through an address (``call_revolution``), the chain types against the
+revolution's signature alone: it compiles while a forked helper compiles the
+revolution (campar.core.split_compile), and its module holds none of the revolution's
+code. One indirect call a revolution costs nothing measurable (~70 µs a revolution).
+
+The address is a run-time argument (``ChainWork.revolution``), so the chain's cache
+entry holds no address of this process. ``revolution_link`` compiles or loads the
+revolution for the signature the chain calls it with, computed here from the chain's
+arguments; the chain checks a fingerprint of that signature against the one it was
+typed with before its first call and raises if they differ (a drift between the two
+would otherwise call code with the wrong arguments).
+"""
+
+import functools
+import zlib
+
+from numba import typeof, types
+from numba.core import cgutils
+from numba.extending import intrinsic
+
+from .model import make_params
+from .revolution import run_revolution, scale_solver_options
+
+ROW = types.Array(types.float64, 1, "C")  # a row of ChainWork.revs
+
+
+def fingerprint(args) -> int:
+    """A signature's argument types as a number both sides of the call compute alike."""
+    return zlib.crc32(repr(tuple(args)).encode())
+
+
+def revolution_args(solver, cs, cw) -> tuple:
+    """run_revolution's argument types as kernel.step_revolution calls it: the cell's
+    parameters and options are the types make_params and scale_solver_options return for
+    the chain's arguments (float64 parameters, the int64 law), no recorder."""
+    rk4_steps = typeof(cs)[cs._fields.index("rk4_steps")]
+    params = _return_type(make_params, (types.float64,) * 5 + (types.int64,))
+    options = _return_type(scale_solver_options, (typeof(solver), types.float64, rk4_steps))
+    return (typeof(cw.x6), typeof(cw.f6), params, options, typeof(cw.w6), typeof(cw.mode), ROW,
+            types.boolean, types.int64, types.none)  # fmt: skip
+
+
+def _return_type(dispatcher, args: tuple) -> types.Type:
+    """What ``dispatcher`` returns for these argument types (compiled or loaded if need be)."""
+    dispatcher.compile(args)
+    return dispatcher.overloads[args].signature.return_type
+
+
+@functools.cache
+def _link(args: tuple) -> tuple[int, int]:
+    run_revolution.compile(args)
+    compiled = run_revolution.overloads[args]
+    if compiled.signature.return_type != types.int64:
+        raise TypeError(f"run_revolution returns {compiled.signature.return_type}, not int64")
+    address = compiled.library.get_pointer_to_function(compiled.fndesc.llvm_func_name)
+    return address, fingerprint(args)
+
+
+def revolution_link(solver, cs, cw) -> tuple[int, int]:
+    """(address, fingerprint) of run_revolution compiled (or loaded) for this chain's
+    call; what ``ChainWork.revolution`` holds."""
+    return _link(revolution_args(solver, cs, cw))
+
+
+@intrinsic
+def call_revolution(typingctx, link, x, f, p, opt, w, mode, row, want_stats, step_limit):
+    """run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, None) through
+    ``link`` ([address, fingerprint], from revolution_link): its status."""
+    args = (x, f, p, opt, w, mode, row, want_stats, step_limit, types.none)
+    expected = fingerprint(args)
+
+    def codegen(context, builder, signature, llargs):
+        link_array = context.make_array(signature.args[0])(context, builder, llargs[0])
+        address = builder.load(cgutils.gep(builder, link_array.data, 0))
+        linked = builder.load(cgutils.gep(builder, link_array.data, 1))
+        mismatch = builder.icmp_unsigned("!=", linked, linked.type(expected))
+        with cgutils.if_unlikely(builder, mismatch):
+            context.call_conv.return_user_exc(builder, RuntimeError, (
+                "the chain calls run_revolution with other argument types than it was linked "
+                "for (campar.core.revolution_call.revolution_args has drifted from "
+                "kernel.step_revolution)",))  # fmt: skip
+        function_type = context.call_conv.get_function_type(types.int64, args)
+        callee = builder.inttoptr(address, function_type.as_pointer())
+        values = list(llargs[1:]) + [context.get_constant_null(types.none)]
+        status, result = context.call_conv.call_function(builder, callee, types.int64, args,
+                                                         values)  # fmt: skip
+        with cgutils.if_unlikely(builder, status.is_error):
+            context.call_conv.return_status_propagate(builder, status)
+        return result
+
+    return types.int64(link, *args[:-1]), codegen

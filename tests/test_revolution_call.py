@@ -1,0 +1,45 @@
+"""The chain's call of one revolution through its address (campar.core.revolution_call)."""
+
+import numpy as np
+import pytest
+
+from campar.core import revolution
+from campar.core.kernel import chain_compiled, law_bits, make_chain_work
+from campar.core.revolution_call import fingerprint, revolution_args, revolution_link
+from campar.sweep.tile import allocate_outputs, cell_settings, solver_options
+from campar.views.point import point_job
+
+
+def chain_arguments(method="dop853"):
+    job = point_job(omega=3.0, method=method)
+    solver, settings = solver_options(job), cell_settings(job)
+    out = allocate_outputs(1, settings.output_bits, job.n_sections)
+    one = np.ones(1)
+    cells = (np.array([3.0]), 0.2 * one, 0.5 * one, 0.8 * one, 0.8 * one)
+    return cells, solver, settings, out
+
+
+@pytest.mark.parametrize("method", ["dop853", "dp54", "rk4"])
+def test_the_linked_signature_is_the_one_the_chain_calls_with(method):
+    """The chain raises if the fingerprint it was typed with differs from its link's; a
+    run that computes a cell shows that revolution_args matches the call site."""
+    cells, solver, settings, out = chain_arguments(method)
+    cw = make_chain_work(settings)
+    address, print_ = revolution_link(solver, settings, cw)
+    args = revolution_args(solver, settings, cw)
+    assert print_ == fingerprint(args)
+    assert address == revolution_link(solver, settings, cw)[0] != 0
+    assert args in revolution.run_revolution.overloads
+    cw.revolution[:] = address, print_
+    chain_compiled(*cells, law_bits(True), np.zeros(2), solver, settings, out, cw)
+    assert out.status[0] == 0 and out.n[0] >= 1
+
+
+def test_a_chain_linked_for_other_arguments_raises_instead_of_calling():
+    cells, solver, settings, out = chain_arguments()
+    cw = make_chain_work(settings)
+    address, print_ = revolution_link(solver, settings, cw)
+    cw.revolution[:] = address, print_ ^ 1
+    with pytest.raises(RuntimeError, match="other argument types"):
+        chain_compiled(*cells, law_bits(True), np.zeros(2), solver, settings, out, cw)
+    assert out.revolutions[0] == 0  # nothing was computed
