@@ -27,7 +27,7 @@ test afterwards.
 import math
 
 from .codes import CHAOTIC, QUASIPERIODIC, UNCONVERGED
-from .hermite import hermite_extremum, quintic_extremum
+from .hermite import MAXIMUM, MINIMUM, hermite_extremum, quintic_extremum
 from .jit import hot
 
 # Columns of the per-revolution statistics.
@@ -277,10 +277,10 @@ def cubic_extremes(g0, d0, g1, d1):
     """Min and max over [0, 1] of the cubic Hermite model (slopes per unit θ)."""
     lo = min(g0, g1)
     hi = max(g0, g1)
-    th, val = hermite_extremum(g0, d0, g1, d1, True)
+    th, val = hermite_extremum(g0, d0, g1, d1, MINIMUM)
     if th > 0.0:
         lo = min(lo, val)
-    th, val = hermite_extremum(g0, d0, g1, d1, False)
+    th, val = hermite_extremum(g0, d0, g1, d1, MAXIMUM)
     if th > 0.0:
         hi = max(hi, val)
     return lo, hi
@@ -300,12 +300,12 @@ def add_step_stats(row, h, free, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, d
     h2 = h * h
     lo = min(e0, e1)
     hi = max(e0, e1)
-    th, dip = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, True)
+    th, dip = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MINIMUM)
     if th > 0.0:
         lo = min(lo, dip)
         # a local minimum of ε near 0 is where a detachment can appear or vanish
         row[REV_GRAZE] = min(row[REV_GRAZE], abs(dip))
-    th, peak = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, False)
+    th, peak = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MAXIMUM)
     if th > 0.0:
         hi = max(hi, peak)
     row[REV_EPS_MIN] = min(row[REV_EPS_MIN], lo)

@@ -28,7 +28,7 @@ import numpy as np
 
 from . import dop853, entry_steps
 from .codes import NONFINITE, OK, STEP_UNDERFLOW
-from .hermite import hermite_extremum
+from .hermite import MAXIMUM, MINIMUM, hermite_extremum
 from .jit import entry, hot
 
 DP54 = 0
@@ -414,7 +414,7 @@ def first_crossing(rhs, events, step, m):
             fb = g1
             if g0 <= 0.0:
                 # the mode holds only inside the step, if at all: bracket from its peak
-                th, _ = hermite_extremum(g0, d0, g1, d1, False)
+                th, _ = hermite_extremum(g0, d0, g1, d1, MAXIMUM)
                 if th > 0.0:
                     gm = event_value(rhs, events, step, i, th)
                     if gm > 0.0:
@@ -430,7 +430,7 @@ def first_crossing(rhs, events, step, m):
             # the largest excursion of a cubic Hermite basis beyond its end values
             if min(g0, g1) > HERMITE_BOUND * (abs(d0) + abs(d1)):
                 continue
-            th, val = hermite_extremum(g0, d0, g1, d1, True)
+            th, val = hermite_extremum(g0, d0, g1, d1, MINIMUM)
             if th <= 0.0 or val > DIP_MARGIN * min(g0, g1):
                 continue
             # a shallow dip (a grazing contact or detachment) can reach zero between
