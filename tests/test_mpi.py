@@ -4,6 +4,7 @@ Every map is compared with tiles computed directly in the test process, so
 a wrong rank-to-tile bookkeeping, a garbled buffer or a lost tile fails.
 """
 
+import json
 import signal
 import socket
 import subprocess
@@ -232,6 +233,38 @@ def test_a_tile_that_fails_on_two_ranks_ends_the_run_with_where(write_job):
     with read_store(job.store) as reader:
         assert not reader.done[4] and reader.done.sum() >= 1
     assert last_run(job.store)["outcome"] == "failed"
+
+
+COLD_RUN = textwrap.dedent("""
+    import json, sys
+    from campar.core import kernel, revolution
+    from campar.sweep.job import load_job
+    from campar.sweep.runner import run_job
+    from campar.sweep.wire import mpi_world
+
+    run_job(load_job(sys.argv[1]))
+    def compiled(dispatcher):  # [loaded from the cache, compiled here]
+        stats = dispatcher.stats
+        return [sum(stats.cache_hits.values()), sum(stats.cache_misses.values())]
+    print(json.dumps({"rank": mpi_world().Get_rank(), "chain": compiled(kernel.chain_compiled),
+                      "revolution": compiled(revolution.run_revolution)}))
+""")
+
+
+@slow
+def test_ranks_of_a_node_split_a_cold_compile_and_load_each_others_half(write_job, tmp_path):
+    path, job = write_job()
+    env = {**subprocess_env(), "NUMBA_CACHE_DIR": str(tmp_path / "empty cache")}
+    result = subprocess.run([*mpirun(2), sys.executable, "-c", COLD_RUN, str(path)],
+                            capture_output=True, text=True, timeout=300, env=env)  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    ranks = sorted((json.loads(line) for line in result.stdout.splitlines()),
+                   key=lambda r: r["rank"])  # fmt: skip
+    # rank 0 compiled the chain and loaded rank 1's revolution; rank 1 the other way round
+    assert ranks[0]["chain"] == [0, 1] and ranks[0]["revolution"] == [1, 0], ranks
+    assert ranks[1]["chain"] == [1, 0] and ranks[1]["revolution"] == [0, 1], ranks
+    with read_store(job.store) as reader:
+        assert_same_map(reader, job)
 
 
 @slow

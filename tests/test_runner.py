@@ -82,18 +82,19 @@ def test_a_preloading_lane_computes_tiles_as_run_tile_does(write_job, monkeypatc
     _, job = write_job()
     loaded = []
 
-    def load(j):
-        loaded.append(j.name)
+    def load(j, share):
+        loaded.append((j.name, share))
         if load_fails:
             raise RuntimeError("no kernel")
 
     monkeypatch.setattr(runner, "load_kernel", load)
-    lane = runner.ThreadLane(job, "rank 1 on here", preload=True)
+    lane = runner.ThreadLane(job, "rank 1 on here", preload=True, share=(1, 2))
     tile = plan_tiles(job)[2]
     lane.start(tile)
     out = lane.poll(timeout=60.0)
     lane.close()
-    assert loaded == [job.name] and out is not None and out.error is None
+    # the share of a cold compile is handed on (split_compile.share_with_ranks)
+    assert loaded == [(job.name, (1, 2))] and out is not None and out.error is None
     want = run_tile(job, tile)
     for name in array_names(job):
         np.testing.assert_array_equal(out.arrays[name], want[name])

@@ -143,3 +143,18 @@ def test_a_chain_cached_beside_the_sources_leaves_numba_cache_dir_cold(tmp_path)
         assert run.stdout.split() == ["True"]
     finally:
         fake.unlink(missing_ok=True)
+
+
+def test_a_rank_waiting_for_a_half_nobody_compiles_gives_up(monkeypatch):
+    # a signature no rank compiles (a 3-element state): after HELPER_SECONDS the caller
+    # compiles it itself instead of waiting for good
+    from numba import types
+
+    from campar.core.revolution import run_revolution
+
+    monkeypatch.setattr(split_compile, "HELPER_SECONDS", 0.3)
+    never = (types.Array(types.float64, 3, "C"),) * 2
+    started = time.monotonic()
+    split_compile.until_cached(run_revolution, never)
+    assert 0.3 <= time.monotonic() - started < 5
+    assert never not in run_revolution.overloads

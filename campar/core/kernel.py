@@ -428,11 +428,16 @@ def compile_chain(law, x_init, solver, cs, out) -> None:
     """Compile (or load) the chain for these arguments, then the revolution it calls: in
     this order a cold chain compiles while a forked helper compiles the revolution
     (campar.core.split_compile), and waits for it only at the end."""
+    chain_compiled.compile(chain_signature(law, x_init, solver, cs, out))
+    revolution_link(solver, cs, make_chain_work(cs))
+
+
+def chain_signature(law, x_init, solver, cs, out) -> tuple:
+    """chain_compiled's argument types for a chain with these settings."""
     none = np.empty(0)
-    cw = make_chain_work(cs)
-    args = (none, none, none, none, none, law_bits(law), x_init, solver, cs, out, cw)
-    chain_compiled.compile(tuple(typeof(a) for a in args))
-    revolution_link(solver, cs, cw)
+    args = (none, none, none, none, none, law_bits(law), x_init, solver, cs, out,
+            make_chain_work(cs))  # fmt: skip
+    return tuple(typeof(a) for a in args)
 
 
 def chain_loaded(solver) -> bool:

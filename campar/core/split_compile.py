@@ -13,8 +13,11 @@ The helper compiles the signature ``revolution_args`` computes, the one the chai
 linked with, so what it caches is what this process loads (tests/test_split_compile).
 
 Forking is safe only in a process with one thread and without MPI (``campar point``,
-``campar warm-up``, a serial run before its lane starts): MPI ranks compile as before.
-With a warm cache nothing is forked.
+``campar warm-up``, a serial run before its lane starts). MPI ranks on one node that
+share a cache split the same way without a fork (``share_with_ranks``): ranks of even
+index there compile the chain first, those of odd index the revolution, and each then
+waits for the other half to reach the cache and loads it. With a warm cache nothing is
+forked and nobody waits.
 """
 
 import os
@@ -24,11 +27,12 @@ import threading
 import time
 
 from . import jitcache
-from .kernel import make_chain_work
+from .kernel import chain_compiled, make_chain_work
 from .revolution import run_revolution
 from .revolution_call import revolution_args
 
-HELPER_SECONDS = 300.0  # a helper takes ~6 s here; one still running after this is stuck
+HELPER_SECONDS = 300.0  # a helper takes ~5 s here; one still running after this is stuck
+POLL_SECONDS = 0.05  # between looks into the cache for another rank's half
 
 
 def cache_is_cold() -> bool:
@@ -86,3 +90,33 @@ def reap(pid: int | None) -> None:
     if pid is not None and run_revolution.awaiting is not None:
         run_revolution.awaiting = None
         wait_for(pid)
+
+
+def share_with_ranks(share, solver, cs, chain_signature) -> None:
+    """Split a cold compile with the other ranks of this node that share the cache.
+
+    ``share``: (this rank's index, how many) among them (``wire.cache_sharers``), or None.
+    Ranks of odd index compile the revolution here and then wait for the chain; ranks of
+    even index return at once and wait for the revolution where they link the chain to it
+    (``CompiledCallersOnly.awaiting``). The caller compiles the chain next either way:
+    compiled here, or loaded from the cache. Nothing is split for one rank, or when the
+    cache holds a chain already."""
+    if share is None or share[1] < 2 or not cache_is_cold():
+        return
+    args = revolution_args(solver, cs, make_chain_work(cs))
+    if share[0] % 2 == 0:
+        run_revolution.awaiting = lambda: until_cached(run_revolution, args)
+        return
+    run_revolution.compile(args)
+    until_cached(chain_compiled, chain_signature)
+
+
+def until_cached(dispatcher, signature) -> None:
+    """Wait until numba's cache serves ``signature`` to ``dispatcher`` (another rank
+    compiles it), or HELPER_SECONDS: then the caller compiles it here instead. numba
+    writes a cache entry's data before it is read, so a half-written one is not found."""
+    deadline = time.monotonic() + HELPER_SECONDS
+    while dispatcher._cache.load_overload(signature, dispatcher.targetctx) is None:
+        if time.monotonic() > deadline:
+            return
+        time.sleep(POLL_SECONDS)

@@ -56,13 +56,14 @@ from .plan import Tile, auto_tile_rows, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
 from .signals import Signals, early_interruption
 from .store import open_store, read_store, takes_direct_writes
-from .tile import compile_kernel, load_kernel, run_tile
+from .tile import compile_kernel, load_kernel, located_cache_dir, run_tile
 from .wire import (
     BACKOFF_SECONDS,
     TILES_HELD,
     Backoff,
     Outcome,
     Workers,
+    cache_sharers,
     direct_path,
     mpi_world,
     receive_outcome,
@@ -88,10 +89,13 @@ class ThreadLane:
     writing a tile, holding the GIL, or busy with other ranks) — unless ``halted()``
     says a stop signal came: then the next waits for the master to take it back."""
 
-    def __init__(self, job: Job, where: str, preload: bool = False, halted=lambda: False):
-        """With ``preload`` the thread first loads the kernel (``load_kernel``) while the
-        caller waits for the master; tiles queue behind it."""
+    def __init__(self, job: Job, where: str, preload: bool = False, halted=lambda: False,
+                 share=None):  # fmt: skip
+        """With ``preload`` the thread first loads the kernel (``load_kernel``, a cold
+        compile split as ``share`` says) while the caller waits for the master; tiles
+        queue behind it."""
         self.job, self.where, self.preload, self.halted = job, where, preload, halted
+        self.share = share
         self.held: list[int] = []  # tiles started or queued, not yet reported, in order
         self.seconds = 0.0
         self.shortest_tile = float("inf")  # seconds, of the tiles it reported
@@ -149,7 +153,7 @@ class ThreadLane:
     def _loop(self):
         try:
             if self.preload:
-                load_kernel(self.job)
+                load_kernel(self.job, self.share)
         except Exception:  # the first tile meets the same error and reports it
             log.debug("loading the kernel ahead failed", exc_info=True)
         while (tile := self._next()) is not None:
@@ -380,6 +384,7 @@ def run_job(
             job = job.with_tile_rows(agreed_tile_rows(job, path, comm, overwrite))
             check_budget(job, max_store=max_store, max_memory=max_memory)
         where = f"on {socket.gethostname()}"
+        share = None if comm is None else cache_sharers(comm, str(located_cache_dir()))
 
         def halted() -> bool:  # a lane starts no tile once a stop signal came
             return signals.count > 0
@@ -387,7 +392,7 @@ def run_job(
         if comm is not None and comm.Get_rank() > 0:
             # The worker's lane loads the kernel while rank 0 opens the store (~0.3 s each:
             # in rank 0's own process the two would take turns on the GIL).
-            lane = ThreadLane(job, f"rank {comm.Get_rank()} {where}", True, halted)
+            lane = ThreadLane(job, f"rank {comm.Get_rank()} {where}", True, halted, share)
             direct = receive_outcome(comm)  # of opening the store: where to write, if at all
             work(comm, job, signals, lane, direct)
             receive_outcome(comm)  # of the run
@@ -395,10 +400,11 @@ def run_job(
         # Compiled (or loaded) before the store opens and before the lane's thread starts:
         # a serial process then has one thread (zarr starts one of its own when the store
         # opens), so a cold compile may fork a helper (campar.core.split_compile); under MPI
-        # the workers load theirs meanwhile, and rank 0's first tile runs at full speed (its
+        # the workers load theirs meanwhile (a cold compile split between the ranks of a
+        # node, ``share``), and rank 0's first tile runs at full speed (its
         # lane loading inside it was 0.22 s of a 7.4 s plane). A store with nothing pending
         # then has loaded the kernel for nothing (~0.3 s; a compile if the cache is cold).
-        compile_kernel(job)
+        compile_kernel(job, share)
         lane = ThreadLane(job, f"rank 0 {where}", halted=halted)
         opened = {}
         with share_outcome(comm, opened):

@@ -11,7 +11,7 @@ import numpy as np
 from ..core import split_compile
 from ..core.integrator import DOP853, DP54, RK4, SolverOptions, method_tag
 from ..core.jit import collector_paused
-from ..core.jitcache import ensure_fresh_cache
+from ..core.jitcache import ensure_fresh_cache, located_cache_dir  # noqa: F401 (runner's)
 from ..core.kernel import (
     CONVERGED,
     FIXED,
@@ -22,6 +22,7 @@ from ..core.kernel import (
     CellOutputs,
     CellSettings,
     chain_loaded,
+    chain_signature,
     compile_chain,
     run_chain,
     trace_orbit,
@@ -157,22 +158,25 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     return result
 
 
-def load_kernel(job: Job) -> None:
+def load_kernel(job: Job, share=None) -> None:
     """Bring the job's compiled kernel into this process (numba's on-disk cache, or a
     compile) and compute its chains' starts, as a first tile would: a runner calls it on
     a lane's thread while the store opens, so the first tile starts at full speed
-    (~0.3 s a process, benchmarks/RESULTS.md). A chain of no cells: nothing is computed."""
+    (~0.3 s a process, benchmarks/RESULTS.md). A chain of no cells: nothing is computed.
+    ``share``: as compile_kernel's."""
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
-    compile_kernel(job)
+    compile_kernel(job, share)
     if job.kind != "basin":  # a basin's chains start from its grid of initial states
         chain_starts(job)
 
 
-def compile_kernel(job: Job) -> None:
-    """Load the job's compiled chain, or compile it: on two cores with an empty cache in a
-    process that may fork (campar.core.split_compile), else here. A chain of no cells; at
-    once if this process holds the chain already (a point called again and again)."""
+def compile_kernel(job: Job, share=None) -> None:
+    """Load the job's compiled chain, or compile it: with an empty cache on two cores in a
+    process that may fork, split with the ranks of this node that share the cache
+    (``share``: this rank's index and their number, wire.cache_sharers), else here
+    (campar.core.split_compile). A chain of no cells; at once if this process holds the
+    chain already (a point called again and again)."""
     ensure_fresh_cache()
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
@@ -184,6 +188,8 @@ def compile_kernel(job: Job) -> None:
     x_init = np.array([job.initial.y, job.initial.v])
     with collector_paused():
         helper = split_compile.start_helper(solver, settings)
+        signature = chain_signature(job.model.law, x_init, solver, settings, out)
+        split_compile.share_with_ranks(share, solver, settings, signature)
         compile_chain(job.model.law, x_init, solver, settings, out)
         split_compile.reap(helper)
 

@@ -425,6 +425,21 @@ def mpi_world():
     return MPI.COMM_WORLD if MPI.COMM_WORLD.Get_size() > 1 else None
 
 
+def cache_sharers(comm, cache_dir: str) -> tuple[int, int]:
+    """(this rank's index, their number) among the ranks of its node whose numba cache is
+    ``cache_dir``: one directory on one node, so a cold compile can be split between them
+    (campar.core.split_compile.share_with_ranks). A collective: every rank calls it."""
+    from mpi4py import MPI
+
+    node = comm.Split_type(MPI.COMM_TYPE_SHARED)
+    try:
+        dirs = node.allgather(cache_dir)
+        sharers = [rank for rank, other in enumerate(dirs) if other == cache_dir]
+        return sharers.index(node.Get_rank()), len(sharers)
+    finally:
+        node.Free()
+
+
 SHARED_ERRORS = (
     CamparError, JobError, StoreError, StoreMismatch, StoreLocked, Interrupted, StoreIOError,
     StoreDamaged,
