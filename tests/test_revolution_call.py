@@ -2,9 +2,17 @@
 
 import numpy as np
 import pytest
+from numba import typeof
 
 from campar.core import revolution
-from campar.core.kernel import chain_compiled, law_bits, make_chain_work
+from campar.core.kernel import (
+    chain_compiled,
+    law_bits,
+    make_chain_work,
+    trace_arguments,
+    trace_compiled,
+)
+from campar.core.revolution import make_trace
 from campar.core.revolution_call import fingerprint, revolution_args, revolution_link
 from campar.sweep.tile import allocate_outputs, cell_settings, solver_options
 from campar.views.point import point_job
@@ -25,12 +33,12 @@ def test_the_linked_signature_is_the_one_the_chain_calls_with(method):
     run that computes a cell shows that revolution_args matches the call site."""
     cells, solver, settings, out = chain_arguments(method)
     cw = make_chain_work(settings)
-    address, print_ = revolution_link(solver, settings, cw)
-    args = revolution_args(solver, settings, cw)
-    assert print_ == fingerprint(args)
-    assert address == revolution_link(solver, settings, cw)[0] != 0
+    link = revolution_link(solver, settings, cw.w6)
+    args = revolution_args(solver, settings, cw.w6)
+    assert link[1] == fingerprint(args) and link[0] != 0
+    np.testing.assert_array_equal(revolution_link(solver, settings, cw.w6), link)
     assert args in revolution.run_revolution.overloads
-    cw.revolution[:] = address, print_
+    cw.revolution[:] = link
     chain_compiled(*cells, law_bits(True), np.zeros(2), solver, settings, out, cw)
     assert out.status[0] == 0 and out.n[0] >= 1
 
@@ -38,8 +46,22 @@ def test_the_linked_signature_is_the_one_the_chain_calls_with(method):
 def test_a_chain_linked_for_other_arguments_raises_instead_of_calling():
     cells, solver, settings, out = chain_arguments()
     cw = make_chain_work(settings)
-    address, print_ = revolution_link(solver, settings, cw)
-    cw.revolution[:] = address, print_ ^ 1
+    cw.revolution[:] = revolution_link(solver, settings, cw.w6)
+    cw.revolution[1] ^= 1
     with pytest.raises(RuntimeError, match="other argument types"):
         chain_compiled(*cells, law_bits(True), np.zeros(2), solver, settings, out, cw)
     assert out.revolutions[0] == 0  # nothing was computed
+
+
+def test_the_tracer_links_the_revolution_with_a_recorder_and_checks_it_too():
+    _, solver, settings, _ = chain_arguments()
+    rec = make_trace(100, 10, 1)
+    args = trace_arguments(3.0, 0.2, 0.5, 0.8, 0.8, True, np.zeros(2), solver, settings, 2, rec)
+    link = args[-1]
+    assert link[1] == fingerprint(revolution_args(solver, settings, args[11], typeof(rec)))
+    assert link[1] != revolution_link(solver, settings, args[11])[1]  # the chain's variant
+    status, y, _ = trace_compiled(*args)
+    assert status == 0 and rec.count[0] > 2 and y == rec.samples[rec.count[0] - 1, 1]
+    link[1] ^= 1
+    with pytest.raises(RuntimeError, match="other argument types"):
+        trace_compiled(*args)

@@ -32,7 +32,7 @@ COLD_POINT = textwrap.dedent("""
         forked.append(start(*args))
         return forked[-1]
     split_compile.start_helper = start_helper
-    result = simulate_point(3.0, mu_cn=0.75, multipliers=True)
+    result = simulate_point(3.0, mu_cn=0.75, multipliers=True, trace=True)
     chain_side = [analysis.assess_revolution, analysis.window_stats, analysis.repeat_period,
                   analysis.distinct_period, analysis.stable_subperiod, analysis.cycle_jacobian,
                   analysis.near_unit_circle, analysis.multipliers_of, analysis.spectral_radius,
@@ -49,6 +49,7 @@ COLD_POINT = textwrap.dedent("""
         # a DOP853 job's kernel has no other stepper (integrator.method_tag)
         "other_steppers": len(integrator.rk4_step.signatures + integrator.error_norm.signatures),
         "result": result.to_dict(),
+        "trace": [result.trace.y.tolist(), result.trace.events.tolist()],
     }))
 """)
 
@@ -66,14 +67,15 @@ def test_split_compile_loads_the_helpers_revolution_and_matches_a_serial_compile
     split = cold_point("split", tmp_path / "split")
     serial = cold_point("serial", tmp_path / "serial")
     assert split["forked"] == [True] and serial["forked"] == []
-    # this process loaded run_revolution from the helper's cache entry and compiled nothing
-    # under it: the chain calls it through its address and links none of its code
-    assert (split["hits"], split["misses"], split["revolutions"]) == (1, 0, 1)
+    # this process loaded both revolutions (the chain's, the tracer's with a recorder) from
+    # the helper's cache entries and compiled nothing under them: the chain and the tracer
+    # call them through their addresses and link none of their code
+    assert (split["hits"], split["misses"], split["revolutions"]) == (2, 0, 2)
     assert set(split["revolution_side"].values()) == {0}, split["revolution_side"]
-    assert (serial["hits"], serial["misses"], serial["revolutions"]) == (0, 1, 1)
+    assert (serial["hits"], serial["misses"], serial["revolutions"]) == (0, 2, 2)
     # the chain's classification compiled once per function, in this process
     assert set(split["chain_side"].values()) == {1}, split["chain_side"]
-    assert split["result"] == serial["result"]
+    assert split["result"] == serial["result"] and split["trace"] == serial["trace"]
     # the serial compile typed the whole kernel in this process: DP5(4)'s error estimate and
     # RK4's step were pruned before typing, never compiled
     assert serial["other_steppers"] == 0
@@ -100,7 +102,7 @@ def test_a_stuck_helper_is_killed_and_reaped(monkeypatch):
         time.sleep(60)
         os._exit(0)
     started = time.monotonic()
-    split_compile.wait_for(pid)
+    split_compile.Helper(pid).wait()
     assert time.monotonic() - started < 5
     with pytest.raises(ChildProcessError):  # reaped: no zombie left behind
         os.waitpid(pid, 0)

@@ -43,15 +43,15 @@ from numba.core.registry import CPUDispatcher
 class CompiledCallersOnly(CPUDispatcher):
     """A dispatcher without a Python entry: compiled callers only.
 
-    ``awaiting``: a function to call once before this dispatcher next compiles (the
-    split compile waits there for a helper that puts it into the on-disk cache)."""
+    ``awaiting``: while set, called with the signature before this dispatcher compiles it
+    (the split compile waits there for a helper or another rank that puts it into the
+    on-disk cache)."""
 
     awaiting = None
 
     def compile(self, sig):
         if self.awaiting is not None:
-            wait, self.awaiting = self.awaiting, None
-            wait()
+            self.awaiting(sig)
         return super().compile(sig)
 
     def __call__(self, *args, **kwargs):

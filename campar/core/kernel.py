@@ -59,7 +59,7 @@ from .model import (
     gap,
     make_params,
 )
-from .revolution import run_revolution, scale_solver_options
+from .revolution import make_trace, scale_solver_options
 from .revolution_call import call_revolution, revolution_link
 
 # Transient policies.
@@ -182,7 +182,8 @@ def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
     x[0] = cw.xs[k, 0]
     x[1] = cw.xs[k, 1]
     limit = w.counts[0] + w.counts[1] + (step_budget - spend(cw))
-    status = call_revolution(cw.revolution, x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit)
+    status = call_revolution(cw.revolution, x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit,
+                             None)  # fmt: skip
     if status != OK:
         return status
     if not (math.isfinite(x[0]) and math.isfinite(x[1])):
@@ -420,7 +421,7 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out):
     talks MPI.
     """
     cw = make_chain_work(cs)
-    cw.revolution[:] = revolution_link(solver, cs, cw)
+    cw.revolution[:] = revolution_link(solver, cs, cw.w6)
     chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law_bits(law), x_init, solver, cs, out, cw)
 
 
@@ -428,8 +429,9 @@ def compile_chain(law, x_init, solver, cs, out) -> None:
     """Compile (or load) the chain for these arguments, then the revolution it calls: in
     this order a cold chain compiles while a forked helper compiles the revolution
     (campar.core.split_compile), and waits for it only at the end."""
+    cw = make_chain_work(cs)
     chain_compiled.compile(chain_signature(law, x_init, solver, cs, out))
-    revolution_link(solver, cs, make_chain_work(cs))
+    revolution_link(solver, cs, cw.w6)
 
 
 def chain_signature(law, x_init, solver, cs, out) -> tuple:
@@ -547,17 +549,32 @@ def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions,
     Returns (status, final y, final y'). For figures of a steady orbit: start
     from a cell's final state and trace its period.
     """
-    x = np.array(x0, dtype=np.float64)
+    return trace_compiled(*trace_arguments(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs,
+                                           revolutions, rec))  # fmt: skip
+
+
+def trace_arguments(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions, rec):
+    """trace_compiled's arguments: trace_orbit's, its buffers, the revolution's link."""
     w = make_work(N_STATE, MAX_EVENTS, 0.0)
-    buffers = (np.zeros(N_STATE), np.zeros(2, dtype=np.int64), np.zeros(N_REV_STATS))
-    return trace_compiled(omega, zeta, f0, mu_kn, mu_cn, law_bits(law), x, solver, cs,
-                          revolutions, rec, w, *buffers)  # fmt: skip
+    link = revolution_link(solver, cs, w, typeof(rec))
+    buffers = (w, np.zeros(N_STATE), np.zeros(2, dtype=np.int64), np.zeros(N_REV_STATS))
+    return (float(omega), float(zeta), float(f0), float(mu_kn), float(mu_cn), law_bits(law),
+            np.array(x0, dtype=np.float64), solver, cs, np.int64(revolutions), rec, *buffers,
+            link)  # fmt: skip
+
+
+def compile_tracer(law, solver, cs) -> None:
+    """Compile (or load) the orbit tracer, then the revolution with a recorder it calls."""
+    args = trace_arguments(1.0, 0.2, 0.5, 0.8, 0.8, law, np.zeros(N_STATE), solver, cs, 1,
+                           make_trace(0, 0, 1))  # fmt: skip
+    trace_compiled.compile(tuple(typeof(a) for a in args))
 
 
 @njit(cache=True, _nrt=False)
 def trace_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x, solver, cs, revolutions, rec, w, f,
-                   mode, row):  # fmt: skip
-    """trace_orbit's compiled body: integrates in place on x with the buffers w, f, mode, row."""
+                   mode, row, link):  # fmt: skip
+    """trace_orbit's compiled body: integrates in place on x with the buffers w, f, mode, row;
+    ``link``: revolution_link's for a recorder of rec's type."""
     p = make_params(omega, zeta, f0, mu_kn, mu_cn, law)
     opt = scale_solver_options(solver, omega, cs.rk4_steps)
     mode[0] = RISE
@@ -566,7 +583,7 @@ def trace_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x, solver, cs, revolution
     model.rhs(0.0, x, p, mode, f)
     w.ctrl[CTRL_H] = initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol, 2, 0.1)
     for _ in range(revolutions):
-        status = run_revolution(x, f, p, opt, w, mode, row, False, cs.max_steps, rec)
+        status = call_revolution(link, x, f, p, opt, w, mode, row, False, cs.max_steps, rec)
         if status != OK:
             return status, x[0], x[1]
     return OK, x[0], x[1]

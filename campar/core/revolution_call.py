@@ -1,4 +1,4 @@
-"""The chain calls one revolution through its machine-code address, not by name.
+"""The chain and the orbit tracer call one revolution through its machine-code address.
 
 numba compiles a callee while it types the caller, and links the callee's code into
 the caller's module, where LLVM optimises it and turns it into machine code again. For
@@ -10,17 +10,21 @@ revolution's signature alone: it compiles while a forked helper compiles the
 revolution (campar.core.split_compile), and its module holds none of the revolution's
 code. One indirect call a revolution costs nothing measurable (~70 µs a revolution).
 
-The address is a run-time argument (``ChainWork.revolution``), so the chain's cache
-entry holds no address of this process. ``revolution_link`` compiles or loads the
-revolution for the signature the chain calls it with, computed here from the chain's
-arguments; the chain checks a fingerprint of that signature against the one it was
-typed with before its first call and raises if they differ (a drift between the two
-would otherwise call code with the wrong arguments).
+The orbit tracer (``kernel.trace_compiled``) calls the revolution with a recorder, a
+variant of its own, the same way: a forked helper compiles that variant too.
+
+The address is a run-time argument (``ChainWork.revolution``, the tracer's ``link``), so
+a cached entry holds no address of this process. ``revolution_link`` compiles or loads
+the revolution for the signature the caller calls it with, computed here from the
+caller's arguments; every call checks a fingerprint of that signature against the one
+the caller was typed with and raises if they differ (a drift between the two would
+otherwise call code with the wrong arguments).
 """
 
 import functools
 import zlib
 
+import numpy as np
 from numba import typeof, types
 from numba.core import cgutils
 from numba.extending import intrinsic
@@ -28,7 +32,8 @@ from numba.extending import intrinsic
 from .model import make_params
 from .revolution import run_revolution, scale_solver_options
 
-ROW = types.Array(types.float64, 1, "C")  # a row of ChainWork.revs
+VECTOR = types.Array(types.float64, 1, "C")  # the state, its derivative, a statistics row
+MODE = types.Array(types.int64, 1, "C")
 
 
 def fingerprint(args) -> int:
@@ -36,15 +41,16 @@ def fingerprint(args) -> int:
     return zlib.crc32(repr(tuple(args)).encode())
 
 
-def revolution_args(solver, cs, cw) -> tuple:
-    """run_revolution's argument types as kernel.step_revolution calls it: the cell's
-    parameters and options are the types make_params and scale_solver_options return for
-    the chain's arguments (float64 parameters, the int64 law), no recorder."""
+def revolution_args(solver, cs, work, recorder=types.none) -> tuple:
+    """run_revolution's argument types as the chain (kernel.step_revolution) and the orbit
+    tracer call it, with the step buffers ``work`` and a recorder of type ``recorder``
+    (the chain's: none): the cell's parameters and options are the types make_params and
+    scale_solver_options return for float64 parameters and the int64 law."""
     rk4_steps = typeof(cs)[cs._fields.index("rk4_steps")]
     params = _return_type(make_params, (types.float64,) * 5 + (types.int64,))
     options = _return_type(scale_solver_options, (typeof(solver), types.float64, rk4_steps))
-    return (typeof(cw.x6), typeof(cw.f6), params, options, typeof(cw.w6), typeof(cw.mode), ROW,
-            types.boolean, types.int64, types.none)  # fmt: skip
+    return (VECTOR, VECTOR, params, options, typeof(work), MODE, VECTOR, types.boolean,
+            types.int64, recorder)  # fmt: skip
 
 
 def _return_type(dispatcher, args: tuple) -> types.Type:
@@ -63,17 +69,19 @@ def _link(args: tuple) -> tuple[int, int]:
     return address, fingerprint(args)
 
 
-def revolution_link(solver, cs, cw) -> tuple[int, int]:
-    """(address, fingerprint) of run_revolution compiled (or loaded) for this chain's
-    call; what ``ChainWork.revolution`` holds."""
-    return _link(revolution_args(solver, cs, cw))
+def revolution_link(solver, cs, work, recorder=types.none) -> np.ndarray:
+    """int64 [address, fingerprint] of run_revolution compiled (or loaded) for the call
+    ``revolution_args`` describes: what ``call_revolution`` takes."""
+    return np.array(_link(revolution_args(solver, cs, work, recorder)), dtype=np.int64)
 
 
 @intrinsic
-def call_revolution(typingctx, link, x, f, p, opt, w, mode, row, want_stats, step_limit):
-    """run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, None) through
-    ``link`` ([address, fingerprint], from revolution_link): its status."""
-    args = (x, f, p, opt, w, mode, row, want_stats, step_limit, types.none)
+def call_revolution(typingctx, link, x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
+    """run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec) through
+    ``link`` (revolution_link): its status. Literal arguments are passed as their plain
+    types, the ones revolution_args names."""
+    args = tuple(types.unliteral(a) for a in (x, f, p, opt, w, mode, row, want_stats,
+                                              step_limit, rec))  # fmt: skip
     expected = fingerprint(args)
 
     def codegen(context, builder, signature, llargs):
@@ -83,16 +91,15 @@ def call_revolution(typingctx, link, x, f, p, opt, w, mode, row, want_stats, ste
         mismatch = builder.icmp_unsigned("!=", linked, linked.type(expected))
         with cgutils.if_unlikely(builder, mismatch):
             context.call_conv.return_user_exc(builder, RuntimeError, (
-                "the chain calls run_revolution with other argument types than it was linked "
-                "for (campar.core.revolution_call.revolution_args has drifted from "
-                "kernel.step_revolution)",))  # fmt: skip
+                "run_revolution is called with other argument types than it was linked for "
+                "(campar.core.revolution_call.revolution_args has drifted from the call)",
+            ))  # fmt: skip
         function_type = context.call_conv.get_function_type(types.int64, args)
         callee = builder.inttoptr(address, function_type.as_pointer())
-        values = list(llargs[1:]) + [context.get_constant_null(types.none)]
         status, result = context.call_conv.call_function(builder, callee, types.int64, args,
-                                                         values)  # fmt: skip
+                                                         list(llargs[1:]))  # fmt: skip
         with cgutils.if_unlikely(builder, status.is_error):
             context.call_conv.return_status_propagate(builder, status)
         return result
 
-    return types.int64(link, *args[:-1]), codegen
+    return types.int64(link, *args), codegen

@@ -26,9 +26,11 @@ import sys
 import threading
 import time
 
+from numba import typeof, types
+
 from . import jitcache
 from .kernel import chain_compiled, make_chain_work
-from .revolution import run_revolution
+from .revolution import make_trace, run_revolution
 from .revolution_call import revolution_args
 
 HELPER_SECONDS = 300.0  # a helper takes ~5 s here; one still running after this is stuck
@@ -51,45 +53,76 @@ def can_fork() -> bool:
     return mpi is None or not mpi.Is_initialized()
 
 
-def start_helper(solver, cs) -> int | None:
-    """Fork the helper that compiles one revolution into the cache; its pid, or None
-    (nothing forked) when the cache is warm or forking is unsafe. The caller compiles the
-    chain next, then links it to the revolution, waiting for the helper there."""
+class Helper:
+    """A forked process compiling into numba's cache, seen from the process that forked it."""
+
+    def __init__(self, pid: int):
+        self.pid, self.exited = pid, False
+
+    def running(self) -> bool:
+        if not self.exited and os.waitpid(self.pid, os.WNOHANG) != (0, 0):
+            self.exited = True
+        return not self.exited
+
+    def wait(self) -> None:
+        """Until it exits, or HELPER_SECONDS: a helper that hangs is killed. Its exit status
+        does not matter: whatever is missing from the cache is compiled here."""
+        deadline = time.monotonic() + HELPER_SECONDS
+        while self.running():
+            if time.monotonic() > deadline:
+                self.kill()
+                return
+            time.sleep(0.005)
+
+    def kill(self) -> None:
+        if self.running():
+            os.kill(self.pid, signal.SIGKILL)
+            os.waitpid(self.pid, 0)
+            self.exited = True
+
+
+def start_helper(solver, cs, trace: bool = False) -> Helper | None:
+    """Fork the helper that compiles the revolution into the cache, then with ``trace``
+    its variant with a recorder (the orbit tracer's); None (nothing forked) when the cache
+    is warm or forking is unsafe. The caller compiles the chain (and the tracer) next, then
+    links them to the revolution: it waits there for the helper's cache entries."""
     jitcache.ensure_fresh_cache()
     if not (can_fork() and cache_is_cold()):
         return None
-    cw = make_chain_work(cs)
+    work = make_chain_work(cs).w6
+    recorders = [types.none, typeof(make_trace(0, 0, 1))] if trace else [types.none]
+    signatures = [revolution_args(solver, cs, work, recorder) for recorder in recorders]
     pid = os.fork()
     if pid == 0:  # the helper: compile, then leave without running the parent's exit code
         status = 1
         try:
-            run_revolution.compile(revolution_args(solver, cs, cw))
+            for signature in signatures:
+                run_revolution.compile(signature)
             status = 0
         finally:
             os._exit(status)
 
-    run_revolution.awaiting = lambda: wait_for(pid)
-    return pid
+    helper = Helper(pid)
+    await_revolutions(signatures, helper)
+    return helper
 
 
-def wait_for(pid: int) -> None:
-    """Until the helper exits, or HELPER_SECONDS: a helper that hangs is killed and this
-    process compiles what it did not deliver. Its exit status does not matter either way:
-    whatever is missing from the cache is compiled here."""
-    deadline = time.monotonic() + HELPER_SECONDS
-    while os.waitpid(pid, os.WNOHANG) == (0, 0):
-        if time.monotonic() > deadline:
-            os.kill(pid, signal.SIGKILL)
-            os.waitpid(pid, 0)
-            return
-        time.sleep(0.005)
+def await_revolutions(signatures, helper: Helper | None = None) -> None:
+    """Before this process compiles run_revolution for one of ``signatures`` (those the
+    helper, or another rank, delivers), wait for it in the cache (``until_cached``)."""
+
+    def awaiting(signature):
+        if tuple(signature) in signatures:
+            until_cached(run_revolution, signature, helper)
+
+    run_revolution.awaiting = awaiting
 
 
-def reap(pid: int | None) -> None:
-    """Wait for the helper if linking the revolution did not (it was loaded meanwhile)."""
-    if pid is not None and run_revolution.awaiting is not None:
-        run_revolution.awaiting = None
-        wait_for(pid)
+def reap(helper: Helper | None) -> None:
+    """Stop waiting for cache entries, and for the helper once it has exited."""
+    run_revolution.awaiting = None
+    if helper is not None:
+        helper.wait()
 
 
 def share_with_ranks(share, solver, cs, chain_signature) -> None:
@@ -103,20 +136,25 @@ def share_with_ranks(share, solver, cs, chain_signature) -> None:
     cache holds a chain already."""
     if share is None or share[1] < 2 or not cache_is_cold():
         return
-    args = revolution_args(solver, cs, make_chain_work(cs))
+    revolution = revolution_args(solver, cs, make_chain_work(cs).w6)
     if share[0] % 2 == 0:
-        run_revolution.awaiting = lambda: until_cached(run_revolution, args)
+        await_revolutions([revolution])
         return
-    run_revolution.compile(args)
+    run_revolution.compile(revolution)
     until_cached(chain_compiled, chain_signature)
 
 
-def until_cached(dispatcher, signature) -> None:
-    """Wait until numba's cache serves ``signature`` to ``dispatcher`` (another rank
-    compiles it), or HELPER_SECONDS: then the caller compiles it here instead. numba
-    writes a cache entry's data before it is read, so a half-written one is not found."""
+def until_cached(dispatcher, signature, helper: Helper | None = None) -> None:
+    """Wait until numba's cache serves ``signature`` to ``dispatcher`` (a helper or another
+    rank compiles it), the helper has exited, or HELPER_SECONDS have passed (a helper still
+    running is killed): then the caller compiles what is missing here. numba writes a
+    cache entry's data before its index names it, so a half-written one is not found."""
     deadline = time.monotonic() + HELPER_SECONDS
     while dispatcher._cache.load_overload(signature, dispatcher.targetctx) is None:
+        if helper is not None and not helper.running():
+            return
         if time.monotonic() > deadline:
+            if helper is not None:
+                helper.kill()
             return
         time.sleep(POLL_SECONDS)

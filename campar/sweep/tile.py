@@ -24,6 +24,7 @@ from ..core.kernel import (
     chain_loaded,
     chain_signature,
     compile_chain,
+    compile_tracer,
     run_chain,
     trace_orbit,
 )
@@ -171,12 +172,12 @@ def load_kernel(job: Job, share=None) -> None:
         chain_starts(job)
 
 
-def compile_kernel(job: Job, share=None) -> None:
+def compile_kernel(job: Job, share=None, trace: bool = False) -> None:
     """Load the job's compiled chain, or compile it: with an empty cache on two cores in a
     process that may fork, split with the ranks of this node that share the cache
     (``share``: this rank's index and their number, wire.cache_sharers), else here
-    (campar.core.split_compile). A chain of no cells; at once if this process holds the
-    chain already (a point called again and again)."""
+    (campar.core.split_compile); with ``trace`` the orbit tracer too. A chain of no cells;
+    at once if this process holds the chain already (a point called again and again)."""
     ensure_fresh_cache()
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
@@ -187,10 +188,12 @@ def compile_kernel(job: Job, share=None) -> None:
     out = allocate_outputs(0, settings.output_bits, job.n_sections)
     x_init = np.array([job.initial.y, job.initial.v])
     with collector_paused():
-        helper = split_compile.start_helper(solver, settings)
+        helper = split_compile.start_helper(solver, settings, trace)
         signature = chain_signature(job.model.law, x_init, solver, settings, out)
         split_compile.share_with_ranks(share, solver, settings, signature)
         compile_chain(job.model.law, x_init, solver, settings, out)
+        if trace:
+            compile_tracer(job.model.law, solver, settings)
         split_compile.reap(helper)
 
 
@@ -251,7 +254,7 @@ def warm_up() -> float:
         },
         source="warm-up",
     )
-    compile_kernel(job)
+    compile_kernel(job, trace=True)
     run_tile(job, Tile(0, 0, 1))
     par = chain_parameters(job, 0)
     trace_orbit(

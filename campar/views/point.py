@@ -204,7 +204,7 @@ def simulate_point(
     if lyapunov:
         outputs.append("lyapunov")
     job = point_job(omega=omega, outputs=outputs, **settings)
-    compile_kernel(job)  # on two cores if the cache is empty
+    compile_kernel(job, trace=trace)  # on two cores if the cache is empty
     cell = {name: arr[0, 0] for name, arr in run_tile(job, Tile(0, 0, 1)).items()}
     result = point_result(job, cell)
     if trace and result.kind != KIND_NAMES[Kind.FAILED]:
