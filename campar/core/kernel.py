@@ -7,7 +7,9 @@ No Python objects, no allocation per step; failures are status codes.
 ``run_chain`` and ``trace_orbit`` allocate their buffers in Python and call
 the compiled entry points ``chain_compiled`` and ``trace_compiled``, which
 take only arrays, numbers and named tuples, so numba's on-disk cache serves
-every new process. The field and event functions are handed to
+every new process. Both call one revolution through its address
+(campar.core.revolution_call), so a cold compile splits in two halves
+(campar.core.split_compile). The field and event functions are handed to
 the integrator as ``model.rhs`` (a module attribute): a dispatcher imported by
 name and passed as an argument makes numba refuse to cache the caller
 ("dynamic globals"), measured with numba 0.68.

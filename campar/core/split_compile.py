@@ -6,11 +6,14 @@ through its address (campar.core.revolution_call), so the two halves of the kern
 compile apart: a forked helper compiles one revolution (``run_revolution`` with the
 integrator, the field and the events under it) into numba's on-disk cache while this
 process compiles the chain (the cell's transient and classification); then this
-process waits for the helper (``CompiledCallersOnly.awaiting``) and loads its
-revolution from the cache. Both halves take ~6 s here (benchmarks/RESULTS.md).
+process waits for the helper's cache entry (``CompiledCallersOnly.awaiting``) and loads
+it. Where the command will trace an orbit, the helper compiles the revolution with a
+recorder next, for the tracer. The halves take ~4 and ~5 s here; a cold ``campar point``
+takes ~6 s in all (benchmarks/RESULTS.md).
 
-The helper compiles the signature ``revolution_args`` computes, the one the chain is
-linked with, so what it caches is what this process loads (tests/test_split_compile).
+The helper compiles the signatures ``revolution_args`` computes, those the chain and the
+tracer are linked with, so what it caches is what this process loads
+(tests/test_split_compile).
 
 Forking is safe only in a process with one thread and without MPI (``campar point``,
 ``campar warm-up``, a serial run before its lane starts). MPI ranks on one node that
