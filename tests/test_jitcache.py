@@ -36,3 +36,20 @@ def test_stale_entries_are_cleared_under_numba_cache_dir(tmp_path):
                          text=True, timeout=120)  # fmt: skip
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip() == "ok"
+
+
+def test_every_module_of_the_core_that_numba_compiles_is_in_the_digest():
+    # numba keys a cached function by its own file only: a module compiled into the kernel
+    # (inlined, linked or an intrinsic) but missing from the digest would leave stale code
+    # in the cache after an edit
+    import re
+
+    from campar.core import jitcache
+
+    compiled = {
+        path.stem
+        for path in jitcache.PACKAGE.glob("*.py")
+        if re.search(r"^@(njit|hot|entry|inlined|intrinsic)\b", path.read_text(), re.MULTILINE)
+    }
+    assert compiled, "no compiled module found: the pattern is out of date"
+    assert compiled <= set(jitcache.COMPILED_MODULES), compiled - set(jitcache.COMPILED_MODULES)

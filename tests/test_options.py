@@ -13,7 +13,6 @@ import pytest
 
 from campar.bench.scipy_model import Model, duty_cycle, integrate
 from campar.core.jit import through_numba
-from campar.core.kernel import trace_orbit
 from campar.core.model import (
     LAW_CAM_LITERAL,
     LAW_CLAMP,
@@ -25,6 +24,7 @@ from campar.core.model import (
     make_params,
 )
 from campar.core.revolution import make_trace
+from campar.core.tracer import trace_orbit
 from campar.errors import JobError
 from campar.sweep.job import Job, job_digest
 from campar.sweep.store._cf import global_attrs

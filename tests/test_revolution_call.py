@@ -5,15 +5,10 @@ import pytest
 from numba import typeof
 
 from campar.core import revolution
-from campar.core.kernel import (
-    chain_compiled,
-    law_bits,
-    make_chain_work,
-    trace_arguments,
-    trace_compiled,
-)
+from campar.core.kernel import chain_compiled, law_bits, make_chain_work
 from campar.core.revolution import make_trace
 from campar.core.revolution_call import fingerprint, revolution_args, revolution_link
+from campar.core.tracer import trace_arguments, trace_compiled
 from campar.sweep.tile import allocate_outputs, cell_settings, solver_options
 from campar.views.point import point_job
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from campar.bench.scipy_model import Model, integrate
-from campar.core.kernel import trace_orbit
 from campar.core.revolution import make_trace
+from campar.core.tracer import trace_orbit
 from campar.sweep.tile import cell_settings, solver_options
 from campar.views.point import EVENT_NAMES, point_job
 

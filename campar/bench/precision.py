@@ -27,8 +27,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..core.kernel import trace_orbit
 from ..core.revolution import make_trace
+from ..core.tracer import trace_orbit
 from ..sweep.job import DEFAULT_INTEGRATOR
 from ..sweep.tile import cell_settings, solver_options
 from ..views.point import EVENT_NAMES, point_job, simulate_point

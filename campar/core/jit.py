@@ -29,7 +29,7 @@ function raises TypeError there: Python calls ``entry`` functions, and tests rea
 the others through ``through_numba``.
 
 ``entry`` for the few ``hot``-like functions Python calls (the buffers' set-up); the
-kernel's entry points (``chain_compiled``, ``trace_compiled``) have their own options.
+kernel's entry points (``kernel.chain_compiled``, ``tracer.trace_compiled``) have their own options.
 """
 
 import contextlib

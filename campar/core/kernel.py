@@ -1,12 +1,12 @@
-"""The compiled kernel: one cell, one continuation chain of cells, one traced orbit.
+"""The compiled kernel: one cell, one continuation chain of cells.
 
 ``run_chain`` is the entry the runners call: it computes a chain of cells in
 order (ω decreasing along the chain in a map), each warm-started from the
 previous cell's final state at θ = 0, and fills preallocated output arrays.
 No Python objects, no allocation per step; failures are status codes.
-``run_chain`` and ``trace_orbit`` allocate their buffers in Python and call
-the compiled entry points ``chain_compiled`` and ``trace_compiled``, which
-take only arrays, numbers and named tuples, so numba's on-disk cache serves
+``run_chain`` (and campar.core.tracer's ``trace_orbit``) allocate their buffers in
+Python and call the compiled entry point ``chain_compiled`` (``trace_compiled``), which
+takes only arrays, numbers and named tuples, so numba's on-disk cache serves
 every new process. Both call one revolution through its address
 (campar.core.revolution_call), so a cold compile splits in two halves
 (campar.core.split_compile). The field and event functions are handed to
@@ -61,7 +61,7 @@ from .model import (
     gap,
     make_params,
 )
-from .revolution import make_trace, scale_solver_options
+from .revolution import scale_solver_options
 from .revolution_call import call_revolution, revolution_link
 
 # Transient policies.
@@ -542,50 +542,3 @@ def extrapolation_order(prev, streak):
 @hot
 def close(a, b):
     return abs(a[0] - b[0]) + abs(a[1] - b[1]) < EXTRAPOLATE_MAX
-
-
-def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions, rec):
-    """Integrate ``revolutions`` revolutions from x0 (at θ = 0), recording into rec
-    (``law`` as run_chain's).
-
-    Returns (status, final y, final y'). For figures of a steady orbit: start
-    from a cell's final state and trace its period.
-    """
-    return trace_compiled(*trace_arguments(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs,
-                                           revolutions, rec))  # fmt: skip
-
-
-def trace_arguments(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions, rec):
-    """trace_compiled's arguments: trace_orbit's, its buffers, the revolution's link."""
-    w = make_work(N_STATE, MAX_EVENTS, 0.0)
-    link = revolution_link(solver, cs, w, typeof(rec))
-    buffers = (w, np.zeros(N_STATE), np.zeros(2, dtype=np.int64), np.zeros(N_REV_STATS))
-    return (float(omega), float(zeta), float(f0), float(mu_kn), float(mu_cn), law_bits(law),
-            np.array(x0, dtype=np.float64), solver, cs, np.int64(revolutions), rec, *buffers,
-            link)  # fmt: skip
-
-
-def compile_tracer(law, solver, cs) -> None:
-    """Compile (or load) the orbit tracer, then the revolution with a recorder it calls."""
-    args = trace_arguments(1.0, 0.2, 0.5, 0.8, 0.8, law, np.zeros(N_STATE), solver, cs, 1,
-                           make_trace(0, 0, 1))  # fmt: skip
-    trace_compiled.compile(tuple(typeof(a) for a in args))
-
-
-@njit(cache=True, _nrt=False)
-def trace_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x, solver, cs, revolutions, rec, w, f,
-                   mode, row, link):  # fmt: skip
-    """trace_orbit's compiled body: integrates in place on x with the buffers w, f, mode, row;
-    ``link``: revolution_link's for a recorder of rec's type."""
-    p = make_params(omega, zeta, f0, mu_kn, mu_cn, law)
-    opt = scale_solver_options(solver, omega, cs.rk4_steps)
-    mode[0] = RISE
-    eps, deps = gap(0.0, x, p, mode[0])  # not RISE: numba would compile a variant for the literal
-    mode[1] = contact_mode(eps, deps, p)
-    model.rhs(0.0, x, p, mode, f)
-    w.ctrl[CTRL_H] = initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol, 2, 0.1)
-    for _ in range(revolutions):
-        status = call_revolution(link, x, f, p, opt, w, mode, row, False, cs.max_steps, rec)
-        if status != OK:
-            return status, x[0], x[1]
-    return OK, x[0], x[1]

@@ -10,7 +10,7 @@ revolution's signature alone: it compiles while a forked helper compiles the
 revolution (campar.core.split_compile), and its module holds none of the revolution's
 code. One indirect call a revolution costs nothing measurable (~70 µs a revolution).
 
-The orbit tracer (``kernel.trace_compiled``) calls the revolution with a recorder, a
+The orbit tracer (``tracer.trace_compiled``) calls the revolution with a recorder, a
 variant of its own, the same way: a forked helper compiles that variant too.
 
 The address is a run-time argument (``ChainWork.revolution``, the tracer's ``link``), so

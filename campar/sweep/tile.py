@@ -24,12 +24,11 @@ from ..core.kernel import (
     chain_loaded,
     chain_signature,
     compile_chain,
-    compile_tracer,
     run_chain,
-    trace_orbit,
 )
 from ..core.model import N_STATE
 from ..core.revolution import make_trace
+from ..core.tracer import compile_tracer, trace_orbit
 from .arrays import array_names, array_spec
 from .job import Job
 from .plan import Tile, chain_order, chain_parameters, first_column_parameters

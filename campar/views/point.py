@@ -10,8 +10,8 @@ import numpy as np
 
 from ..core import model
 from ..core.codes import KIND_NAMES, Flag, Kind, cell_label, status_message
-from ..core.kernel import trace_orbit
 from ..core.revolution import make_trace
+from ..core.tracer import trace_orbit
 from ..errors import JobError
 from ..sweep.job import (
     DEFAULT_CLASSIFY,
