@@ -150,8 +150,9 @@ def share_with_ranks(share, solver, cs, chain_signature) -> None:
 def until_cached(dispatcher, signature, helper: Helper | None = None) -> None:
     """Wait until numba's cache serves ``signature`` to ``dispatcher`` (a helper or another
     rank compiles it), the helper has exited, or HELPER_SECONDS have passed (a helper still
-    running is killed): then the caller compiles what is missing here. numba writes a
-    cache entry's data before its index names it, so a half-written one is not found."""
+    running is killed): then the caller compiles what is missing here. numba names an
+    entry in its index before it writes the entry's data, whole, under a temporary name
+    that it then renames: an entry whose data is not there yet is not found."""
     deadline = time.monotonic() + HELPER_SECONDS
     while dispatcher._cache.load_overload(signature, dispatcher.targetctx) is None:
         if helper is not None and not helper.running():
