@@ -21,7 +21,6 @@ the caller was typed with and raises if they differ (a drift between the two wou
 otherwise call code with the wrong arguments).
 """
 
-import functools
 import zlib
 
 import numpy as np
@@ -59,7 +58,9 @@ def _return_type(dispatcher, args: tuple) -> types.Type:
     return dispatcher.overloads[args].signature.return_type
 
 
-@functools.cache
+_LINKS: dict = {}  # (solver options' type, recorder type) -> (address, fingerprint)
+
+
 def _link(args: tuple) -> tuple[int, int]:
     run_revolution.compile(args)
     compiled = run_revolution.overloads[args]
@@ -71,8 +72,14 @@ def _link(args: tuple) -> tuple[int, int]:
 
 def revolution_link(solver, cs, work, recorder=types.none) -> np.ndarray:
     """int64 [address, fingerprint] of run_revolution compiled (or loaded) for the call
-    ``revolution_args`` describes: what ``call_revolution`` takes."""
-    return np.array(_link(revolution_args(solver, cs, work, recorder)), dtype=np.int64)
+    ``revolution_args`` describes: what ``call_revolution`` takes. Kept by the solver
+    options' type, the one argument type that differs between jobs (kernel.chain_loaded):
+    a chain looks its link up in ~20 µs instead of typing every argument (~160 µs), and
+    the fingerprint every call checks would catch any other argument type changing."""
+    key = (typeof(solver), recorder)
+    if key not in _LINKS:
+        _LINKS[key] = _link(revolution_args(solver, cs, work, recorder))
+    return np.array(_LINKS[key], dtype=np.int64)
 
 
 @intrinsic
