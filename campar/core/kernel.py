@@ -427,13 +427,12 @@ def run_chain(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out):
     chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law_bits(law), x_init, solver, cs, out, cw)
 
 
-def compile_chain(law, x_init, solver, cs, out) -> None:
-    """Compile (or load) the chain for these arguments, then the revolution it calls: in
-    this order a cold chain compiles while a forked helper compiles the revolution
-    (campar.core.split_compile), and waits for it only at the end."""
-    cw = make_chain_work(cs)
-    chain_compiled.compile(chain_signature(law, x_init, solver, cs, out))
-    revolution_link(solver, cs, cw.w6)
+def compile_chain(signature, solver, cs) -> None:
+    """Compile (or load) the chain for ``signature`` (chain_signature), then the revolution
+    it calls: in this order a cold chain compiles while a forked helper compiles the
+    revolution (campar.core.split_compile), and waits for it only at the end."""
+    chain_compiled.compile(signature)
+    revolution_link(solver, cs, make_chain_work(cs).w6)
 
 
 def chain_signature(law, x_init, solver, cs, out) -> tuple:

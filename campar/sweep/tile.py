@@ -190,7 +190,7 @@ def compile_kernel(job: Job, share=None, trace: bool = False) -> None:
         helper = split_compile.start_helper(solver, settings, trace)
         signature = chain_signature(job.model.law, x_init, solver, settings, out)
         split_compile.share_with_ranks(share, solver, settings, signature)
-        compile_chain(job.model.law, x_init, solver, settings, out)
+        compile_chain(signature, solver, settings)
         if trace:
             compile_tracer(job.model.law, solver, settings)
         split_compile.reap(helper)
