@@ -8,7 +8,7 @@ from campar.core import revolution
 from campar.core.kernel import chain_compiled, law_bits, make_chain_work
 from campar.core.revolution import make_trace
 from campar.core.revolution_call import fingerprint, revolution_args, revolution_link
-from campar.core.tracer import trace_arguments, trace_compiled
+from campar.core.tracer import trace_arguments, trace_compiled, tracer_link
 from campar.sweep.tile import allocate_outputs, cell_settings, solver_options
 from campar.views.point import point_job
 
@@ -52,11 +52,11 @@ def test_the_tracer_links_the_revolution_with_a_recorder_and_checks_it_too():
     _, solver, settings, _ = chain_arguments()
     rec = make_trace(100, 10, 1)
     args = trace_arguments(3.0, 0.2, 0.5, 0.8, 0.8, True, np.zeros(2), solver, settings, 2, rec)
-    link = args[-1]
+    link = tracer_link(solver, settings, rec)
     assert link[1] == fingerprint(revolution_args(solver, settings, args[11], typeof(rec)))
     assert link[1] != revolution_link(solver, settings, args[11])[1]  # the chain's variant
-    status, y, _ = trace_compiled(*args)
+    status, y, _ = trace_compiled(*args, link)
     assert status == 0 and rec.count[0] > 2 and y == rec.samples[rec.count[0] - 1, 1]
     link[1] ^= 1
     with pytest.raises(RuntimeError, match="other argument types"):
-        trace_compiled(*args)
+        trace_compiled(*args, link)

@@ -6,7 +6,7 @@ its own, which a forked helper compiles while this process compiles the tracer
 (campar.core.split_compile)."""
 
 import numpy as np
-from numba import njit, typeof
+from numba import njit, typeof, types
 
 from . import model
 from .analysis import N_REV_STATS
@@ -17,6 +17,8 @@ from .model import MAX_EVENTS, N_STATE, RISE, contact_mode, gap, make_params
 from .revolution import make_trace, scale_solver_options
 from .revolution_call import call_revolution, revolution_link
 
+LINK = types.Array(types.int64, 1, "C")  # revolution_link's [address, fingerprint]
+
 
 def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions, rec):
     """Integrate ``revolutions`` revolutions from x0 (at θ = 0), recording into rec
@@ -25,25 +27,33 @@ def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions,
     Returns (status, final y, final y'). For figures of a steady orbit: start
     from a cell's final state and trace its period.
     """
-    return trace_compiled(*trace_arguments(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs,
-                                           revolutions, rec))  # fmt: skip
+    args = trace_arguments(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions, rec)
+    return trace_compiled(*args, tracer_link(solver, cs, rec))
 
 
 def trace_arguments(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions, rec):
-    """trace_compiled's arguments: trace_orbit's, its buffers, the revolution's link."""
-    w = make_work(N_STATE, MAX_EVENTS, 0.0)
-    link = revolution_link(solver, cs, w, typeof(rec))
-    buffers = (w, np.zeros(N_STATE), np.zeros(2, dtype=np.int64), np.zeros(N_REV_STATS))
-    return (float(omega), float(zeta), float(f0), float(mu_kn), float(mu_cn), law_bits(law),
-            np.array(x0, dtype=np.float64), solver, cs, np.int64(revolutions), rec, *buffers,
-            link)  # fmt: skip
+    """trace_compiled's arguments but its last, the revolution's link (tracer_link):
+    trace_orbit's, then the buffers."""
+    buffers = (make_work(N_STATE, MAX_EVENTS, 0.0), np.zeros(N_STATE),
+               np.zeros(2, dtype=np.int64), np.zeros(N_REV_STATS))  # fmt: skip
+    parameters = (float(omega), float(zeta), float(f0), float(mu_kn), float(mu_cn))
+    return (*parameters, law_bits(law), np.array(x0, dtype=np.float64), solver, cs,
+            np.int64(revolutions), rec, *buffers)  # fmt: skip
+
+
+def tracer_link(solver, cs, rec) -> np.ndarray:
+    """The link to the revolution that records into a recorder of rec's type."""
+    return revolution_link(solver, cs, make_work(N_STATE, MAX_EVENTS, 0.0), typeof(rec))
 
 
 def compile_tracer(law, solver, cs) -> None:
-    """Compile (or load) the orbit tracer, then the revolution with a recorder it calls."""
-    args = trace_arguments(1.0, 0.2, 0.5, 0.8, 0.8, law, np.zeros(N_STATE), solver, cs, 1,
-                           make_trace(0, 0, 1))  # fmt: skip
-    trace_compiled.compile(tuple(typeof(a) for a in args))
+    """Compile (or load) the orbit tracer, then link the revolution with a recorder it
+    calls: in this order a cold tracer compiles while a forked helper compiles that
+    revolution (campar.core.split_compile)."""
+    rec = make_trace(0, 0, 1)
+    args = trace_arguments(1.0, 0.2, 0.5, 0.8, 0.8, law, np.zeros(N_STATE), solver, cs, 1, rec)
+    trace_compiled.compile((*(typeof(a) for a in args), LINK))
+    tracer_link(solver, cs, rec)
 
 
 @njit(cache=True, _nrt=False)
