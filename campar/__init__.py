@@ -7,7 +7,8 @@ The package, layer by layer (each may import only the layers above it):
 - ``campar.sweep``: the sweep machinery (job, plan, tile, runner, progress, store);
 - ``campar.views``: one cell, one bifurcation line, and figures;
 - ``campar.paper``: the study of the source paper (claims, figure set, report);
-- ``campar.bench``: ``campar bench``; ``campar.cli``: the ``campar`` command.
+- ``campar.bench``: ``campar bench``; ``campar.cli``: the ``campar`` command, a module
+  per command family.
 
 Importing campar does nothing but define names: the numba cache is checked when
 the kernel is first run (``campar.core.jitcache.ensure_fresh_cache``).
