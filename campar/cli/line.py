@@ -1,7 +1,7 @@
 """``campar line``: bifurcation diagrams along ω."""
 
 from ..errors import JobError
-from .options import add_model_arguments
+from .options import add_model_arguments, model_options, parameter_values, transient_options
 
 
 def add_line(sub):
@@ -48,11 +48,9 @@ def run_line(args) -> int:
     figure_file(args.output)  # before computing
     if args.npz:
         writable_file(args.npz, "arrays")
-    sets = varied_parameters({"f0": args.f0, "mu_kn": args.mu_kn, "mu_cn": args.mu_cn,
-                              "zeta": args.zeta})  # fmt: skip
-    jobs = [line_job(args.omega, args.points, tensile=args.tensile, sections=args.sections,
-                     transient=args.transient, revolutions=args.revolutions, **params)
-            for params in sets]  # fmt: skip
+    options = {**model_options(args), **transient_options(args), "sections": args.sections}
+    jobs = [line_job(args.omega, args.points, **options, **params)
+            for params in varied_parameters(parameter_values(args))]  # fmt: skip
     start = time.perf_counter()
     lines = compute_lines(jobs)
     seconds = time.perf_counter() - start

@@ -1,7 +1,13 @@
 """``campar point``: one cell, its classification, its attractors."""
 
 from ..errors import JobError
-from .options import add_law_options, add_model_arguments
+from .options import (
+    add_model_arguments,
+    model_flags,
+    model_options,
+    parameter_values,
+    transient_options,
+)
 
 
 def add_point(sub):
@@ -10,7 +16,6 @@ def add_point(sub):
     p = sub.add_parser("point", help="simulate one cell and classify its steady motion")
     p.add_argument("--omega", type=float, required=True, help="cam speed / natural frequency")
     add_model_arguments(p)
-    add_law_options(p)
     p.add_argument("--y0", type=float, default=DEFAULT_INITIAL.y, help="initial y at θ = 0")
     p.add_argument("--v0", type=float, default=DEFAULT_INITIAL.v, help="initial y' at θ = 0")
     rtol, method = DEFAULT_INTEGRATOR.rtol, DEFAULT_INTEGRATOR.method
@@ -27,12 +32,11 @@ def add_point(sub):
     p.set_defaults(handler=run_point)
 
 
-# Keys of the one-cell job ``campar point`` builds, and the flags that set them.
+# Keys of the one-cell job ``campar point`` builds, and the flags that set them (with the
+# model's, ``model_flags``).
 POINT_FLAGS = {
     "integrator.rtol": "--rtol", "integrator.method": "--method", "initial.y": "--y0",
-    "initial.v": "--v0", "transient.mode": "--transient",
-    "transient.max_revolutions": "--revolutions", "model.tensile": "--tensile",
-    "model.duty_cycle": "--duty-cycle", "model.cam_velocity": "--cam-velocity",
+    "initial.v": "--v0",
 }  # fmt: skip
 
 
@@ -44,7 +48,7 @@ def naming_flags(handler):
             return handler(args)
         except JobError as exc:
             text = str(exc)
-            for key, flag in POINT_FLAGS.items():
+            for key, flag in {**POINT_FLAGS, **model_flags()}.items():
                 text = text.replace(f"point: {key}:", f"{flag}:")
             raise JobError(text) from None
 
@@ -57,12 +61,8 @@ def run_point(args) -> int:
 
     from ..views.point import simulate_point
 
-    if args.revolutions < 1:
-        raise JobError(f"--revolutions must be ≥ 1, got {args.revolutions}")
-    settings = dict(f0=args.f0, mu_kn=args.mu_kn, mu_cn=args.mu_cn, zeta=args.zeta,
-                    tensile=args.tensile, duty_cycle=args.duty_cycle,
-                    cam_velocity=args.cam_velocity, transient=args.transient,
-                    revolutions=args.revolutions, rtol=args.rtol, method=args.method)  # fmt: skip
+    settings = {**parameter_values(args), **model_options(args), **transient_options(args),
+                "rtol": args.rtol, "method": args.method}  # fmt: skip
     if args.attractors is not None:
         return run_attractors(args, settings)
     if args.plot:
