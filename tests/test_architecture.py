@@ -18,7 +18,8 @@ LAYERS = {
     "views": {"core", "sweep", "errors"},
     "paper": {"core", "sweep", "views", "errors"},
     "bench": {"core", "sweep", "views", "errors"},
-    "cli": {"core", "sweep", "views", "paper", "bench", "errors", "__init__"},
+    "api": {"core", "sweep", "views", "errors"},
+    "cli": {"core", "sweep", "views", "paper", "bench", "api", "errors", "__init__"},
 }
 
 

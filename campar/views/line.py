@@ -43,6 +43,7 @@ ROW_PARAMETER = "mu_kn"
 PAPER_START = 6.0  # ω where the paper's continuations start (docs/model.md, sweeps)
 CONTINUATION_STEP = 0.005  # ω step of ``continued_state``: a third of the paper's map step
 DEFAULT_SECTIONS = 64  # σn points kept per non-periodic cell (periodic ones keep n)
+DEFAULT_POINTS = 2000  # ω values of a line (campar line, campar.line)
 LINE_OUTPUTS = ("label", "dc", "eps", "sections", "multipliers")
 
 
