@@ -11,8 +11,10 @@ May import every layer of campar (it is the top one).
 """
 
 import argparse
+import difflib
 import gc
 import os
+import re
 import sys
 
 # Before numpy is imported: one OpenBLAS thread. campar's work runs on its own threads and
@@ -40,8 +42,34 @@ SUBCOMMANDS = [
 ]
 
 
+class CommandParser(argparse.ArgumentParser):
+    """argparse's parser without abbreviated flags (``--mu`` is not ``--mu-kn``: a flag added
+    later would change what an abbreviation means), naming the closest command or flag
+    when one is misspelled."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message):
+        choice = re.match(r"argument \S+: invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:
+            choices = [c.strip("'") for c in choice.group(2).split(", ")]
+            message += did_you_mean(choice.group(1), choices)
+        super().error(message)
+
+
+def did_you_mean(word: str, candidates) -> str:
+    """ " (did you mean --mu-kn?)": the candidates that begin with ``word`` (an abbreviation),
+    else the closest to it; "" if none is close."""
+    candidates = list(candidates)
+    close = [c for c in candidates if c.startswith(word)][:3]
+    close = close or difflib.get_close_matches(word, candidates, n=2, cutoff=0.75)
+    return f" (did you mean {' or '.join(close)}?)" if close else ""
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="campar",
         description="Two-parameter bifurcation maps of the cam–follower impact oscillator.",
     )
@@ -52,6 +80,32 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def parse_arguments(parser: argparse.ArgumentParser, argv) -> argparse.Namespace:
+    """``parser.parse_args``, but an unknown flag is reported by its command's parser (its
+    usage, and the flag it may have meant) instead of the top-level usage."""
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:
+        command = command_parser(parser, args.command)
+        flags = [f for p in nested_parsers(command) for a in p._actions for f in a.option_strings]
+        hints = "".join(did_you_mean(u, flags) for u in unknown if u.startswith("-"))
+        command.error(f"unrecognized arguments: {' '.join(unknown)}{hints}")
+    return args
+
+
+def command_parser(parser: argparse.ArgumentParser, name: str) -> argparse.ArgumentParser:
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    return sub.choices[name]
+
+
+def nested_parsers(parser: argparse.ArgumentParser):
+    """The parser and those of its subcommands (``campar bench NAME``), depth first."""
+    yield parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                yield from nested_parsers(child)
+
+
 def main(argv=None) -> int:
     """The program (``argv`` None: a stop signal after the work is done is ignored), or a
     command from Python (``argv`` a list: the caller's signal handlers are restored)."""
@@ -60,7 +114,7 @@ def main(argv=None) -> int:
     saved = guard_start()  # a stop signal from here on: one line, never a traceback
     command = "campar"
     try:
-        args = build_parser().parse_args(argv)
+        args = parse_arguments(build_parser(), argv)
         command = f"campar {args.command}"
         return int(args.handler(args) or 0)
     except CamparError as exc:

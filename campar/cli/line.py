@@ -5,11 +5,18 @@ from .options import add_model_arguments, model_options, parameter_values, trans
 
 
 def add_line(sub):
-    from ..views.line import DEFAULT_SECTIONS  # cheap: numba loads only to compute
+    from ..views.line import DEFAULT_POINTS, DEFAULT_SECTIONS  # cheap: numba loads only to compute
     from ..views.plot import parse_range  # cheap: matplotlib loads only to draw
 
-    p = sub.add_parser("line", help="bifurcation diagram: σn points y and detachments p "
-                       "against ω (continuation, ω decreasing)")  # fmt: skip
+    p = sub.add_parser(
+        "line",
+        help="bifurcation diagram: σn points y and detachments p against ω (continuation, "
+        "ω decreasing)",
+        description="A bifurcation line: one continuation chain along ω. It starts at the "
+        "larger ω of --omega from rest, (y, y') = (0, 0) at θ = 0, and each next cell "
+        "(ω decreasing) starts from the previous cell's final state, as a row of a map "
+        "does; the same from Python: campar.line.",
+    )
     p.add_argument(
         "--omega",
         metavar="A:B",
@@ -17,7 +24,8 @@ def add_line(sub):
         required=True,
         help="ω range; computed from the larger value down (the paper's direction)",
     )
-    p.add_argument("--points", type=int, default=2000, help="ω values (2000)")
+    p.add_argument("--points", type=int, default=DEFAULT_POINTS,
+                   help=f"ω values ({DEFAULT_POINTS})")  # fmt: skip
     add_model_arguments(p, several=True)
     p.add_argument("--sections", type=int, default=DEFAULT_SECTIONS,
                    help=f"σn points kept per non-periodic cell ({DEFAULT_SECTIONS})")  # fmt: skip
