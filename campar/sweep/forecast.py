@@ -104,6 +104,8 @@ def forecast(
     exists = bool(path) and Path(path).exists()
     if stored is not None:
         state = "holds this job"
+    elif not path:
+        state = "a run refuses a job without one"
     elif not exists:
         state = "new"
     elif overwrite:
