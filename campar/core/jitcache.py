@@ -18,7 +18,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_MODULES = (
     "jit", "codes", "hermite", "dop853", "entry_steps", "model", "integrator", "analysis",
-    "revolution", "revolution_call", "kernel", "tracer",
+    "revolution", "revolution_call", "kernel", "tracer", "shooting",
 )  # fmt: skip
 STAMP = "campar-core.digest"
 
