@@ -43,6 +43,7 @@ ROW_PARAMETER = "mu_kn"
 PAPER_START = 6.0  # ω where the paper's continuations start (docs/model.md, sweeps)
 CONTINUATION_STEP = 0.005  # ω step of ``continued_state``: a third of the paper's map step
 DEFAULT_SECTIONS = 64  # σn points kept per non-periodic cell (periodic ones keep n)
+DEFAULT_POINTS = 2000  # ω values of a line (campar line, campar.line)
 LINE_OUTPUTS = ("label", "dc", "eps", "sections", "multipliers")
 
 
@@ -60,7 +61,7 @@ class BifurcationLine:
     kind: np.ndarray  # (N,) campar.core.codes.Kind codes
     dc: np.ndarray  # (N,) duty cycle
     state: np.ndarray  # (N, 2) final (y, y') at θ = 0 of each cell
-    parameters: dict  # f0, mu_kn, mu_cn, zeta (floats) and tensile
+    parameters: dict  # f0, mu_kn, mu_cn, zeta (floats); tensile, duty_cycle, cam_velocity
     chatter_p: int = DEFAULT_CLASSIFY.chatter_p
     window: int = DEFAULT_CLASSIFY.window_revolutions  # read window (p of non-periodic cells)
     multipliers: np.ndarray | None = None  # (N, 2, 2) (re, im) of both; NaN if not periodic
@@ -114,6 +115,8 @@ def line_job(
     points: int,
     *,
     tensile: str = DEFAULT_MODEL.tensile,
+    duty_cycle: str = DEFAULT_MODEL.duty_cycle,
+    cam_velocity: str = DEFAULT_MODEL.cam_velocity,
     sections: int = DEFAULT_SECTIONS,
     transient: str = DEFAULT_TRANSIENT.mode,
     revolutions: int = DEFAULT_TRANSIENT.max_revolutions,
@@ -125,8 +128,10 @@ def line_job(
     """The one-row job of a line: ``points`` ω values from max(omega) down to min(omega).
 
     ``parameters``: f0, mu_kn, mu_cn, zeta; those not given take the paper's base values.
-    ``sections`` σn points are stored per non-periodic cell (chaos, quasi-periodic
-    clouds); ``transient`` and ``revolutions`` as in a job's ``transient``.
+    ``tensile``, ``duty_cycle``, ``cam_velocity``: the job's ``model:`` section (the force
+    law and its options, docs/model.md). ``sections`` σn points are stored per
+    non-periodic cell (chaos, quasi-periodic clouds); ``transient`` and ``revolutions`` as
+    in a job's ``transient``.
     Raises JobError for a parameter unknown or out of range.
     """
     hi, lo = max(omega), min(omega)
@@ -139,7 +144,7 @@ def line_job(
             ROW_PARAMETER: {"from": row, "to": row, "points": 1},
         },
         "fixed": values,
-        "model": {"tensile": tensile},
+        "model": {"tensile": tensile, "duty_cycle": duty_cycle, "cam_velocity": cam_velocity},
         "initial": {"y": initial[0], "v": initial[1]},
         "integrator": {"rtol": rtol},
         "transient": {"mode": transient, "max_revolutions": revolutions},
@@ -161,7 +166,7 @@ def compute_line(job: Job, *, transitions: bool = True) -> BifurcationLine:
     cells = {name: values[0] for name, values in run_tile(job, Tile(0, 0, 1)).items()}
     parameters = {name: float(job.parameter(name)) for name in ("f0", "mu_cn", "zeta")}
     parameters[ROW_PARAMETER] = float(job.second_values[0])
-    parameters["tensile"] = job.model.tensile
+    parameters.update(job.model.model_dump())  # tensile, duty_cycle, cam_velocity
     line = BifurcationLine(
         omega=job.omega,
         sections=cells["sections"],
