@@ -1,7 +1,7 @@
 """Compile the map kernel with an empty cache on two cores instead of one.
 
-numba compiles in one process, one function after the other: a cold ``campar point``
-compiled for ~12 s on one core while the other idled. The chain calls one revolution
+numba compiles in one process, one function after the other, on one core while the
+other idles. The chain calls one revolution
 through its address (campar.core.revolution_call), so the two halves of the kernel
 compile apart: a forked helper compiles one revolution (``run_revolution`` with the
 integrator, the field and the events under it) into numba's on-disk cache while this
