@@ -18,7 +18,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "numpydoc",
 ]
-source_suffix = {".md": "markdown"}
+source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 exclude_patterns = ["_build", "**/*.yaml"]
 myst_heading_anchors = 3
 myst_enable_extensions = ["dollarmath"]
@@ -28,6 +28,7 @@ numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 # Every documented public object has its parameters, returns and examples.
 numpydoc_validation_checks = {"PR01", "PR02", "PR03", "RT01", "EX01", "SS01"}
+numpydoc_validation_exclude = {r"\.to_dict$", r"\.to_npz$"}
 
 html_theme = "pydata_sphinx_theme"
 html_title = "campar"

@@ -281,6 +281,49 @@ def field_choices(settings: type[Settings], name: str) -> tuple[str, ...]:
 
 
 class Job(Settings):
+    """A validated job: the plane (or the basin) to compute, how, and where to store it.
+
+    Built from a YAML file by :func:`load_job`, or from a mapping by ``Job.from_dict``;
+    frozen, every key explicit once validated. jobs/README.md lists every key, its
+    default and what it means.
+
+    Parameters
+    ----------
+    name : str
+        Letters, digits, ``_ . -``.
+    sweep : dict
+        Two axes: ``omega`` and one parameter (a map), or ``y0`` and ``ydot0`` (a basin),
+        each ``{from, to, points}``.
+    fixed : dict
+        Parameters not swept; those not given take the paper's values.
+    model, initial, integrator, transient, classify : mapping
+        The force law and its options, the start, the stepper, the transient and the
+        classification.
+    outputs : sequence of str
+        What to compute and store besides the label.
+    tiles, chains : mapping
+        The tile size; the chains' start and direction.
+    attractors : mapping or None
+        A census of coexisting attractors at every cell (None: off).
+    store : str or None
+        The result store's path.
+
+    Raises
+    ------
+    pydantic.ValidationError
+        From the constructor; ``Job.from_dict`` and ``load_job`` raise
+        :class:`campar.errors.JobError` naming the key instead.
+
+    Examples
+    --------
+    >>> from campar import Job
+    >>> job = Job.from_dict({"name": "corner", "sweep": {
+    ...     "omega": {"from": 6.0, "to": 5.0, "points": 11},
+    ...     "mu_kn": {"from": 0.95, "to": 0.9, "points": 6}}})
+    >>> job.shape, job.fixed["mu_cn"], job.chains.direction
+    ((6, 11), 0.8, 'down')
+    """
+
     name: Annotated[str, Field(min_length=1, max_length=200, pattern=r"^[A-Za-z0-9_.\-]+$")]
     sweep: dict[str, Axis]
     fixed: dict[str, float] = {}
@@ -581,7 +624,33 @@ UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, 
 
 
 def load_job(path: str | Path) -> Job:
-    """Read and validate a YAML job file."""
+    """Read and validate a YAML job file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The job file (jobs/README.md lists every key and its default).
+
+    Returns
+    -------
+    Job
+        The validated job, every key explicit.
+
+    Raises
+    ------
+    campar.errors.JobError
+        The file cannot be read, is not YAML, repeats a key, or holds an unknown key, a
+        wrong type or a value out of range (the message names it).
+
+    Examples
+    --------
+    >>> import campar
+    >>> job = campar.load_job("jobs/smoke.yaml")
+    >>> job.name, job.second, job.shape
+    ('smoke', 'mu_cn', (24, 40))
+    >>> job.integrator.method, job.integrator.rtol
+    ('dop853', 1e-07)
+    """
     path = Path(path)
     try:
         text = path.read_text()
