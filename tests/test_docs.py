@@ -162,3 +162,24 @@ def test_the_site_builds_without_a_warning(tmp_path):
                           str(tmp_path / "html")], text=True, capture_output=True,
                          timeout=900, env={**os.environ, "PYTHONWARNINGS": "ignore"})  # fmt: skip
     assert run.returncode == 0, run.stderr[-5000:]
+
+
+def test_the_readme_tour_runs_as_shown(example_dir):
+    """The tour after its first command (shown with its output above): the map exists (the
+    fixture ran `campar run jobs/smoke.yaml` there), its plot is drawn, and the Python line
+    prints what the README shows."""
+    lines = (ROOT / "README.md").read_text().splitlines()
+    start = lines.index("$ campar run jobs/smoke.yaml")
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
+    i = start + 1
+    while lines[i] != "```":
+        command, shown = lines[i].removeprefix("$ "), []
+        i += 1
+        while lines[i] != "```" and not lines[i].startswith("$ "):
+            shown.append(lines[i])
+            i += 1
+        run = subprocess.run(command, shell=True, cwd=example_dir, env=env, text=True,
+                             capture_output=True, timeout=300)  # fmt: skip
+        assert run.returncode == 0, f"{command}: {run.stderr}"
+        assert run.stdout.splitlines() == shown, command
+    assert (example_dir / "smoke.png").stat().st_size > 0
