@@ -38,7 +38,11 @@ REV_EPS_MAX = 3
 REV_PN_MAX = 4
 REV_LOG_STRETCH = 5  # growth of the tangent vector (Lyapunov exponent)
 REV_GRAZE = 6  # smallest |ε| at a local minimum of ε: a shallow flight or a near miss
-N_REV_STATS = 7
+# ε at the interior local extremum of ε (minimum or maximum) nearest 0, signed: where it
+# crosses 0 the contact pattern changes (a grazing contact or flight), so a continuation
+# locates grazing as a root of it (campar.continuation)
+REV_TOUCH = 7
+N_REV_STATS = 8
 
 # Longest Newton jump taken on agreeing estimates (assess_revolution).
 TRUSTED_JUMP_MAX = 0.2
@@ -270,6 +274,7 @@ def reset_revolution_stats(row):
     row[REV_PN_MAX] = 0.0
     row[REV_LOG_STRETCH] = 0.0
     row[REV_GRAZE] = math.inf
+    row[REV_TOUCH] = math.inf
 
 
 @hot
@@ -305,9 +310,14 @@ def add_step_stats(row, h, free, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, d
         lo = min(lo, dip)
         # a local minimum of ε near 0 is where a detachment can appear or vanish
         row[REV_GRAZE] = min(row[REV_GRAZE], abs(dip))
+        if abs(dip) < abs(row[REV_TOUCH]):
+            row[REV_TOUCH] = dip
     th, peak = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MAXIMUM)
     if th > 0.0:
         hi = max(hi, peak)
+        # … and a local maximum near 0, where an impact can appear or vanish
+        if abs(peak) < abs(row[REV_TOUCH]):
+            row[REV_TOUCH] = peak
     row[REV_EPS_MIN] = min(row[REV_EPS_MIN], lo)
     row[REV_EPS_MAX] = max(row[REV_EPS_MAX], hi)
     if not free:
