@@ -20,6 +20,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from ..errors import JobError
+from .job_file import UniqueKeyLoader, format_validation_error
 
 PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 # The axes of a basin job: the initial state (y, y') at θ = 0, y along the first
@@ -281,47 +282,19 @@ def field_choices(settings: type[Settings], name: str) -> tuple[str, ...]:
 
 
 class Job(Settings):
-    """A validated job: the plane (or the basin) to compute, how, and where to store it.
-
-    Built from a YAML file by :func:`load_job`, or from a mapping by ``Job.from_dict``;
-    frozen, every key explicit once validated. jobs/README.md lists every key, its
-    default and what it means.
+    """A validated job, frozen, every key explicit: jobs/README.md gives each key's meaning.
 
     Parameters
     ----------
-    name : str
-        Letters, digits, ``_ . -``.
-    sweep : dict
-        Two axes: ``omega`` and one parameter (a map), or ``y0`` and ``ydot0`` (a basin),
-        each ``{from, to, points}``.
-    fixed : dict
-        Parameters not swept; those not given take the paper's values.
-    model, initial, integrator, transient, classify : mapping
-        The force law and its options, the start, the stepper, the transient and the
-        classification.
-    outputs : sequence of str
-        What to compute and store besides the label.
-    tiles, chains : mapping
-        The tile size; the chains' start and direction.
-    attractors : mapping or None
-        A census of coexisting attractors at every cell (None: off).
-    store : str or None
-        The result store's path.
-
-    Raises
-    ------
-    pydantic.ValidationError
-        From the constructor; ``Job.from_dict`` and ``load_job`` raise
-        :class:`campar.errors.JobError` naming the key instead.
+    name, sweep, fixed, model, initial, integrator, transient : the job's sections
+    classify, outputs, tiles, chains, attractors, store : the job's sections
 
     Examples
     --------
-    >>> from campar import Job
-    >>> job = Job.from_dict({"name": "corner", "sweep": {
-    ...     "omega": {"from": 6.0, "to": 5.0, "points": 11},
-    ...     "mu_kn": {"from": 0.95, "to": 0.9, "points": 6}}})
-    >>> job.shape, job.fixed["mu_cn"], job.chains.direction
-    ((6, 11), 0.8, 'down')
+    >>> import campar
+    >>> job = campar.load_job("jobs/smoke.yaml")
+    >>> job.shape, job.fixed["mu_kn"], job.chains.direction
+    ((24, 40), 0.8, 'down')
     """
 
     name: Annotated[str, Field(min_length=1, max_length=200, pattern=r"^[A-Za-z0-9_.\-]+$")]
@@ -552,7 +525,7 @@ class Job(Settings):
         try:
             return cls.model_validate(data)
         except ValidationError as exc:
-            raise JobError(format_validation_error(exc, source)) from None
+            raise JobError(format_validation_error(exc, source, allowed_keys)) from None
 
 
 def job_digest(data: dict) -> str:
@@ -566,27 +539,6 @@ def job_digest(data: dict) -> str:
                          or MODEL_OPTION_DEFAULTS[key] != value}  # fmt: skip
     text = json.dumps(data, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
-
-
-def format_validation_error(exc: ValidationError, source: str) -> str:
-    lines = []
-    for err in exc.errors():
-        where = ".".join(str(part) for part in err["loc"]) or "(top level)"
-        message = err["msg"].removeprefix("Value error, ")
-        if err["type"] == "extra_forbidden":
-            message = f"unknown key; allowed here: {', '.join(allowed_keys(err['loc'][:-1]))}"
-        elif err["type"] == "missing":
-            message = "required key is missing"
-        elif err["type"] in ("model_type", "dict_type"):
-            message = "must be a mapping of keys (key: value, or {key: value})"
-        got = err.get("input")
-        detail = (
-            ""
-            if err["type"] in ("extra_forbidden", "missing") or isinstance(got, dict)
-            else f", got {got!r}"
-        )
-        lines.append(f"{source}: {where}: {message}{detail}")
-    return "\n".join(lines)
 
 
 def allowed_keys(loc: tuple) -> list[str]:
@@ -604,52 +556,29 @@ def allowed_keys(loc: tuple) -> list[str]:
     return [field.alias or name for name, field in node.model_fields.items()]
 
 
-class UniqueKeyLoader(yaml.SafeLoader):
-    """YAML's safe loader, refusing a key given twice in one mapping (YAML requires keys to
-    be unique; PyYAML would keep the last value silently)."""
-
-
-def _unique_mapping(loader: UniqueKeyLoader, node: yaml.MappingNode, deep: bool = False):
-    seen = {}
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        if isinstance(key, typing.Hashable) and key in seen:
-            lines = f"lines {seen[key] + 1} and {key_node.start_mark.line + 1}"
-            raise yaml.YAMLError(f"the key {key!r} is given twice ({lines})")
-        seen[key] = key_node.start_mark.line
-    return loader.construct_mapping(node, deep=deep)
-
-
-UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _unique_mapping)
-
-
 def load_job(path: str | Path) -> Job:
-    """Read and validate a YAML job file.
+    """Read and validate a YAML job file (jobs/README.md: every key and its default).
 
     Parameters
     ----------
     path : str or pathlib.Path
-        The job file (jobs/README.md lists every key and its default).
+        The job file.
 
     Returns
     -------
     Job
-        The validated job, every key explicit.
+        The validated job.
 
     Raises
     ------
     campar.errors.JobError
-        The file cannot be read, is not YAML, repeats a key, or holds an unknown key, a
-        wrong type or a value out of range (the message names it).
+        The file unreadable, not YAML, or a key unknown, repeated, mistyped or out of range.
 
     Examples
     --------
     >>> import campar
-    >>> job = campar.load_job("jobs/smoke.yaml")
-    >>> job.name, job.second, job.shape
-    ('smoke', 'mu_cn', (24, 40))
-    >>> job.integrator.method, job.integrator.rtol
-    ('dop853', 1e-07)
+    >>> campar.load_job("jobs/smoke.yaml").integrator.method
+    'dop853'
     """
     path = Path(path)
     try:
