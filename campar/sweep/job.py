@@ -20,6 +20,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from ..errors import JobError
+from .job_file import UniqueKeyLoader, format_validation_error
 
 PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 # The axes of a basin job: the initial state (y, y') at θ = 0, y along the first
@@ -281,6 +282,21 @@ def field_choices(settings: type[Settings], name: str) -> tuple[str, ...]:
 
 
 class Job(Settings):
+    """A validated job, frozen, every key explicit: jobs/README.md gives each key's meaning.
+
+    Parameters
+    ----------
+    name, sweep, fixed, model, initial, integrator, transient : the job's sections
+    classify, outputs, tiles, chains, attractors, store : the job's sections
+
+    Examples
+    --------
+    >>> import campar
+    >>> job = campar.load_job("jobs/smoke.yaml")
+    >>> job.shape, job.fixed["mu_kn"], job.chains.direction
+    ((24, 40), 0.8, 'down')
+    """
+
     name: Annotated[str, Field(min_length=1, max_length=200, pattern=r"^[A-Za-z0-9_.\-]+$")]
     sweep: dict[str, Axis]
     fixed: dict[str, float] = {}
@@ -509,7 +525,7 @@ class Job(Settings):
         try:
             return cls.model_validate(data)
         except ValidationError as exc:
-            raise JobError(format_validation_error(exc, source)) from None
+            raise JobError(format_validation_error(exc, source, allowed_keys)) from None
 
 
 def job_digest(data: dict) -> str:
@@ -523,27 +539,6 @@ def job_digest(data: dict) -> str:
                          or MODEL_OPTION_DEFAULTS[key] != value}  # fmt: skip
     text = json.dumps(data, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
-
-
-def format_validation_error(exc: ValidationError, source: str) -> str:
-    lines = []
-    for err in exc.errors():
-        where = ".".join(str(part) for part in err["loc"]) or "(top level)"
-        message = err["msg"].removeprefix("Value error, ")
-        if err["type"] == "extra_forbidden":
-            message = f"unknown key; allowed here: {', '.join(allowed_keys(err['loc'][:-1]))}"
-        elif err["type"] == "missing":
-            message = "required key is missing"
-        elif err["type"] in ("model_type", "dict_type"):
-            message = "must be a mapping of keys (key: value, or {key: value})"
-        got = err.get("input")
-        detail = (
-            ""
-            if err["type"] in ("extra_forbidden", "missing") or isinstance(got, dict)
-            else f", got {got!r}"
-        )
-        lines.append(f"{source}: {where}: {message}{detail}")
-    return "\n".join(lines)
 
 
 def allowed_keys(loc: tuple) -> list[str]:
@@ -561,27 +556,30 @@ def allowed_keys(loc: tuple) -> list[str]:
     return [field.alias or name for name, field in node.model_fields.items()]
 
 
-class UniqueKeyLoader(yaml.SafeLoader):
-    """YAML's safe loader, refusing a key given twice in one mapping (YAML requires keys to
-    be unique; PyYAML would keep the last value silently)."""
-
-
-def _unique_mapping(loader: UniqueKeyLoader, node: yaml.MappingNode, deep: bool = False):
-    seen = {}
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        if isinstance(key, typing.Hashable) and key in seen:
-            lines = f"lines {seen[key] + 1} and {key_node.start_mark.line + 1}"
-            raise yaml.YAMLError(f"the key {key!r} is given twice ({lines})")
-        seen[key] = key_node.start_mark.line
-    return loader.construct_mapping(node, deep=deep)
-
-
-UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _unique_mapping)
-
-
 def load_job(path: str | Path) -> Job:
-    """Read and validate a YAML job file."""
+    """Read and validate a YAML job file (jobs/README.md: every key and its default).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The job file.
+
+    Returns
+    -------
+    Job
+        The validated job.
+
+    Raises
+    ------
+    campar.errors.JobError
+        The file unreadable, not YAML, or a key unknown, repeated, mistyped or out of range.
+
+    Examples
+    --------
+    >>> import campar
+    >>> campar.load_job("jobs/smoke.yaml").integrator.method
+    'dop853'
+    """
     path = Path(path)
     try:
         text = path.read_text()

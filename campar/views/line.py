@@ -52,6 +52,40 @@ class BifurcationLine:
     """Cells of one continuation chain, in the order computed (ω decreasing).
 
     Shapes: N = number of ω values, S = σn points stored per cell.
+
+    Parameters
+    ----------
+    omega : numpy.ndarray
+        (N,) cam speeds, decreasing.
+    sections : numpy.ndarray
+        (N, S, 2) σn points (y, y'), NaN-padded.
+    n, p, kind : numpy.ndarray
+        (N,) period, detachments and ``campar.core.codes.Kind`` code of every cell.
+    dc : numpy.ndarray
+        (N,) duty cycle.
+    state : numpy.ndarray
+        (N, 2) final (y, y') at θ = 0 of each cell.
+    parameters : dict
+        f0, μkn, μcn, ζ (floats) and ``tensile``.
+    chatter_p, window : int
+        p from which a label is chattering; the read window in revolutions.
+    multipliers : numpy.ndarray or None
+        (N, 2, 2): (re, im) of both Floquet multipliers; NaN where not periodic.
+    flags : numpy.ndarray or None
+        (N,) ``campar.core.codes.Flag`` bits.
+    eps_min, eps_max : numpy.ndarray or None
+        (N,) extremes of ε over the steady window.
+    transitions : tuple of Transition
+        The typed boundaries between labels (:func:`find_transitions`).
+    job : Job or None
+        The line's job.
+
+    Examples
+    --------
+    >>> from campar.views.line import bifurcation_line
+    >>> line = bifurcation_line((2.0, 4.0), 50, mu_kn=0.91)
+    >>> [label for label, first, last in line.runs()]
+    ['2-1', '2-2', '1-1']
     """
 
     omega: np.ndarray  # (N,) cam speed, decreasing
@@ -127,12 +161,46 @@ def line_job(
 ) -> Job:
     """The one-row job of a line: ``points`` ω values from max(omega) down to min(omega).
 
-    ``parameters``: f0, mu_kn, mu_cn, zeta; those not given take the paper's base values.
-    ``tensile``, ``duty_cycle``, ``cam_velocity``: the job's ``model:`` section (the force
-    law and its options, docs/model.md). ``sections`` σn points are stored per
-    non-periodic cell (chaos, quasi-periodic clouds); ``transient`` and ``revolutions`` as
-    in a job's ``transient``.
-    Raises JobError for a parameter unknown or out of range.
+    Parameters
+    ----------
+    omega : tuple of float
+        The ω range, either order; the chain runs from the larger value down.
+    points : int
+        Number of ω values.
+    tensile, duty_cycle, cam_velocity : str
+        The job's ``model:`` section: the force law (``"clamp"`` or ``"allow"``) and its
+        options (docs/model.md).
+    sections : int
+        σn points stored per non-periodic cell (chaos, quasi-periodic clouds).
+    transient : str
+        ``"converged"`` or ``"fixed"``, as in a job's ``transient.mode``.
+    revolutions : int
+        The transient's budget (converged) or length (fixed).
+    initial : tuple of float
+        The start (y, y') at θ = 0 of the line's first cell.
+    rtol : float
+        The integrator's relative tolerance.
+    name : str
+        The job's name.
+    **parameters : float
+        f0, mu_kn, mu_cn, zeta; those not given take the paper's base values.
+
+    Returns
+    -------
+    Job
+        A validated one-row job with the outputs a line needs.
+
+    Raises
+    ------
+    campar.errors.JobError
+        A parameter unknown or out of range.
+
+    Examples
+    --------
+    >>> from campar.views.line import line_job
+    >>> job = line_job((2.0, 4.0), 50, mu_kn=0.91)
+    >>> float(job.omega[0]), float(job.omega[-1]), job.shape
+    (4.0, 2.0, (1, 50))
     """
     hi, lo = max(omega), min(omega)
     values = with_paper_values(parameters)
@@ -156,8 +224,32 @@ def line_job(
 
 
 def compute_line(job: Job, *, transitions: bool = True) -> BifurcationLine:
-    """Run the chain of a one-row job (``line_job``) and collect its cells; with
-    ``transitions``, type its label boundaries (``campar.views.transitions``)."""
+    """Run the chain of a one-row job (``line_job``) and collect its cells.
+
+    Parameters
+    ----------
+    job : Job
+        A one-row job with the ``sections`` output (:func:`line_job`).
+    transitions : bool
+        Type the line's label boundaries (:func:`campar.views.transitions.find_transitions`).
+
+    Returns
+    -------
+    BifurcationLine
+        The line's cells in the order computed.
+
+    Raises
+    ------
+    ValueError
+        The job has more than one row or no ``sections`` output.
+
+    Examples
+    --------
+    >>> from campar.views.line import compute_line, line_job
+    >>> line = compute_line(line_job((2.0, 4.0), 50, mu_kn=0.91))
+    >>> [(t.type, t.before.label, t.after.label) for t in line.transitions]
+    [('G', '2-1', '2-2'), ('PD', '2-2', '1-1')]
+    """
     if job.shape[0] != 1 or not job.wants("sections"):
         raise ValueError("compute_line needs a one-row job with the 'sections' output")
     from ..sweep.tile import run_tile  # numba loads here: the CLI reads this module's defaults
@@ -188,7 +280,36 @@ def compute_line(job: Job, *, transitions: bool = True) -> BifurcationLine:
 
 
 def bifurcation_line(omega: tuple[float, float], points: int, **options) -> BifurcationLine:
-    """``compute_line(line_job(omega, points, **options))``."""
+    """A bifurcation line along ω with its typed transitions.
+
+    ``compute_line(line_job(omega, points, **options))``.
+
+    Parameters
+    ----------
+    omega : tuple of float
+        The ω range; the chain runs from the larger value down.
+    points : int
+        Number of ω values.
+    **options
+        The keywords of :func:`line_job`.
+
+    Returns
+    -------
+    BifurcationLine
+        The line's cells, labels and transitions.
+
+    Raises
+    ------
+    campar.errors.JobError
+        A parameter unknown or out of range.
+
+    Examples
+    --------
+    >>> from campar.views.line import bifurcation_line
+    >>> line = bifurcation_line((2.0, 4.0), 50, mu_kn=0.91)
+    >>> len(line.omega), line.labels[0], line.labels[-1]
+    (50, '2-1', '1-1')
+    """
     return compute_line(line_job(omega, points, **options))
 
 
