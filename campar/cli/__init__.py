@@ -25,7 +25,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from .. import __version__  # noqa: E402
 from ..errors import CamparError, Interrupted, JobError  # noqa: E402
-from . import line, maps, paper, plot, point, tools  # noqa: E402
+from . import continuation, line, maps, paper, plot, point, tools  # noqa: E402
 
 # The subcommands, in the order ``campar --help`` lists them.
 SUBCOMMANDS = [
@@ -37,6 +37,7 @@ SUBCOMMANDS = [
     tools.add_warm_up,
     tools.add_bench,
     line.add_line,
+    continuation.add_continue,
     paper.add_gallery,
     paper.add_report,
 ]

@@ -29,6 +29,10 @@ def add_point(sub):
     p.add_argument("--attractors", type=int, metavar="K",
                    help="run K starts (rest, --y0/--v0, a spread over a box of (y, y')) "
                    "and list the distinct attractors with basin fractions")  # fmt: skip
+    p.add_argument("--cycle", type=int, metavar="N",
+                   help="solve for the N-cycle by Newton's method on the section map, stable "
+                   "or not, from --y0/--v0 (or, from rest, the simulated cell's end state); "
+                   "its label, multipliers and stability")  # fmt: skip
     p.set_defaults(handler=run_point)
 
 
@@ -65,6 +69,8 @@ def run_point(args) -> int:
                 "rtol": args.rtol, "method": args.method}  # fmt: skip
     if args.attractors is not None:
         return run_attractors(args, settings)
+    if args.cycle is not None:
+        return run_cycle(args, settings)
     if args.plot:
         from ..views.output import figure_file
 
@@ -105,6 +111,41 @@ def run_attractors(args, settings) -> int:
                              lyapunov=args.lyapunov, **settings)  # fmt: skip
     print(json.dumps(census.to_dict()) if args.json else describe_attractors(census))
     return 0
+
+
+def run_cycle(args, settings) -> int:
+    import json
+
+    from ..continuation.orbit import find_cycle
+    from ..views.point import simulate_point
+
+    if args.cycle < 1:
+        raise JobError(f"--cycle must be ≥ 1, got {args.cycle}")
+    if args.plot or args.lyapunov:
+        raise JobError("--cycle reports the cycle's multipliers: without --plot and --lyapunov")
+    guess = (args.y0, args.v0)
+    if guess == (0.0, 0.0):  # from rest: the simulated cell's end state is the guess
+        guess = simulate_point(args.omega, **settings).state
+    model = {name: settings[name] for name in ("tensile", "duty_cycle", "cam_velocity")}
+    parameters = {name: settings[name] for name in ("f0", "mu_kn", "mu_cn", "zeta")}
+    orbit = find_cycle(args.cycle, guess, model=model, omega=args.omega, **parameters)
+    print(json.dumps(orbit.to_dict()) if args.json else format_cycle(orbit))
+    return 0
+
+
+def format_cycle(orbit) -> str:
+    par = ", ".join(f"{k}={v:g}" for k, v in orbit.parameters.items())
+    stability = "stable" if orbit.stable else "unstable"
+    mult = ", ".join(f"{m.real:+.8f}{m.imag:+.8f}j (|λ|={abs(m):.8f})" for m in orbit.multipliers)
+    points = "  ".join(f"({y:.10f}, {v:.10f})" for y, v in orbit.sections)
+    return "\n".join([
+        f"{orbit.label} cycle ({stability}) at {par}",
+        f"  section points: {points}",
+        f"  Floquet multipliers: {mult}",
+        f"  residual |P^n(x) - x| {orbit.residual:.1e} after {orbit.iterations} Newton "
+        f"iterations; duty cycle {orbit.dc:.4f}, ε min {orbit.eps_min:.4f}, "
+        f"ε max {orbit.eps_max:.4f}, Pn max {orbit.pn_max:.4f}",
+    ])  # fmt: skip
 
 
 def format_point(r) -> str:
