@@ -11,6 +11,8 @@ import math
 import time
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from ..continuation.branch import Branch, BranchSettings
 from ..continuation.curves import CURVE_TYPES, BifurcationCurve, continue_curve
 from ..continuation.orbit import PeriodicOrbit, find_cycle
@@ -163,3 +165,118 @@ def describe_continuation(result: ContinuationResult) -> str:
     lines.extend(f"no curve: {failure}" for failure in result.curve_failures)
     lines.append(f"{result.shots} integrations of the section map, {result.seconds:.2f} s")
     return "\n".join(lines)
+
+
+@dataclass
+class LineStructure:
+    """Every branch met along a line: the periodic attractors a simulation finds along it
+    (the seeds), each continued across the window both ways with switching, and the
+    branches found twice dropped.
+
+    branches: the root branches (each with its switched children); seeds: (ω, label) of
+    the cells the branches were started from; line: the simulated line.
+    """
+
+    branches: list[Branch]
+    seeds: list[tuple[float, str]]
+    line: object
+    seconds: float = 0.0
+    shots: int = 0
+
+    def special_points(self):
+        for root in self.branches:
+            for branch in root.walk():
+                for sp in branch.special:
+                    yield branch, sp
+
+    def to_dict(self) -> dict:
+        return {
+            "seeds": [{"omega": w, "label": label} for w, label in self.seeds],
+            "branches": [root.to_dict() for root in self.branches],
+            "special": [{"branch_period": b.n, **sp.to_dict()}
+                        for b, sp in self.special_points()],  # fmt: skip
+            "seconds": self.seconds,
+            "shots": self.shots,
+        }
+
+
+def line_structure(window: tuple[float, float], points: int, fixed: dict, *, switch: int = 3,
+                   census: int = 0, census_points: int = 9, model: dict | None = None,
+                   settings: BranchSettings | None = None,
+                   section_map: SectionMap | None = None) -> LineStructure:  # fmt: skip
+    """The branch structure along ω over ``window`` at the parameters ``fixed``.
+
+    The line is simulated from the window's upper end down (``campar line``, ``points``
+    cells); from the middle cell of every run of one periodic label a cycle is solved for
+    and continued both ways across the window, switching at PD points ``switch`` deep.
+    With ``census`` > 0, the attractors that many starts reach (``find_attractors``) at
+    ``census_points`` speeds spread over the window seed branches too: the attractors
+    the line's path does not visit. A seed whose cycle lies on a branch already computed
+    (its state within 1e-6 of a branch point at the same ω, up to a cyclic shift) starts
+    none.
+    """
+    from .line import compute_line, line_job
+
+    began = time.perf_counter()
+    model = dict(model or {})
+    smap = section_map or SectionMap(model)
+    shots0 = smap.shots
+    others = {k: v for k, v in fixed.items() if k != "omega"}
+    line = compute_line(line_job(window, points, **model, **others), transitions=False)
+    runs, start = [], 0
+    labels = list(line.labels)
+    for i in range(1, len(labels) + 1):
+        if i == len(labels) or labels[i] != labels[start]:
+            if line.kind[start] == 0:
+                runs.append((start, i))
+            start = i
+    candidates = []  # (ω, n, label, state, section points)
+    for a, b in runs:
+        k = (a + b) // 2
+        n = int(line.n[k])
+        candidates.append((float(line.omega[k]), n, labels[k], line.state[k],
+                           line.sections[k, :n]))  # fmt: skip
+    if census:
+        from .attractors import find_attractors
+
+        for omega in np.linspace(max(window), min(window), census_points + 2)[1:-1]:
+            found = find_attractors(float(omega), count=census, **model, **others)
+            for a in found.attractors:
+                if a.kind == "periodic":
+                    r = a.result
+                    candidates.append((float(omega), r.n, r.label, np.array(r.state),
+                                       np.asarray(r.sections)[: r.n]))  # fmt: skip
+    settings = settings or BranchSettings()
+    roots, seeds = [], []
+    for omega, n, label, state, points in candidates:
+        if on_a_branch(roots, omega, points):
+            continue
+        try:
+            orbit = find_cycle(n, state, section_map=smap, omega=omega, **others)
+        except ContinuationError:
+            continue
+        if on_a_branch(roots, omega, orbit.sections):
+            continue
+        seeds.append((omega, label))
+        for direction in (-1.0, 1.0):
+            roots.append(continue_with_switching(orbit, "omega", window, switch,
+                                                 direction=direction, section_map=smap,
+                                                 settings=settings))  # fmt: skip
+    return LineStructure(roots, seeds, line, time.perf_counter() - began, smap.shots - shots0)
+
+
+def on_a_branch(roots: list[Branch], omega: float, points, tol: float = 1e-6) -> bool:
+    """True when the cycle with section ``points`` at ω lies on a computed branch."""
+    n = len(points)
+    for root in roots:
+        for branch in root.walk():
+            if branch.n != n or not len(branch.values):
+                continue
+            close = np.nonzero(np.abs(branch.values - omega) < 0.02)[0]
+            for i in close:
+                # the branch point's cycle at its own ω; compare after a cyclic shift
+                for shift in range(n):
+                    if np.abs(np.roll(branch.sections[i], shift, axis=0) - points).max() < \
+                            max(tol, 50 * abs(branch.values[i] - omega)):  # fmt: skip
+                        return True
+    return False
