@@ -58,27 +58,49 @@ def test_every_api_example_runs_and_prints_what_it_shows(dotted, example_dir, mo
     assert result.attempted > 0 and result.failed == 0, f"{dotted}: {result}"
 
 
-def code_lines(page: Path):
-    """(line number, text) of every line in the page's code blocks (fenced or indented)."""
-    fenced, lines = False, page.read_text().splitlines()
-    for number, line in enumerate(lines, 1):
+def code_blocks(page: Path):
+    """Each code block of the page (fenced or indented): a list of (line number, text)."""
+    blocks, block, fenced = [], [], False
+    for number, line in enumerate(page.read_text().splitlines(), 1):
         if line.lstrip().startswith("```"):
             fenced = not fenced
+        elif fenced or line.startswith("    "):
+            block.append((number, line.strip()))
             continue
-        if fenced or line.startswith("    "):
-            yield number, line.strip()
+        if block:
+            blocks.append(block)
+            block = []
+    return [*blocks, block] if block else blocks
+
+
+def shell_commands(block):
+    """(line number, command) of a code block. Where the block shows a session (`$ `
+    lines), only those are commands, and one shown refused (its output says error) is
+    the error being shown, not a command to accept."""
+    if not any(text.startswith("$ ") for _, text in block):
+        return list(block)
+    commands = []
+    for i, (number, text) in enumerate(block):
+        if not text.startswith("$ "):
+            continue
+        output = []
+        for _, after in block[i + 1 :]:
+            if after.startswith("$ "):
+                break
+            output.append(after)
+        if not any("error" in line for line in output):
+            commands.append((number, text[2:]))
+    return commands
 
 
 def campar_commands(page: Path):
     """(line number, argv after `campar`) of every campar command in the page's code."""
-    for number, line in code_lines(page):
-        line = line.removeprefix("$ ")
-        line = re.sub(r"^(?:\.venv/bin/)?mpirun -n \d+ ", "", line)
-        line = re.sub(r"^\S*/bin/", "", line)  # .venv/bin/campar
-        if not line.startswith("campar "):
-            continue
-        words = shlex.split(line, comments=True)
-        yield number, words[1:]
+    for block in code_blocks(page):
+        for number, line in shell_commands(block):
+            line = re.sub(r"^(?:\.venv/bin/)?mpirun -n \d+ ", "", line)
+            line = re.sub(r"^\S*/bin/", "", line)  # .venv/bin/campar
+            if line.startswith("campar "):
+                yield number, shlex.split(line, comments=True)[1:]
 
 
 def all_commands():
