@@ -120,10 +120,12 @@ def forecast(
 
     Parameters
     ----------
-    job, store, settings, overwrite, max_store, max_memory
+    job, store, settings
         As for ``run``.
     ranks : int
         The MPI ranks the run would have (``tiles.rows: auto`` depends on them).
+    overwrite, max_store, max_memory
+        As for ``run``.
 
     Returns
     -------

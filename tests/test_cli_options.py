@@ -1,6 +1,7 @@
 """One interface everywhere: every option of a job's ``model:`` section is a flag of each
-command that computes cells, from one definition (campar/cli/options.py), and a line's flags
-reach the kernel (checked against the independent SciPy model)."""
+command that computes cells (point, line, continue), from one definition
+(campar/cli/options.py), and a line's flags reach the kernel (checked against the
+independent SciPy model)."""
 
 import argparse
 import json
@@ -12,7 +13,7 @@ from campar.bench.scipy_model import Model, duty_cycle, integrate
 from campar.cli import build_parser, main
 from campar.sweep.job import DEFAULT_MODEL, ModelSettings, field_choices
 
-CELL_COMMANDS = ("point", "line")
+CELL_COMMANDS = ("point", "line", "continue")
 
 
 def subparser(command: str) -> argparse.ArgumentParser:
@@ -41,8 +42,11 @@ def test_the_commands_share_one_definition_of_the_model_flags(command):
     """Same flags, same help text: a flag means the same in every command."""
     mine = {a.dest: (a.option_strings, a.help) for a in subparser(command)._actions}
     point = {a.dest: (a.option_strings, a.help) for a in subparser("point")._actions}
-    for name in (*ModelSettings.model_fields, "transient", "revolutions"):
+    for name in ModelSettings.model_fields:
         assert mine[name] == point[name], name
+    if command == "line":  # a chain's transient too (continue solves for cycles instead)
+        assert (mine["transient"], mine["revolutions"]) == (point["transient"],
+                                                            point["revolutions"])  # fmt: skip
 
 
 def test_a_lines_model_flags_reach_the_kernel(tmp_path):
