@@ -13,6 +13,8 @@ onto the n-cycles (at the PD point closing a period-doubling bubble).
 children, down to ``depth`` doublings: a period-doubling cascade 1 → 2 → 4 → …
 """
 
+import logging
+
 import numpy as np
 
 from ..errors import ContinuationError
@@ -21,9 +23,12 @@ from .orbit import PeriodicOrbit, minimal_period, section_points
 from .section_map import PARAMETER_ORDER, SectionMap
 from .special import PD, SpecialPoint
 
+log = logging.getLogger("campar.continue")
+
 SWITCH_OFFSETS = (1e-3, 4e-3, 1.6e-2)  # δ tried in turn: the doubled branch's first point
-SAME_POINT = 1e-6  # PD points this close in the parameter are one (a bubble's two ends)
+SAME_POINT = 1e-5  # PD points this close in the parameter are one (a bubble's two ends)
 MAX_BRANCHES = 64  # every branch of one cascade, at most
+MAX_PERIOD = 32  # no switching onto cycles longer than this (revolutions)
 
 
 def switch_at_pd(smap: SectionMap, sp: SpecialPoint, window, settings: BranchSettings,
@@ -59,18 +64,22 @@ def switch_at_pd(smap: SectionMap, sp: SpecialPoint, window, settings: BranchSet
 def continue_with_switching(orbit: PeriodicOrbit, parameter: str, window, depth: int, *,
                             direction: float | None = None,
                             section_map: SectionMap | None = None,
-                            settings: BranchSettings | None = None) -> Branch:  # fmt: skip
+                            settings: BranchSettings | None = None,
+                            switched: list | None = None) -> Branch:  # fmt: skip
     """The branch of ``orbit`` and, ``depth`` doublings deep, the branches born at its PD
     points (each a child of the branch it was switched from: ``Branch.children``).
 
-    A PD point where an already computed doubled branch ended (the far end of a
-    period-doubling bubble) is not switched again. Where no doubled branch could be
-    started, the reason is kept in the branch's ``switch_failures``.
+    A PD point is switched once: where a doubled branch was already started, or where one
+    ended (the far end of a period-doubling bubble), it is not switched again. Several
+    calls share that record through ``switched`` (a list of (period, parameter value)).
+    Where no doubled branch could be started, the reason is kept in the branch's
+    ``switch_failures``.
     """
     smap = section_map or SectionMap(orbit.model)
     settings = settings or BranchSettings()
     root = continue_branch(orbit, parameter, window, direction=direction, section_map=smap,
                            settings=settings)  # fmt: skip
+    switched = [] if switched is None else switched
     pending = [(root, depth)]
     count = 1
     while pending:
@@ -78,23 +87,21 @@ def continue_with_switching(orbit: PeriodicOrbit, parameter: str, window, depth:
         if left <= 0:
             continue
         for sp in branch.special:
-            if sp.type != PD or count >= MAX_BRANCHES or closed_by_sibling(branch, sp):
+            if sp.type != PD or count >= MAX_BRANCHES or 2 * sp.n > MAX_PERIOD:
                 continue
+            if any(n == sp.n and abs(v - sp.value) < SAME_POINT for n, v in switched):
+                continue
+            switched.append((sp.n, sp.value))
             try:
                 child = switch_at_pd(smap, sp, window, settings)
             except ContinuationError as exc:
                 branch.switch_failures.append(str(exc))
                 continue
+            if child.returned and len(child.values):
+                switched.append((sp.n, float(child.values[-1])))  # the bubble's other end
+            log.info("%d-cycles switched at %s=%.8f: %d points, %s", child.n, sp.parameter,
+                     sp.value, len(child.values), child.end)  # fmt: skip
             branch.children.append(child)
             count += 1
             pending.append((child, left - 1))
     return root
-
-
-def closed_by_sibling(branch: Branch, sp: SpecialPoint) -> bool:
-    """True when a doubled branch already switched from ``branch`` ended at sp: it went
-    round a period-doubling bubble and returned onto the n-cycles there."""
-    return any(
-        child.returned and abs(child.values[-1] - sp.value) < SAME_POINT
-        for child in branch.children
-    )

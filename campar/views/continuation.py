@@ -193,8 +193,9 @@ class LineStructure:
         return {
             "seeds": [{"omega": w, "label": label} for w, label in self.seeds],
             "branches": [root.to_dict() for root in self.branches],
-            "special": [{"branch_period": b.n, **sp.to_dict()}
-                        for b, sp in self.special_points()],  # fmt: skip
+            "special": [
+                {"branch_period": b.n, **sp.to_dict()} for b, sp in self.special_points()
+            ],  # fmt: skip
             "seconds": self.seconds,
             "shots": self.shots,
         }
@@ -247,7 +248,7 @@ def line_structure(window: tuple[float, float], points: int, fixed: dict, *, swi
                     candidates.append((float(omega), r.n, r.label, np.array(r.state),
                                        np.asarray(r.sections)[: r.n]))  # fmt: skip
     settings = settings or BranchSettings()
-    roots, seeds = [], []
+    roots, seeds, switched = [], [], []
     for omega, n, label, state, points in candidates:
         if on_a_branch(roots, omega, points):
             continue
@@ -261,7 +262,7 @@ def line_structure(window: tuple[float, float], points: int, fixed: dict, *, swi
         for direction in (-1.0, 1.0):
             roots.append(continue_with_switching(orbit, "omega", window, switch,
                                                  direction=direction, section_map=smap,
-                                                 settings=settings))  # fmt: skip
+                                                 settings=settings, switched=switched))  # fmt: skip
     return LineStructure(roots, seeds, line, time.perf_counter() - began, smap.shots - shots0)
 
 
