@@ -22,8 +22,8 @@ the branch.
 
 The branch ends where it leaves the parameter window, reaches ``max_points``, where the
 step falls below ``min_step`` (no point found ahead), where its parameter leaves the
-model's range, or where the orbit's minimal period drops (a doubled branch returning
-onto the branch it was born from).
+model's range, where a doubled branch returns onto the branch it was born from, or where
+it closes on itself (an isola between two folds).
 """
 
 import math
@@ -122,6 +122,7 @@ class Branch:
     switch_failures: list[str] = field(default_factory=list)
     shots: int = 0  # integrations of n revolutions it took
     returned: bool = False  # ended where it returned onto the branch of period n/2
+    closed: bool = False  # a closed loop, ended back at its first point
 
     @property
     def labels(self) -> list[str]:
@@ -178,6 +179,7 @@ class Continuation:
         self.lo, self.hi = sorted(window)
         self.settings = settings or BranchSettings()
         self.returned = False  # the last run ended on the branch of period n/2
+        self.closed = False  # the last run went round a closed loop
 
     # -- points ----------------------------------------------------------------------
     def parameters_at(self, lam: float) -> np.ndarray:
@@ -306,12 +308,26 @@ class Continuation:
                 end = f"left the window at {self.name}={edge:.10g}"
                 break
             points.append(b)
+            if self.closes(points, ds):
+                self.closed = True
+                end = "closed: the branch is a loop, back at its first point"
+                break
             if iterations <= GROW_ITERATIONS:
                 ds = min(1.5 * ds, cfg.max_step)
             elif iterations > GROW_ITERATIONS + 1:
                 ds *= 0.7
         special.sort(key=lambda sp: sp.arclength)
         return points, special, end
+
+    @staticmethod
+    def closes(points: list[BranchPoint], ds: float) -> bool:
+        """True when the last step ended within the step's length of the first point, after
+        the branch had gone farther from it than that (a closed loop, an isola)."""
+        if len(points) < 4:
+            return False
+        first, last = points[0].u, points[-1].u
+        far = max(np.linalg.norm(pt.u - first) for pt in points[1:-1])
+        return far > 4.0 * ds and np.linalg.norm(last - first) <= ds
 
     def halves_between(self, a: BranchPoint, b: BranchPoint) -> bool:
         """True when an even-period branch passes a PD point of the n/2-cycles between a
@@ -549,6 +565,7 @@ def assemble(engine: Continuation, points: list[BranchPoint], special: list[Spec
         origin=origin,
         shots=shots,
         returned=engine.returned,
+        closed=engine.closed,
     )
 
 
