@@ -519,6 +519,15 @@ def continue_branch(orbit: PeriodicOrbit, parameter: str, window: tuple[float, f
     Branch
         Its points, special points (PD, SN, BP, NS, G, located to 1e-10 in the
         parameter) and why it ended.
+
+    Examples
+    --------
+    >>> from campar.continuation.orbit import find_cycle
+    >>> from campar.continuation.branch import continue_branch
+    >>> orbit = find_cycle(1, (0.6, -0.6), omega=4.0, mu_kn=0.91)
+    >>> branch = continue_branch(orbit, "omega", (3.0, 4.0))
+    >>> [(sp.type, round(sp.value, 6)) for sp in branch.special], branch.end
+    ([('PD', 3.542608)], 'left the window at omega=3')
     """
     smap = section_map or SectionMap(orbit.model)
     par = np.array([orbit.parameters[name] for name in PARAMETER_ORDER])

@@ -75,6 +75,15 @@ def continue_with_switching(orbit: PeriodicOrbit, parameter: str, window, depth:
     calls share that record through ``switched`` (a list of (period, parameter value)).
     Where no doubled branch could be started, the reason is kept in the branch's
     ``switch_failures``. No branch of period above ``max_period`` is switched onto.
+
+    Examples
+    --------
+    >>> from campar.continuation.orbit import find_cycle
+    >>> from campar.continuation.switching import continue_with_switching
+    >>> orbit = find_cycle(1, (0.6, -0.6), omega=4.0, mu_kn=0.91)
+    >>> root = continue_with_switching(orbit, "omega", (2.0, 4.0), 1)
+    >>> [(branch.n, branch.returned) for branch in root.walk()]
+    [(1, False), (2, True)]
     """
     smap = section_map or SectionMap(orbit.model)
     settings = settings or BranchSettings()

@@ -86,6 +86,13 @@ def continue_from_cell(parameter: str, span: tuple[float, float], fixed: dict, *
     -------
     ContinuationResult
 
+    Examples
+    --------
+    >>> from campar.views.continuation import continue_from_cell
+    >>> result = continue_from_cell("omega", (6.0, 5.0), {"mu_kn": 0.91})
+    >>> result.start.label, [(sp.type, round(sp.value, 5)) for _, sp in result.special_points()]
+    ('3-1', [('G', 5.46923), ('SN', 5.27333)])
+
     Raises
     ------
     ContinuationError
