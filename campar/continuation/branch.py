@@ -264,6 +264,7 @@ class Continuation:
         special points and why it ended."""
         cfg = self.settings
         points = [start]
+        farthest = 0.0  # from the first point
         special: list[SpecialPoint] = []
         ds = min(cfg.step, cfg.max_step)
         end = f"reached {cfg.max_points} points (max_points)"
@@ -274,8 +275,11 @@ class Continuation:
             b = None
             if found is not None and np.linalg.norm(found[0] - predicted) <= ds:
                 u, shot, iterations = found
-                b = self.point(u, shot, a.tangent, a.s + ds)
-                if np.dot(a.tangent, b.tangent) < math.cos(cfg.max_turn):
+                try:
+                    b = self.point(u, shot, a.tangent, a.s + ds)
+                except ContinuationError:  # the parameter column's integration failed
+                    b = None
+                if b is not None and np.dot(a.tangent, b.tangent) < math.cos(cfg.max_turn):
                     b = None  # turned too sharply: a step this long may jump branches
             if b is None:
                 ds *= 0.5
@@ -308,26 +312,20 @@ class Continuation:
                 end = f"left the window at {self.name}={edge:.10g}"
                 break
             points.append(b)
-            if self.closes(points, ds):
+            # a closed loop (an isola): back within a step of the first point, after having
+            # gone farther from it than four steps
+            distance = float(np.linalg.norm(b.u - start.u))
+            if farthest > 4.0 * ds and distance <= ds:
                 self.closed = True
                 end = "closed: the branch is a loop, back at its first point"
                 break
+            farthest = max(farthest, distance)
             if iterations <= GROW_ITERATIONS:
                 ds = min(1.5 * ds, cfg.max_step)
             elif iterations > GROW_ITERATIONS + 1:
                 ds *= 0.7
         special.sort(key=lambda sp: sp.arclength)
         return points, special, end
-
-    @staticmethod
-    def closes(points: list[BranchPoint], ds: float) -> bool:
-        """True when the last step ended within the step's length of the first point, after
-        the branch had gone farther from it than that (a closed loop, an isola)."""
-        if len(points) < 4:
-            return False
-        first, last = points[0].u, points[-1].u
-        far = max(np.linalg.norm(pt.u - first) for pt in points[1:-1])
-        return far > 4.0 * ds and np.linalg.norm(last - first) <= ds
 
     def halves_between(self, a: BranchPoint, b: BranchPoint) -> bool:
         """True when an even-period branch passes a PD point of the n/2-cycles between a
@@ -386,7 +384,10 @@ class Continuation:
         if found is None:
             return None
         u, shot, _ = found
-        return self.point(u, shot, a.tangent, a.s + ds)
+        try:
+            return self.point(u, shot, a.tangent, a.s + ds)
+        except ContinuationError:
+            return None
 
     # -- special points ---------------------------------------------------------------
     def along(self, a: BranchPoint, s: float) -> BranchPoint | None:
@@ -396,7 +397,10 @@ class Continuation:
         if found is None:
             return None
         u, shot, _ = found
-        return self.point(u, shot, a.tangent, a.s + s)
+        try:
+            return self.point(u, shot, a.tangent, a.s + s)
+        except ContinuationError:
+            return None
 
     def locate(self, a: BranchPoint, b: BranchPoint,
                kind: str) -> tuple[SpecialPoint, BranchPoint] | None:  # fmt: skip
