@@ -11,6 +11,7 @@ Errors name the offending key and what is allowed, e.g.
 import hashlib
 import json
 import math
+import re
 import typing
 from pathlib import Path
 from typing import Annotated, Literal
@@ -65,27 +66,46 @@ def check_parameter(name: str, value: float) -> float:
 
 
 class Settings(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+    # No infinity or NaN in any number of a job: every setting and axis end is finite.
+    model_config = ConfigDict(
+        extra="forbid", frozen=True, populate_by_name=True, allow_inf_nan=False
+    )
 
     @field_validator("*", mode="before")
     @classmethod
     def booleans_are_not_numbers(cls, value, info):
-        """YAML's true/false where a number belongs is a mistake (pydantic reads true as 1)."""
+        """YAML's true/false where a number belongs is a mistake (pydantic reads true as 1),
+        and so is text ("4" quoted): pydantic would read it as the number."""
         annotation = cls.model_fields[info.field_name].annotation
         values = value.values() if isinstance(value, dict) else [value]
         if any(isinstance(v, bool) for v in values) and wants_number(annotation):
             raise ValueError("must be a number, not true or false")
+        if any(isinstance(v, str) for v in values) and wants_number(annotation, text=False):
+            raise ValueError("must be a number, not text (write it without quotes)")
         return value
 
 
-def wants_number(annotation) -> bool:
-    """A field typed int or float (inside Annotated, Optional or a dict's values)."""
+def wants_number(annotation, text: bool = True) -> bool:
+    """A field typed int or float (inside Annotated, Optional or a dict's values); with
+    ``text`` False, only one that takes no text either (``tiles.rows`` takes auto)."""
     if annotation in (int, float):
         return True
     args = typing.get_args(annotation)
     if typing.get_origin(annotation) is dict:
-        return wants_number(args[1])
-    return any(wants_number(a) for a in args if a is not bool)
+        return wants_number(args[1], text)
+    if not text and str in args:
+        return False
+    return any(wants_number(a, text) for a in args if a is not bool)
+
+
+# Bounds of the integers a job may hold: each far beyond any useful setting, and small enough
+# that every count and product of them fits the kernel's 64-bit integers.
+MAX_POINTS = 100_000  # per axis
+MAX_STEPS = 10**12  # integrator steps per cell: at ~1 µs a step, days for one cell
+MAX_COUNT = 1_000_000  # revolutions, jumps and other per-cell counts
+# A basin's starts (y0 in lifts h, ydot0 in h per unit time): a thousand lifts away from the
+# cam is far outside every attractor, and keeps a grid's spacing finite.
+MAX_START = 1e3
 
 
 class Axis(Settings):
@@ -93,7 +113,7 @@ class Axis(Settings):
 
     start: float = Field(alias="from")
     stop: float = Field(alias="to")
-    points: Annotated[int, Field(ge=1, le=100_000)]
+    points: Annotated[int, Field(ge=1, le=MAX_POINTS)]
 
     @model_validator(mode="after")
     def distinct_values(self):
@@ -166,7 +186,7 @@ class IntegratorSettings(Settings):
     """RK4 steps per revolution (a multiple of 6 lands on every cam phase boundary)."""
     event_tol: Annotated[float, Field(gt=0.0, lt=1e-3)] = 1e-12
     """Event times are located to event_tol × max(1, revolution period)."""
-    max_steps: Annotated[int, Field(ge=1000)] = 5_000_000
+    max_steps: Annotated[int, Field(ge=1000, le=MAX_STEPS)] = 5_000_000
     """Steps per cell before the cell fails with 'step budget'."""
 
 
@@ -180,7 +200,7 @@ class TransientSettings(Settings):
     jump_cap: Annotated[float, Field(gt=0.0)] = 0.02
     jump_residual: Annotated[float, Field(gt=0.0)] = 1e-3
     """Newton jumps are tried only where |x_k − x_{k−n}| is below this."""
-    max_jumps: Annotated[int, Field(ge=0)] = 20
+    max_jumps: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 20
     jump_agree: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.1
     """Also jump (up to 0.2) where the estimate agrees with the one n revolutions
     earlier to this fraction of its distance, whatever the residual (0: off)."""
@@ -191,18 +211,18 @@ class TransientSettings(Settings):
     extrapolate: Annotated[int, Field(ge=0, le=2)] = 2
     """Warm start: 0 the previous cell's state; 1 linear, 2 quadratic extrapolation
     through the previous cells' fixed points (where they are cycles of one period)."""
-    chaos_after: Annotated[int, Field(ge=0)] = 96
+    chaos_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 96
     """From this revolution on, a clearly chaotic motion ends the transient (0: never)."""
     chaos_lyapunov: Annotated[float, Field(gt=0.0)] = 0.1
     """Lyapunov exponent per revolution (last read window) that counts as clearly chaotic."""
-    quasiperiodic_after: Annotated[int, Field(ge=0)] = 0
+    quasiperiodic_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 0
     """From this revolution on, a quasi-periodic motion (|Lyapunov exponent| ≤ lyap_tol)
     ends the transient (0: never)."""
 
 
 class ClassifySettings(Settings):
     n_max: Annotated[int, Field(ge=1, le=256)] = 32
-    chatter_p: Annotated[int, Field(ge=1)] = 7
+    chatter_p: Annotated[int, Field(ge=1, le=MAX_COUNT)] = 7
     window_revolutions: Annotated[int, Field(ge=1, le=100_000)] = 64
     """Read window: fixed transient, and non-periodic verdicts (Lyapunov exponent)."""
     period_tol: Annotated[float, Field(gt=0.0, lt=1.0)] = 1e-6
@@ -228,9 +248,9 @@ class TileSettings(Settings):
     @field_validator("rows", mode="before")
     @classmethod
     def whole_number_or_auto(cls, value):
-        if value == "auto" or (type(value) is int and value >= 1):
+        if value == "auto" or (type(value) is int and 1 <= value <= MAX_POINTS):
             return value
-        raise ValueError("must be an integer ≥ 1, or auto")
+        raise ValueError(f"must be an integer from 1 to {MAX_POINTS} (an axis' most), or auto")
 
 
 class ChainSettings(Settings):
@@ -297,6 +317,11 @@ class Job(Settings):
     store: str | None = None
     """Path of the result store; '.h5'/'.hdf5' selects HDF5, anything else Zarr."""
 
+    @field_validator("store")
+    @classmethod
+    def a_store_path(cls, store: str | None) -> str | None:
+        return None if store is None else check_store_path(store)
+
     @model_validator(mode="before")
     @classmethod
     def fill_fixed(cls, data):
@@ -315,7 +340,13 @@ class Job(Settings):
     @classmethod
     def omega_and_one_more(cls, sweep: dict[str, Axis]) -> dict[str, Axis]:
         keys = list(sweep)
-        if tuple(keys) == BASIN_AXES:  # a basin: initial states, checked as any number
+        if tuple(keys) == BASIN_AXES:  # a basin: initial states, finite (Settings) and bounded
+            for name, axis in sweep.items():
+                for end, value in (("from", axis.start), ("to", axis.stop)):
+                    if abs(value) > MAX_START:
+                        raise ValueError(
+                            f"{name}.{end}: a start must be within ±{MAX_START:g}, got {value:g}"
+                        )
             return sweep
         unknown = [k for k in keys if k not in PARAMETERS]
         if unknown:
@@ -512,6 +543,20 @@ class Job(Settings):
             raise JobError(format_validation_error(exc, source)) from None
 
 
+def check_store_path(path) -> str:
+    """``path`` as text if it can name a store; ValueError saying why not (empty, a NUL byte,
+    a path that ends in no name: /, ., ..)."""
+    text = str(path)
+    if not text.strip():
+        raise ValueError("an empty path; name the store, e.g. results/map.zarr")
+    if "\0" in text:
+        raise ValueError("the path holds a NUL byte, which no file name can")
+    if Path(text).name in ("", ".", ".."):
+        example = text.rstrip("/") + "/map.zarr"
+        raise ValueError(f"names a folder, not a store; add the store's name, e.g. {example}")
+    return text
+
+
 def job_digest(data: dict) -> str:
     """``Job.digest`` of a normalised job as ``to_dict`` gives it, or as a store holds it
     (so a store can check its job against its hash without this campar's defaults)."""
@@ -526,24 +571,61 @@ def job_digest(data: dict) -> str:
 
 
 def format_validation_error(exc: ValidationError, source: str) -> str:
-    lines = []
+    """Every problem pydantic found, on one line: "SOURCE: key: problem; key: problem"
+    (required keys missing from one mapping named together)."""
+    problems, missing = [], {}
     for err in exc.errors():
         where = ".".join(str(part) for part in err["loc"]) or "(top level)"
         message = err["msg"].removeprefix("Value error, ")
+        if err["type"] == "missing":
+            parent = ".".join(str(part) for part in err["loc"][:-1])
+            if parent not in missing:
+                missing[parent] = []
+                problems.append(("missing", parent))
+            missing[parent].append(str(err["loc"][-1]))
+            continue
         if err["type"] == "extra_forbidden":
             message = f"unknown key; allowed here: {', '.join(allowed_keys(err['loc'][:-1]))}"
-        elif err["type"] == "missing":
-            message = "required key is missing"
         elif err["type"] in ("model_type", "dict_type"):
             message = "must be a mapping of keys (key: value, or {key: value})"
         got = err.get("input")
         detail = (
             ""
-            if err["type"] in ("extra_forbidden", "missing") or isinstance(got, dict)
-            else f", got {got!r}"
+            if err["type"] == "extra_forbidden" or isinstance(got, dict)
+            else f", got {short_repr(got)}"
         )
-        lines.append(f"{source}: {where}: {message}{detail}")
-    return "\n".join(lines)
+        problems.append(("", f"{where}: {message}{detail}"))
+    lines = []
+    for kind, text in problems:
+        if kind == "missing":
+            keys = missing[text]
+            prefix = f"{text}." if text else ""
+            lines.append(
+                f"{prefix}{keys[0]}: required key is missing" if len(keys) == 1 else
+                f"{text or '(top level)'}: required keys are missing: {', '.join(keys)}"
+            )  # fmt: skip
+        else:
+            lines.append(text)
+    return f"{source}: " + "; ".join(lines)
+
+
+SHOWN_CHARS = 60  # of a bad value in a message: a value may be huge (a list from aliases)
+
+
+def short_repr(value) -> str:
+    """``repr(value)`` cut to SHOWN_CHARS, without building the whole of a huge value."""
+    if isinstance(value, (list, tuple, dict, set)) and len(value) > 8:
+        return f"a {type(value).__name__} of {len(value)} items"
+    text = reprlib_repr(value)
+    return text if len(text) <= SHOWN_CHARS else text[: SHOWN_CHARS - 1] + "…"
+
+
+def reprlib_repr(value) -> str:
+    import reprlib
+
+    shown = reprlib.Repr()
+    shown.maxstring, shown.maxother, shown.maxlevel = SHOWN_CHARS, SHOWN_CHARS, 3
+    return shown.repr(value)
 
 
 def allowed_keys(loc: tuple) -> list[str]:
@@ -563,12 +645,40 @@ def allowed_keys(loc: tuple) -> list[str]:
 
 class UniqueKeyLoader(yaml.SafeLoader):
     """YAML's safe loader, refusing a key given twice in one mapping (YAML requires keys to
-    be unique; PyYAML would keep the last value silently)."""
+    be unique; PyYAML would keep the last value silently), a key that is not a plain value
+    (``? [1, 2]``), and integers of more than MAX_DIGITS digits; floats as YAML 1.2 reads
+    them (``1e-8`` is a number, not the text YAML 1.1 makes of it)."""
+
+
+MAX_JOB_BYTES = 1 << 20  # a job file of every key with comments is ~5 kB
+MAX_DIGITS = 30  # digits of an integer: every bound of the schema has at most 13
+# Nodes of the document once every alias is expanded. A job of every key and a census has
+# ~150; a value repeated through aliases expands into the validator's work and messages
+# (nine levels of nine-fold aliases are 387 million nodes: minutes and gigabytes).
+MAX_NODES = 10_000
+
+FLOAT_TAG = "tag:yaml.org,2002:float"
+YAML12_FLOAT = re.compile(
+    r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+    |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+    |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
+    |[-+]?\.(?:inf|Inf|INF)
+    |\.(?:nan|NaN|NAN))$""",
+    re.X,
+)
+UniqueKeyLoader.yaml_implicit_resolvers = {
+    first: [(tag, regexp) for tag, regexp in resolvers if tag != FLOAT_TAG]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
+UniqueKeyLoader.add_implicit_resolver(FLOAT_TAG, YAML12_FLOAT, list("-+0123456789."))
 
 
 def _unique_mapping(loader: UniqueKeyLoader, node: yaml.MappingNode, deep: bool = False):
     seen = {}
     for key_node, _ in node.value:
+        if not isinstance(key_node, yaml.ScalarNode):
+            line = key_node.start_mark.line + 1
+            raise yaml.YAMLError(f"line {line}: a key must be a name, not a {key_node.id}")
         key = loader.construct_object(key_node, deep=deep)
         if isinstance(key, typing.Hashable) and key in seen:
             lines = f"lines {seen[key] + 1} and {key_node.start_mark.line + 1}"
@@ -577,18 +687,99 @@ def _unique_mapping(loader: UniqueKeyLoader, node: yaml.MappingNode, deep: bool 
     return loader.construct_mapping(node, deep=deep)
 
 
+def _bounded_int(loader: UniqueKeyLoader, node: yaml.ScalarNode):
+    digits = sum(c.isdigit() for c in node.value)
+    if digits > MAX_DIGITS:
+        line = node.start_mark.line + 1
+        raise yaml.YAMLError(
+            f"line {line}: an integer of {digits} digits; no setting takes more than {MAX_DIGITS}"
+        )
+    return loader.construct_yaml_int(node)
+
+
 UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _unique_mapping)
+UniqueKeyLoader.add_constructor("tag:yaml.org,2002:int", _bounded_int)
+
+
+def expanded_nodes(node: yaml.Node, limit: int = MAX_NODES) -> int:
+    """The nodes of a YAML document with every alias expanded; YAMLError once over ``limit``
+    or if an alias contains itself. Each distinct node is counted once, in the time of the
+    document as written."""
+    sizes: dict[int, int] = {}
+    open_nodes: set[int] = set()
+
+    def size(n: yaml.Node) -> int:
+        key = id(n)
+        if key in sizes:
+            return sizes[key]
+        if key in open_nodes:
+            raise yaml.YAMLError(f"line {n.start_mark.line + 1}: an alias that contains itself")
+        open_nodes.add(key)
+        if isinstance(n, yaml.SequenceNode):
+            total = 1 + sum(size(child) for child in n.value)
+        elif isinstance(n, yaml.MappingNode):
+            total = 1 + sum(size(k) + size(v) for k, v in n.value)
+        else:
+            total = 1
+        open_nodes.discard(key)
+        if total > limit:
+            raise yaml.YAMLError(
+                f"line {n.start_mark.line + 1}: its aliases expand to over {limit} values; "
+                "a job needs a few hundred: write the values out"
+            )
+        sizes[key] = total
+        return total
+
+    return size(node)
+
+
+def parse_job_text(data: bytes, where: str):
+    """The YAML document of a job file's bytes, as Python values; JobError (one line) for a
+    file too large, not UTF-8 text, not valid YAML or bounded YAML (``UniqueKeyLoader``,
+    ``expanded_nodes``)."""
+    if len(data) > MAX_JOB_BYTES:
+        raise JobError(f"{where}: {len(data)} bytes; a job file is at most {MAX_JOB_BYTES}")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise JobError(
+            f"{where}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
+            "save the job file as UTF-8"
+        ) from None
+    loader = None
+    try:
+        loader = UniqueKeyLoader(text)  # its reader refuses control characters at once
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        expanded_nodes(node)
+        return loader.construct_document(node)
+    except yaml.YAMLError as exc:
+        raise JobError(f"{where}: not valid YAML: {yaml_problem(exc)}") from None
+    except RecursionError:
+        raise JobError(f"{where}: not valid YAML: nested too deeply") from None
+    finally:
+        if loader is not None:
+            loader.dispose()
+
+
+def yaml_problem(exc: yaml.YAMLError) -> str:
+    """A YAML error in one line: where, and what ("line 3, column 1: expected …")."""
+    if not isinstance(exc, yaml.MarkedYAMLError):
+        return " ".join(str(exc).split())
+    mark = exc.problem_mark or exc.context_mark
+    where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
+    what = "; ".join(" ".join(part.split()) for part in (exc.context, exc.problem) if part)
+    return where + what
 
 
 def load_job(path: str | Path) -> Job:
     """Read and validate a YAML job file."""
     path = Path(path)
     try:
-        text = path.read_text()
+        data = path.read_bytes()
     except OSError as exc:
         raise JobError(f"cannot read job file {path}: {exc.strerror}") from None
-    try:
-        data = yaml.load(text, Loader=UniqueKeyLoader)
-    except yaml.YAMLError as exc:
-        raise JobError(f"job file {path}: not valid YAML: {exc}") from None
-    return Job.from_dict(data, source=f"job file {path}")
+    except ValueError as exc:  # a NUL byte in the path
+        raise JobError(f"cannot read job file {path!r}: {exc}") from None
+    return Job.from_dict(parse_job_text(data, f"job file {path}"), source=f"job file {path}")
