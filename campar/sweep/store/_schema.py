@@ -30,6 +30,7 @@ from ..arrays import COMPONENTS, PARTS, TAIL_DIMS, array_names, array_spec
 from ..job import DIRECTIONS, Job, job_digest
 from ..plan import Tile, plan_tiles
 from ._cf import cell_attrs, checksum_attrs, coordinate_attrs, done_attrs, global_attrs, history
+from ._metadata import CHECKSUMS_ATTR
 
 # Bumped when the layout changes in a way old readers cannot follow. 1: no CF
 # metadata, tail dimension "var" unlabelled, ``done`` bool, Zarr attributes as
@@ -237,6 +238,12 @@ def decode_attrs(raw) -> dict:
             value = value.item()
         if key in JSON_ATTRS and isinstance(value, str):  # format 1 Zarr: already nested
             value = json.loads(value)
+        elif key == CHECKSUMS_ATTR:  # damaged: every variable then fails its check, and says so
+            try:
+                value = json.loads(value)
+            except (TypeError, ValueError):
+                value = {}
+            value = value if isinstance(value, dict) else {}
         attrs[key] = value
     return attrs
 
