@@ -160,7 +160,7 @@ class StoreReader(ABC):
     def metadata_checksums(self) -> bool:
         """Whether the store's variables carry checksums (a store of the current format
         written before them does not: its next run records them)."""
-        return self.format != FORMAT or CHECKSUMS_ATTR in self.attrs
+        return self.format != FORMAT or isinstance(self.attrs.get(CHECKSUMS_ATTR), dict)
 
     def variable_damage(self) -> dict[str, str]:
         """{variable: what changed} — coordinates, array metadata and the attributes that say
@@ -169,7 +169,8 @@ class StoreReader(ABC):
         if self.format != FORMAT:
             return {}
         arrays = store_arrays(self.job)
-        stored = self.attrs.get(CHECKSUMS_ATTR)
+        stored = self.attrs.get(CHECKSUMS_ATTR)  # unreadable: checked against the job instead
+        stored = stored if isinstance(stored, dict) else None
         return variable_problems(self._describe(arrays), stored, lambda: self._fresh(arrays))
 
     @abstractmethod

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..plan import Tile, plan_tiles
+from ._metadata import CHECKSUMS_ATTR
 from ._schema import fill_value
 
 DIGEST_BYTES = 8  # 64 bits: a damaged tile passes with probability 2**-64
@@ -119,6 +120,11 @@ def verify_store(reader, visit: Callable[[TileCheck], None] | None = None) -> Ve
     report.problems += reader.metadata_problems()
     report.variables = reader.variable_damage()
     report.metadata_checksums = reader.metadata_checksums
+    if CHECKSUMS_ATTR in reader.attrs and not report.metadata_checksums:
+        report.problems.append(
+            f"the variables' checksums (attribute {CHECKSUMS_ATTR}) cannot be read: every "
+            "variable was checked against the stored job instead; `campar run` records them"
+        )
     for check in check_tiles(reader):
         report.committed.append(check.tile.index)
         if check.problem:

@@ -16,6 +16,7 @@ axis (``tile_shape``), and coordinates ``direction`` (down, up) and
 laid out exactly as before (same format, no direction axis).
 """
 
+import contextlib
 import json
 import math
 from dataclasses import dataclass, field
@@ -238,12 +239,9 @@ def decode_attrs(raw) -> dict:
             value = value.item()
         if key in JSON_ATTRS and isinstance(value, str):  # format 1 Zarr: already nested
             value = json.loads(value)
-        elif key == CHECKSUMS_ATTR:  # damaged: every variable then fails its check, and says so
-            try:
+        elif key == CHECKSUMS_ATTR:  # kept as it is if it is not JSON: a problem verify names
+            with contextlib.suppress(TypeError, ValueError):
                 value = json.loads(value)
-            except (TypeError, ValueError):
-                value = {}
-            value = value if isinstance(value, dict) else {}
         attrs[key] = value
     return attrs
 
