@@ -266,3 +266,26 @@ def test_raw_xarray_sees_what_campar_open_refuses(tmp_path):
     np.testing.assert_allclose(raw["dc"].values[tile.rows], 2 * fake_tile(job, tile, 0)["dc"])
     with pytest.raises(StoreDamaged, match="attribute scale_factor added"):
         campar.open(path)
+
+
+def test_plot_of_a_basin_store_with_a_flipped_bit_draws_it_and_names_the_tile(
+    tmp_path, capsys, caplog
+):
+    """The issue's basin case: one bit flipped in kind's first chunk made `campar plot` exit 1
+    with zarr's CRC traceback. Now the tile is drawn as not computed, said in one line."""
+    import campar.sweep.runner as runner
+    from campar.sweep.job import Job
+
+    job = Job.from_dict({
+        "name": "basin_damage", "sweep": {"y0": {"from": -0.5, "to": 0.5, "points": 6},
+                                          "ydot0": {"from": -1, "to": 1, "points": 4}},
+        "fixed": {"omega": 3.0}, "classify": {"window_revolutions": 16}, "tiles": {"rows": 2},
+    })  # fmt: skip
+    path = tmp_path / "basin.zarr"
+    runner.run_job(job, path)
+    _flip(path / "kind" / "c.0.0", 17)
+    figure = tmp_path / "basin.png"
+    assert main(["plot", str(path), "-o", str(figure)]) == 0
+    out, err = capsys.readouterr()
+    assert figure.stat().st_size > 0 and "Traceback" not in out + err
+    assert "1 damaged tiles read as not computed (tile 0: kind unreadable" in caplog.text
