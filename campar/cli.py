@@ -5,10 +5,17 @@ parser and sets ``handler`` to a function in the module that owns the logic,
 so every behaviour is reachable from Python without the CLI.
 """
 
-import argparse
-import gc
 import os
 import sys
+
+from .sweep.signals import guard_program
+
+PROGRAM = os.path.basename(getattr(sys.modules.get("__main__"), "__file__", None) or "")
+if __name__ == "__main__" or PROGRAM == "campar":
+    guard_program()  # the program, not a library importing it: a stop signal is one line
+
+import argparse  # noqa: E402
+import gc  # noqa: E402
 
 # Before numpy is imported: one OpenBLAS thread. campar's work runs on its own threads and
 # ranks, and BLAS only ever sees tiny matrices; numpy's and SciPy's OpenBLAS pools (SciPy
@@ -319,7 +326,7 @@ def add_run(sub):
     p.add_argument("job", help="job file (YAML)")
     p.add_argument("--store", metavar="PATH", help="result store (default: the job's store:)")
     p.add_argument("--overwrite", action="store_true", help="replace a store of another job")
-    p.add_argument("--grace", type=float, default=30.0, metavar="SECONDS",
+    p.add_argument("--grace", type=seconds, default=30.0, metavar="SECONDS",
                    help="after a signal, wait so long for tiles in flight (30)")  # fmt: skip
     from .sweep.budget import DEFAULT_MAX_MEMORY, DEFAULT_MAX_STORE, format_size, parse_size
 
@@ -329,6 +336,19 @@ def add_run(sub):
     p.add_argument("--max-memory", type=parse_size, metavar="SIZE",
                    help=f"refuse a job whose ranks each need over SIZE ({memory})")  # fmt: skip
     p.set_defaults(handler=run_run)
+
+
+def seconds(text: str) -> float:
+    """A duration flag: a finite number ≥ 0 (argparse says what is wrong in one line)."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number of seconds ≥ 0, got {text}")
+    return value
 
 
 def run_run(args) -> int:

@@ -246,3 +246,12 @@ def test_the_memory_estimate_counts_a_tile_chunk_past_the_grid(tmp_path, capsys)
     err = capsys.readouterr().err
     assert "each rank would need" in err and err.count("\n") == 1, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["j.yaml"]
+
+
+@pytest.mark.parametrize("grace", ["nan", "-1", "inf", "soon"])
+def test_a_grace_that_is_no_duration_is_refused(tmp_path, capsys, grace):
+    (tmp_path / "job.yaml").write_text(f"name: x\n{GOOD_SWEEP}\nstore: {tmp_path / 'x.zarr'}\n")
+    with pytest.raises(SystemExit) as exit_:
+        main(["run", str(tmp_path / "job.yaml"), "--grace", grace])
+    assert exit_.value.code == 2 and "argument --grace" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["job.yaml"]
