@@ -11,7 +11,13 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import MPIRUN, start_campar, subprocess_env
+from conftest import (
+    MPIRUN,
+    campar_processes,
+    start_campar,
+    subprocess_env,
+    wait_until_guarded,
+)
 
 # The ``campar`` program, as the console script runs it, with a stop signal sent to itself
 # while campar's command module imports ``IMPORT`` (one of its first imports, or one of the
@@ -65,30 +71,6 @@ def test_a_signal_while_one_rank_imports_stops_every_rank_together(write_job):
     assert_one_line_stop(done.returncode, done.stderr, (130,))
 
 
-def _guarded(pid: int) -> bool:
-    """campar's stop-signal handlers are installed in ``pid`` (SIGUSR1 caught: Python
-    installs no handler of its own for it)."""
-    try:
-        status = Path(f"/proc/{pid}/status").read_text()
-    except OSError:
-        return False
-    mask = next(line.split()[1] for line in status.splitlines() if line.startswith("SigCgt:"))
-    return bool(int(mask, 16) >> (signal.SIGUSR1 - 1) & 1)
-
-
-def _ranks(launcher: int) -> list[int]:
-    """The campar processes below ``launcher`` (mpirun's proxies start them)."""
-    found = []
-    for stat in Path("/proc").glob("[0-9]*/cmdline"):
-        try:
-            cmdline = stat.read_bytes().split(b"\0")
-        except OSError:
-            continue
-        if b"campar.cli" in cmdline and int(stat.parent.name) != launcher:
-            found.append(int(stat.parent.name))
-    return found
-
-
 @pytest.mark.mpi
 @pytest.mark.slow
 @pytest.mark.parametrize("after", [0.0, 0.15, 0.4])
@@ -98,15 +80,8 @@ def test_a_group_sigint_during_start_up_under_mpirun_is_one_line_no_crash(write_
     or 130 (mpirun's own, for a Ctrl-C), no rank killed by a signal."""
     path, _ = write_job(slow=True)
     proc = start_campar("run", path, launcher=[MPIRUN, "-n", "2"])
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:
-        ranks = _ranks(proc.pid)
-        if len(ranks) == 2 and all(_guarded(pid) for pid in ranks):
-            break
-        time.sleep(0.002)
-    else:
-        proc.kill()
-        pytest.fail("the ranks never installed campar's handlers")
+    wait_until_guarded(proc, ranks=2)
+    assert proc.poll() is None and len(campar_processes(proc.pid)) == 2
     time.sleep(after)
     os.killpg(proc.pid, signal.SIGINT)
     _, err = proc.communicate(timeout=180)
