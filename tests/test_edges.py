@@ -378,3 +378,22 @@ def test_status_and_verify_memory_does_not_grow_with_the_grid(tmp_path):
     for command in ("status", "verify"):
         grown = peak_rss_mb(command, str(large)) - peak_rss_mb(command, str(small))
         assert grown < 40, f"campar {command}: {grown:.0f} MB more for 4× the cells"
+
+
+def test_an_hdf5_store_with_a_second_name_is_refused_untouched(tmp_path):
+    """A hard link is another name the lock does not know: a second run through it would
+    write the same file. Refused, the store left as it was."""
+    from damage import synthetic_store
+    from test_store import snapshot
+
+    from campar.errors import StoreError
+
+    path = tmp_path / "s.h5"
+    job = synthetic_store(path)
+    os.link(path, tmp_path / "other.h5")
+    before = snapshot(path)
+    with pytest.raises(StoreError, match="2 names \\(hard links\\)"):
+        open_store(tmp_path / "other.h5", job)
+    with pytest.raises(StoreError, match="hard links"):
+        open_store(path, job)
+    assert snapshot(path) == before

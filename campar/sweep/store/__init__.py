@@ -118,6 +118,12 @@ def open_store(path: str | Path, job: Job, *, overwrite: bool = False) -> Store:
     backend, real = _backend(path), real_path(path)
     lock = StoreLock.acquire(real)
     try:
+        if real.is_file() and real.stat().st_nlink > 1:
+            raise StoreError(
+                f"{path} has {real.stat().st_nlink} names (hard links): a store is locked by "
+                "its name, so a run through another name would write it too; remove the other "
+                "links (find -samefile) and run again"
+            )
         _remove_aside(real)
         attrs = _read_attrs_for(path, real, backend, job)
         if attrs is None and real.exists() and not _empty_dir(real):
