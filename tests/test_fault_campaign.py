@@ -56,7 +56,9 @@ def _files(path):
 def _silently_wrong(ds, reference) -> list[str]:
     """What ``ds`` (opened without refusal) holds that the intact store does not: cells of
     tiles it calls done, coordinates, variables' attributes."""
-    wrong = []
+    volatile = ("runs", "history", "date_created", "campar_version", "versions")
+    keys = (set(ds.attrs) | set(reference.attrs)) - set(volatile)
+    wrong = [f"attribute {k}" for k in keys if str(ds.attrs.get(k)) != str(reference.attrs.get(k))]
     done = ds["done"].values.astype(bool)
     tiles = ds["tile"].values
     rows = list(zip(ds["tile_row_start"].values, ds["tile_row_stop"].values, strict=True))

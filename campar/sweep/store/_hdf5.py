@@ -85,7 +85,7 @@ from ._journal import (  # noqa: F401 (re-exported: the backend's journal)
     write_entry,
 )
 from ._lock import StoreLock
-from ._metadata import CHECKSUMS_ATTR, Variable, digests
+from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests, global_document
 from ._schema import (
     FORMAT,
     TILE_ARRAYS,
@@ -220,7 +220,8 @@ def describe_file(f: h5py.File, arrays) -> dict:
     """{name: ``_metadata.Variable``, or why it cannot be read} of the variables ``arrays``
     of an open store file: each dataset's type, shape, chunks, fill value, filters and
     attributes, and a coordinate's values."""
-    found = {}
+    attrs = {key: _plain(value) for key, value in f.attrs.items()}
+    found: dict = {GLOBAL: Variable({"attributes": global_document(attrs)})}
     for a in arrays:
         try:
             data = f[a.name]
@@ -305,7 +306,7 @@ def repair(path: Path, job: Job, report: Verification) -> None:
             reserve(fh, _room(path, journal_entries(path).values()), tmp)
         with Hdf5Reader(path, None, path) as old, h5py.File(tmp, "r+") as new:
             for key, value in old._file.attrs.items():  # date created, history, run log
-                if key != CHECKSUMS_ATTR:  # the new file's own, of its variables as built
+                if key in VOLATILE_ATTRS and key != CHECKSUMS_ATTR:  # the rest: the job's
                     new.attrs[key] = value
             sums = old.tile_checksums()[0]
             for index in keep:

@@ -32,6 +32,17 @@ import numpy as np
 
 CHECKSUMS_ATTR = "metadata_checksums"
 DIGEST_BYTES = 8
+# The store's own attributes are one more "variable": those that say what the store holds
+# (the job, the model's settings, the format), not those a run appends to or that say when
+# and by which versions it was made.
+GLOBAL = "(global attributes)"
+VOLATILE_ATTRS = ("runs", "history", "date_created", "campar_version", "versions", CHECKSUMS_ATTR)
+
+
+def global_document(attrs: dict) -> dict:
+    """The store's attributes under its checksum (``VOLATILE_ATTRS`` left out)."""
+    return {key: value for key, value in attrs.items() if key not in VOLATILE_ATTRS}
+
 
 # What changes how a variable's bytes decode: checked against the job where a store has no
 # checksums. Zarr document keys, HDF5 description keys, and CF attributes.

@@ -42,7 +42,7 @@ from ._base import Store, StoreReader, tile_values
 from ._chunks import DirectChunk
 from ._integrity import Verification, describe_exception
 from ._lock import StoreLock
-from ._metadata import CHECKSUMS_ATTR, Variable, digests
+from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests, global_document
 from ._schema import (
     TILE_ARRAYS,
     cell_arrays,
@@ -146,13 +146,14 @@ def describe_variables(path: Path, arrays, group, consolidated: bool = True) -> 
     ``arrays`` (``ArraySchema``): each one's own zarr.json and (``consolidated``) its copy in
     the store's zarr.json; a coordinate's values read as campar and xarray read them."""
     copies = None
-    if consolidated:
-        try:
-            copies = json.loads((path / "zarr.json").read_bytes())["consolidated_metadata"]
-            copies = copies["metadata"]
-        except (OSError, ValueError, KeyError, TypeError):
-            copies = {}  # each variable is then missing from it, and said so
-    found = {}
+    found: dict = {GLOBAL: "the store's zarr.json cannot be read"}
+    try:
+        document = json.loads((path / "zarr.json").read_bytes())
+        found[GLOBAL] = Variable({"zarr.json": global_document(document["attributes"])})
+        if consolidated:
+            copies = document["consolidated_metadata"]["metadata"]
+    except (OSError, ValueError, KeyError, TypeError):
+        copies = {} if consolidated else None  # each variable then missing from it, and said so
     for a in arrays:
         variable, own = Variable(), path / a.name / "zarr.json"
         try:
@@ -216,6 +217,12 @@ def repair_variables(path: Path, job: Job, names) -> None:
     values — each file written aside and renamed into place, then record the checksums and
     consolidate. The cells' chunks are left as they are (their tiles verify on their own)."""
     arrays = store_arrays(job)
+    if GLOBAL in names:  # what the store holds, from the job; what its runs wrote is kept
+        group = zarr.open_group(path, mode="r+", use_consolidated=False)
+        wanted = {k: v for k, v in initial_attrs(job).items() if k not in VOLATILE_ATTRS}
+        for key in [k for k in group.attrs if k not in wanted and k not in VOLATILE_ATTRS]:
+            del group.attrs[key]
+        group.attrs.update(wanted)
     fresh = Path(tempfile.mkdtemp(prefix=f"{path.name}.creating-", dir=path.parent))
     try:
         _build(fresh / "store", job, chunk_separator(path, job))
