@@ -5,9 +5,10 @@ each fault every reader: ``verify``, ``status``, ``plot``, ``campar.open``, then
 
 Counted, and printed on a line starting ``CAMPAIGN`` (run with ``-s``): faults, detected,
 repaired bitwise, refused (named, left for a person: which job a store holds is unknown),
-tracebacks and silently wrong values — the last two must be 0. A value is silently wrong
-when ``campar.open`` returns, without refusing or warning, a coordinate, a variable's
-attribute or a cell that differs from the store as written.
+tracebacks and silently wrong values — the last two must be 0. Detected: ``verify`` did not
+say intact (65 naming the damage; 3 where the store's one file was deleted: no store). A
+value is silently wrong when ``campar.open`` returns, without refusing or warning, a
+coordinate, an attribute or a cell that differs from the store as written.
 
     pytest tests/test_fault_campaign.py -m slow -s | grep CAMPAIGN
 
@@ -29,7 +30,7 @@ from test_store import make_job
 
 import campar
 from campar.cli import main
-from campar.errors import CamparError, StoreDamaged, StoreDamageWarning
+from campar.errors import CamparError, StoreDamageWarning
 
 ROUNDS = int(os.environ.get("CAMPAR_FAULT_ROUNDS", "1"))
 # Faults per layout in the full tier (~1 s a Zarr fault, ~6 s an HDF5 one: each reader of a
@@ -118,7 +119,7 @@ def test_fault_campaign(tmp_path, suffix):
 
         code, said = _quiet("verify", path)
         counts["tracebacks"] += "Traceback" in said
-        detected = code == StoreDamaged.exit_code
+        detected = code != 0  # 65 naming the damage, or 3: no store there at all
         counts["detected"] += detected
         for args in (("status", path), ("plot", path, "-o", tmp_path / "map.png")):
             code, said = _quiet(*args)

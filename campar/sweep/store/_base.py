@@ -43,7 +43,7 @@ from ..job import Job, job_digest
 from ..plan import Tile, plan_tiles
 from ._integrity import describe_exception, tile_checksum
 from ._lock import StoreLock
-from ._metadata import CHECKSUMS_ATTR, variable_problems
+from ._metadata import CHECKSUMS_ATTR, GLOBAL, variable_problems
 from ._schema import (
     CHECKSUMS_FROM,
     FORMAT,
@@ -160,7 +160,8 @@ class StoreReader(ABC):
     def metadata_checksums(self) -> bool:
         """Whether the store's variables carry checksums (a store of the current format
         written before them does not: its next run records them)."""
-        return self.format != FORMAT or isinstance(self.attrs.get(CHECKSUMS_ATTR), dict)
+        stored = self.attrs.get(CHECKSUMS_ATTR)
+        return self.format != FORMAT or (isinstance(stored, dict) and GLOBAL in stored)
 
     def variable_damage(self) -> dict[str, str]:
         """{variable: what changed} — coordinates, array metadata and the attributes that say

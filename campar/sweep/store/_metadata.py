@@ -116,10 +116,11 @@ def variable_problems(
             continue
         copies = list(variable.documents.values())
         alike = all(_text(document) == _text(copies[0]) for document in copies)
+        recorded = stored is not None and name in stored  # else: checked against the job
         for where, document in variable.documents.items():
             place = "" if alike else f"{where}: "  # which copy, where the copies differ
-            if stored is not None:
-                if variable_digest(document, variable.values) == stored.get(name):
+            if recorded:
+                if variable_digest(document, variable.values) == stored[name]:
                     continue
                 what = changes(document, variable.values, reference(name), everything=True)
                 problems[name] = f"{place}{what or 'changed'} (its checksum differs)"

@@ -60,6 +60,11 @@ def read_attrs(path: Path) -> dict | None:
     """Attributes of the campar store at ``path``, or None if it is none; StoreDamaged if it
     has a campar store's layout but its metadata cannot be read."""
     if not (path / "zarr.json").is_file():
+        if (path / "done").is_dir() and (path / "checksum").is_dir():
+            raise StoreDamaged(
+                f"{path} has a campar store's layout but its metadata (zarr.json) is missing: "
+                "campar cannot tell which job it holds; move it away and run again"
+            )
         return None
     try:
         attrs = zarr.open_group(path, mode="r").attrs.asdict()
