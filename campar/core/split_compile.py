@@ -1,7 +1,7 @@
 """Compile the map kernel with an empty cache on two cores instead of one.
 
-numba compiles in one process, one function after the other: a cold ``campar point``
-compiled for ~12 s on one core while the other idled. The chain calls one revolution
+numba compiles in one process, one function after the other, on one core while the
+other idles. The chain calls one revolution
 through its address (campar.core.revolution_call), so the two halves of the kernel
 compile apart: a forked helper compiles one revolution (``run_revolution`` with the
 integrator, the field and the events under it) into numba's on-disk cache while this
@@ -31,7 +31,7 @@ import time
 
 from numba import typeof, types
 
-from . import jitcache
+from . import jitcache, numba_internals
 from .kernel import chain_compiled, make_chain_work
 from .revolution import make_trace, run_revolution
 from .revolution_call import revolution_args
@@ -42,8 +42,12 @@ POLL_SECONDS = 0.05  # between looks into the cache for another rank's half
 
 def cache_is_cold() -> bool:
     """No compiled chain where numba will look for it (after jitcache dropped stale entries):
-    under NUMBA_CACHE_DIR, a chain cached beside the sources does not count."""
-    return not any(jitcache.located_cache_dir().glob("kernel.chain_compiled-*.nbi"))
+    under NUMBA_CACHE_DIR, a chain cached beside the sources does not count. False where
+    numba's cache cannot be asked (``numba_internals``): nothing is split then."""
+    located = jitcache.located_cache_dir()
+    if located is None or not numba_internals.split_available(run_revolution):
+        return False
+    return not any(located.glob("kernel.chain_compiled-*.nbi"))
 
 
 def can_fork() -> bool:
@@ -152,9 +156,10 @@ def until_cached(dispatcher, signature, helper: Helper | None = None) -> None:
     rank compiles it), the helper has exited, or HELPER_SECONDS have passed (a helper still
     running is killed): then the caller compiles what is missing here. numba names an
     entry in its index before it writes the entry's data, whole, under a temporary name
-    that it then renames: an entry whose data is not there yet is not found."""
+    that it then renames: an entry whose data is not there yet is not found. Where numba's
+    cache cannot be asked (``numba_internals``) it returns at once."""
     deadline = time.monotonic() + HELPER_SECONDS
-    while dispatcher._cache.load_overload(signature, dispatcher.targetctx) is None:
+    while numba_internals.cache_serves(dispatcher, signature) is False:
         if helper is not None and not helper.running():
             return
         if time.monotonic() > deadline:

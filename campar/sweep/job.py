@@ -19,7 +19,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from ..errors import JobError
-from .job_file import format_validation_error, parse_job_text
+from .job_file import check_store_path, format_validation_error, parse_job_text, wants_number
 
 PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 # The axes of a basin job: the initial state (y, y') at θ = 0, y along the first
@@ -65,16 +65,14 @@ def check_parameter(name: str, value: float) -> float:
 
 
 class Settings(BaseModel):
-    # No infinity or NaN in any number of a job: every setting and axis end is finite.
-    model_config = ConfigDict(
-        extra="forbid", frozen=True, populate_by_name=True, allow_inf_nan=False
-    )
+    # allow_inf_nan: no infinity or NaN in any number of a job (settings and axis ends alike)
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True,
+                              allow_inf_nan=False)  # fmt: skip
 
     @field_validator("*", mode="before")
     @classmethod
     def booleans_are_not_numbers(cls, value, info):
-        """YAML's true/false where a number belongs is a mistake (pydantic reads true as 1),
-        and so is text ("4" quoted): pydantic would read it as the number."""
+        """true/false or text ("4") where a number belongs is a mistake (pydantic reads both)."""
         annotation = cls.model_fields[info.field_name].annotation
         values = value.values() if isinstance(value, dict) else [value]
         if any(isinstance(v, bool) for v in values) and wants_number(annotation):
@@ -84,27 +82,11 @@ class Settings(BaseModel):
         return value
 
 
-def wants_number(annotation, text: bool = True) -> bool:
-    """A field typed int or float (inside Annotated, Optional or a dict's values); with
-    ``text`` False, only one that takes no text either (``tiles.rows`` takes auto)."""
-    if annotation in (int, float):
-        return True
-    args = typing.get_args(annotation)
-    if typing.get_origin(annotation) is dict:
-        return wants_number(args[1], text)
-    if not text and str in args:
-        return False
-    return any(wants_number(a, text) for a in args if a is not bool)
-
-
-# Bounds of the integers a job may hold: each far beyond any useful setting, and small enough
-# that every count and product of them fits the kernel's 64-bit integers.
+# Integer bounds: far beyond any useful setting, and every product fits 64-bit integers.
 MAX_POINTS = 100_000  # per axis
 MAX_STEPS = 10**12  # integrator steps per cell: at ~1 µs a step, days for one cell
 MAX_COUNT = 1_000_000  # revolutions, jumps and other per-cell counts
-# A basin's starts (y0 in lifts h, ydot0 in h per unit time): a thousand lifts away from the
-# cam is far outside every attractor, and keeps a grid's spacing finite.
-MAX_START = 1e3
+MAX_START = 1e3  # a basin's starts (lifts h, h per unit time): far outside every attractor
 
 
 class Axis(Settings):
@@ -300,6 +282,21 @@ def field_choices(settings: type[Settings], name: str) -> tuple[str, ...]:
 
 
 class Job(Settings):
+    """A validated job, frozen, every key explicit: jobs/README.md gives each key's meaning.
+
+    Parameters
+    ----------
+    name, sweep, fixed, model, initial, integrator, transient : the job's sections
+    classify, outputs, tiles, chains, attractors, store : the job's sections
+
+    Examples
+    --------
+    >>> import campar
+    >>> job = campar.load_job("jobs/smoke.yaml")
+    >>> job.shape, job.fixed["mu_kn"], job.chains.direction
+    ((24, 40), 0.8, 'down')
+    """
+
     name: Annotated[str, Field(min_length=1, max_length=200, pattern=r"^[A-Za-z0-9_.\-]+$")]
     sweep: dict[str, Axis]
     fixed: dict[str, float] = {}
@@ -343,9 +340,8 @@ class Job(Settings):
             for name, axis in sweep.items():
                 for end, value in (("from", axis.start), ("to", axis.stop)):
                     if abs(value) > MAX_START:
-                        raise ValueError(
-                            f"{name}.{end}: a start must be within ±{MAX_START:g}, got {value:g}"
-                        )
+                        raise ValueError(f"{name}.{end}: a start is within ±{MAX_START:g}, "
+                                         f"got {value:g}")  # fmt: skip
             return sweep
         unknown = [k for k in keys if k not in PARAMETERS]
         if unknown:
@@ -542,20 +538,6 @@ class Job(Settings):
             raise JobError(format_validation_error(exc, source, allowed_keys)) from None
 
 
-def check_store_path(path) -> str:
-    """``path`` as text if it can name a store; ValueError saying why not (empty, a NUL byte,
-    a path that ends in no name: /, ., ..)."""
-    text = str(path)
-    if not text.strip():
-        raise ValueError("an empty path; name the store, e.g. results/map.zarr")
-    if "\0" in text:
-        raise ValueError("the path holds a NUL byte, which no file name can")
-    if Path(text).name in ("", ".", ".."):
-        example = text.rstrip("/") + "/map.zarr"
-        raise ValueError(f"names a folder, not a store; add the store's name, e.g. {example}")
-    return text
-
-
 def job_digest(data: dict) -> str:
     """``Job.digest`` of a normalised job as ``to_dict`` gives it, or as a store holds it
     (so a store can check its job against its hash without this campar's defaults)."""
@@ -585,7 +567,29 @@ def allowed_keys(loc: tuple) -> list[str]:
 
 
 def load_job(path: str | Path) -> Job:
-    """Read and validate a YAML job file."""
+    """Read and validate a YAML job file (jobs/README.md: every key and its default).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The job file.
+
+    Returns
+    -------
+    Job
+        The validated job.
+
+    Raises
+    ------
+    campar.errors.JobError
+        The file unreadable, not YAML, or a key unknown, repeated, mistyped or out of range.
+
+    Examples
+    --------
+    >>> import campar
+    >>> campar.load_job("jobs/smoke.yaml").integrator.method
+    'dop853'
+    """
     path = Path(path)
     try:
         data = path.read_bytes()

@@ -12,6 +12,7 @@ the problem; the numbers are YAML 1.2's (``1e-8`` is a float, not text).
 import re
 import reprlib
 import typing
+from pathlib import Path
 
 import yaml
 
@@ -73,6 +74,33 @@ def reprlib_repr(value) -> str:
     shown = reprlib.Repr()
     shown.maxstring, shown.maxother, shown.maxlevel = SHOWN_CHARS, SHOWN_CHARS, 3
     return shown.repr(value)
+
+
+def wants_number(annotation, text: bool = True) -> bool:
+    """A field typed int or float (inside Annotated, Optional or a dict's values); with
+    ``text`` False, only one that takes no text either (``tiles.rows`` takes auto)."""
+    if annotation in (int, float):
+        return True
+    args = typing.get_args(annotation)
+    if typing.get_origin(annotation) is dict:
+        return wants_number(args[1], text)
+    if not text and str in args:
+        return False
+    return any(wants_number(a, text) for a in args if a is not bool)
+
+
+def check_store_path(path) -> str:
+    """``path`` as text if it can name a store; ValueError saying why not (empty, a NUL byte,
+    a path that ends in no name: /, ., ..)."""
+    text = str(path)
+    if not text.strip():
+        raise ValueError("an empty path; name the store, e.g. results/map.zarr")
+    if "\0" in text:
+        raise ValueError("the path holds a NUL byte, which no file name can")
+    if Path(text).name in ("", ".", ".."):
+        example = text.rstrip("/") + "/map.zarr"
+        raise ValueError(f"names a folder, not a store; add the store's name, e.g. {example}")
+    return text
 
 
 class UniqueKeyLoader(yaml.SafeLoader):
