@@ -17,7 +17,8 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_MODULES = (
-    "jit", "codes", "hermite", "dop853", "entry_steps", "model", "integrator", "analysis",
+    "jit", "codes", "hermite", "dop853", "entry_steps", "cam", "contact", "model",
+    "integrator", "analysis",
     "revolution", "revolution_call", "kernel", "tracer",
 )  # fmt: skip
 STAMP = "campar-core.digest"

@@ -22,6 +22,16 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from ..errors import JobError
 
 PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
+# Parameters of the job's laws (model.cam, model.contact) that a map may sweep as its
+# second axis: the name in ``sweep`` and the model section it overrides row by row.
+LAW_PARAMETERS = {
+    "phi1": "cam", "phi2": "cam", "phi3": "cam", "phi4": "cam",
+    "n": "contact", "restitution": "contact",
+}  # fmt: skip
+# The cam angle that takes up the difference when one is swept (they sum to 2π): the near
+# dwell, or the far dwell when the near dwell itself is swept.
+TAKES_UP = {"phi1": "phi4", "phi2": "phi4", "phi3": "phi4", "phi4": "phi2"}
+MAP_AXES = (*PARAMETERS, *LAW_PARAMETERS)
 # The axes of a basin job: the initial state (y, y') at θ = 0, y along the first
 # (columns), y' along the second (rows); its parameters are all fixed.
 BASIN_AXES = ("y0", "ydot0")
@@ -120,6 +130,89 @@ def cell_edges(centres) -> np.ndarray:
     return np.concatenate([[2 * c[0] - mid[0]], mid, [2 * c[-1] - mid[-1]]])
 
 
+MOTION_LAWS = ("cosine", "cycloidal", "polynomial-345", "modified-trapezoid", "modified-sine")
+CONTACT_LAWS = ("hunt-crossley", "lankarani-nikravesh", "flores")
+ANGLES = ("phi1", "phi2", "phi3", "phi4")
+PAPER_ANGLES = (math.pi / 3.0, 2.0 * math.pi / 3.0, math.pi / 3.0, 2.0 * math.pi / 3.0)
+
+
+class CamSettings(Settings):
+    """The cam: a motion law for the rise and one for the fall over the phase angles
+    phi1 … phi4 (rise, far dwell, fall, near dwell; radians, summing to 2π), or a table."""
+
+    rise: Literal[MOTION_LAWS] = "cosine"
+    fall: Literal[MOTION_LAWS] = "cosine"
+    phi1: float = PAPER_ANGLES[0]
+    phi2: float = PAPER_ANGLES[1]
+    phi3: float = PAPER_ANGLES[2]
+    phi4: float = PAPER_ANGLES[3]
+    table: str | None = None
+    """A CSV of (θ in radians, S in units of the stroke) over one revolution: the cam is the
+    periodic C² cubic spline through it (campar.sweep.cam_table); rise and fall then have
+    no say, the angles only say where the revolution's steps end."""
+    table_sha256: str | None = None
+    """The table's content hash, set when the job is read: the numbers depend on it."""
+
+    @model_validator(mode="after")
+    def consistent(self):
+        from .cam_table import check_angles, read_table  # numpy only
+
+        check_angles(self.angles)
+        if self.table is None:
+            if self.table_sha256 is not None:
+                raise ValueError("table_sha256 belongs to a table: give table too")
+            return self
+        if (self.rise, self.fall) != ("cosine", "cosine"):
+            raise ValueError("a cam is either a table or rise/fall laws, not both")
+        digest = read_table(self.table).sha256
+        if self.table_sha256 is not None and self.table_sha256 != digest:
+            raise ValueError(
+                f"table {self.table} has changed since this job was made "
+                f"(sha256 {digest[:12]}…, the job says {self.table_sha256[:12]}…)"
+            )
+        object.__setattr__(self, "table_sha256", digest)
+        return self
+
+    @property
+    def angles(self) -> tuple[float, float, float, float]:
+        return (self.phi1, self.phi2, self.phi3, self.phi4)
+
+    def with_angle(self, name: str, value: float) -> "CamSettings":
+        """These settings with angle ``name`` at ``value``, TAKES_UP's angle taking up the
+        difference (ValueError where that leaves the angles inconsistent)."""
+        if value == getattr(self, name):
+            return self  # the angles as they are, bit for bit
+        other = TAKES_UP[name]
+        rest = sum(getattr(self, key) for key in ANGLES if key not in (name, other))
+        update = {name: value, other: 2.0 * math.pi - rest - value}
+        return CamSettings.model_validate({**self.model_dump(), **update})
+
+
+class ContactSettings(Settings):
+    """The contact force law Pn = k ε^n (1 + c ε') (campar.core.contact)."""
+
+    law: Literal[CONTACT_LAWS] = "hunt-crossley"
+    """hunt-crossley: c from μcn (the paper's); lankarani-nikravesh, flores: c from the
+    coefficient of restitution and the impact velocity."""
+    n: Annotated[float, Field(ge=1.0, le=3.0)] = 1.5
+    """Exponent of the penetration: 1.5 Hertz point contact; line contacts ≈ 1.0–1.1."""
+    restitution: Annotated[float, Field(gt=0.0, le=1.0)] | None = None
+    """Coefficient of restitution e (lankarani-nikravesh, flores: default 0.8)."""
+    impact_floor: Annotated[float, Field(gt=0.0)] | None = None
+    """Impact velocities below this count as this (lankarani-nikravesh, flores: default
+    0.001, in units of h ωn)."""
+
+    @model_validator(mode="after")
+    def restitution_only_where_used(self):
+        for key in ("restitution", "impact_floor"):
+            if self.law == "hunt-crossley" and getattr(self, key) is not None:
+                raise ValueError(
+                    f"{key}: hunt-crossley takes its damping from mu_cn; "
+                    f"{key} belongs to lankarani-nikravesh and flores"
+                )
+        return self
+
+
 class ModelSettings(Settings):
     tensile: Literal["clamp", "allow"] = "clamp"
     """clamp: Pn = max(0, …), contact cannot pull (default); allow: the paper's literal formula."""
@@ -130,18 +223,56 @@ class ModelSettings(Settings):
     cam_velocity: Literal["chain", "literal"] = "chain"
     """chain: the force's ε' uses ẏc = ω dyc/dθ, the chain rule (default); literal: ẏc =
     dyc/dθ, the paper's eq. 6 as printed (without the factor ω)."""
+    cam: CamSettings = CamSettings()
+    """The cam's motion laws and phase angles, or a table (docs/design.md)."""
+    contact: ContactSettings = ContactSettings()
+    """The contact force law (docs/design.md)."""
 
     @property
-    def law(self) -> int:
-        """The kernel's ``law`` bits of these settings (campar.core.model.law_flags)."""
+    def law_bits(self) -> int:
+        """The kernel's LAW_* bits of these settings (campar.core.model.law_flags)."""
         from ..core.model import law_flags  # here: numba only for those who compute
 
         return law_flags(self.tensile, self.duty_cycle, self.cam_velocity)
 
+    @property
+    def law(self):
+        """The kernel's ``law`` (campar.core.model.Law) of these settings: what make_params,
+        run_chain and trace_orbit take."""
+        return self.law_at()
+
+    def law_at(self, name: str | None = None, value: float | None = None, swept=()):
+        """The kernel's Law with law parameter ``name`` (LAW_PARAMETERS) at ``value``;
+        ``swept``: the law parameters a map sweeps (a swept exponent n compiles the general
+        power even at 1.5, so every row runs one kernel)."""
+        from ..core import cam, contact  # here: numba only for those who compute
+        from ..core.model import Law
+        from .cam_table import read_table
+
+        settings = self.cam
+        con = self.contact
+        if name in ANGLES:
+            settings = settings.with_angle(name, value)
+        elif name is not None:
+            con = con.model_copy(update={name: value})
+        if settings.table is not None:
+            bounds = cam.phase_bounds(settings.angles)
+            knots, coef = read_table(settings.table).spline()
+            the_cam = cam.TabulatedCam(knots, coef, bounds)
+        else:
+            the_cam = cam.phased_cam(settings.rise, settings.fall, settings.angles)
+        restitution = 0.8 if con.restitution is None else con.restitution
+        floor = contact.IMPACT_FLOOR if con.impact_floor is None else con.impact_floor
+        the_contact = contact.contact_law(con.law, con.n, restitution, floor,
+                                          general="n" in swept)  # fmt: skip
+        return Law(np.int64(self.law_bits), the_cam, the_contact)
+
 
 # Model options whose default leaves a job's hash as it was before the option existed,
 # so stores computed then stay valid (``job_digest``).
-MODEL_OPTION_DEFAULTS = {"duty_cycle": "separation", "cam_velocity": "chain"}
+MODEL_OPTION_DEFAULTS = {"duty_cycle": "separation", "cam_velocity": "chain",
+                         "cam": CamSettings().model_dump(mode="json"),
+                         "contact": ContactSettings().model_dump(mode="json")}  # fmt: skip
 
 
 class InitialState(Settings):
@@ -317,10 +448,10 @@ class Job(Settings):
         keys = list(sweep)
         if tuple(keys) == BASIN_AXES:  # a basin: initial states, checked as any number
             return sweep
-        unknown = [k for k in keys if k not in PARAMETERS]
+        unknown = [k for k in keys if k not in MAP_AXES]
         if unknown:
             raise ValueError(
-                f"unknown parameter {unknown[0]!r}; allowed: {', '.join(PARAMETERS)} "
+                f"unknown parameter {unknown[0]!r}; allowed: {', '.join(MAP_AXES)} "
                 f"(a map), or exactly {', '.join(BASIN_AXES)} (a basin)"
             )
         if len(keys) != 2 or keys[0] != "omega":
@@ -329,6 +460,8 @@ class Job(Settings):
                 f"parameter (a map), or {', '.join(BASIN_AXES)} (a basin), got {keys}"
             )
         for name, axis in sweep.items():
+            if name in LAW_PARAMETERS:
+                continue  # checked against the model's laws (law_axis_fits_the_model)
             for end, value in (("from", axis.start), ("to", axis.stop)):
                 try:
                     check_parameter(name, value)
@@ -389,6 +522,36 @@ class Job(Settings):
                 f"classify.sections: {what} compares whole cycles of up to classify.n_max = "
                 f"{n_max} section points; sections must be ≥ n_max or unset, got {sections}"
             )
+        return self
+
+    @model_validator(mode="after")
+    def law_axis_fits_the_model(self):
+        name = self.second if self.kind == "map" else None
+        if name not in LAW_PARAMETERS:
+            return self
+        section = LAW_PARAMETERS[name]
+        settings = getattr(self.model, section)
+        if name in settings.model_fields_set:
+            raise ValueError(f"{name} is both swept and set in model.{section}")
+        if name == "restitution" and self.model.contact.law == "hunt-crossley":
+            raise ValueError(
+                "restitution: a hunt-crossley contact has none to sweep; "
+                "model.contact.law: lankarani-nikravesh or flores"
+            )
+        if name in ANGLES and settings.table is not None and name in ("phi1", "phi3"):
+            raise ValueError(f"{name}: a tabulated cam has no rise or fall angle to sweep")
+        axis = self.sweep[name]
+        for end, value in (("from", axis.start), ("to", axis.stop)):
+            try:
+                if name in ANGLES:
+                    settings.with_angle(name, value)
+                else:
+                    ContactSettings.model_validate(
+                        {**settings.model_dump(exclude_unset=True), name: value}
+                    )
+            except ValidationError as exc:
+                message = exc.errors()[0]["msg"].removeprefix("Value error, ")
+                raise ValueError(f"sweep.{name}.{end} = {value:g}: {message}") from None
         return self
 
     @model_validator(mode="after")
@@ -459,6 +622,14 @@ class Job(Settings):
     def parameter(self, name: str) -> float:
         """Value of a parameter that is not swept."""
         return self.fixed[name]
+
+    def law(self, row: int = 0):
+        """The kernel's Law (campar.core.model.Law) of chain ``row``: the model's laws with a
+        swept law parameter (LAW_PARAMETERS) at the row's value."""
+        if self.kind == "map" and self.second in LAW_PARAMETERS:
+            value = float(self.second_values[row])
+            return self.model.law_at(self.second, value, swept=(self.second,))
+        return self.model.law
 
     @property
     def directions(self) -> tuple[str, ...]:
