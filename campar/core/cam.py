@@ -26,7 +26,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba.extending import overload
+from numba.extending import overload, register_jitable
 
 TWO_PI = 2.0 * math.pi
 # The paper's angles: rise, far dwell, fall, near dwell.
@@ -87,13 +87,29 @@ class PhasedCam(NamedTuple):
 
 
 class TabulatedCam(NamedTuple):
-    """A periodic cubic spline: on [knots[i], knots[i+1]], S = ((a d + b) d + c) d + e with
-    d = θ − knots[i] and (a, b, c, e) = coef[i]; knots[-1] = 2π. ``bounds`` as PhasedCam's
-    (the revolution's steps end there; the spline is one formula across them)."""
+    """A cubic spline: on [knots[i], knots[i+1]], S = ((a d + b) d + c) d + e with
+    d = θ − knots[i] and (a, b, c, e) = coef[i]; knots[-1] = 2π. Phase p uses the
+    intervals span[p, 0] … span[p, 1] (those meeting it), so that, as a phased cam's
+    formula, a phase's spline piece is used as given a rounding error outside the phase.
+    ``bounds`` as PhasedCam's (the revolution's steps end there)."""
 
     knots: np.ndarray
     coef: np.ndarray
+    span: np.ndarray  # int64 (4, 2)
     bounds: tuple
+
+
+def tabulated_cam(knots, coef, bounds) -> TabulatedCam:
+    """The TabulatedCam of a spline (campar.sweep.cam_table) and the cam's phase bounds."""
+    knots = np.ascontiguousarray(knots, dtype=np.float64)
+    last = len(knots) - 2  # the last interval
+    span = np.empty((4, 2), dtype=np.int64)
+    for p in range(4):
+        first = int(np.searchsorted(knots, bounds[p], side="right")) - 1
+        final = int(np.searchsorted(knots, bounds[p + 1], side="left")) - 1
+        span[p] = min(max(first, 0), last), min(max(final, first, 0), last)
+    return TabulatedCam(knots, np.ascontiguousarray(coef, dtype=np.float64), span,
+                        tuple(float(b) for b in bounds))  # fmt: skip
 
 
 def segment(name: str, start: float, width: float):
@@ -159,12 +175,14 @@ def _normalised(s_of):
     return rise_impl, fall_impl
 
 
+@register_jitable
 def cycloidal(u):
     w = 2.0 * math.pi
     sn = math.sin(w * u)
     return u - sn / w, 1.0 - math.cos(w * u), w * sn
 
 
+@register_jitable
 def polynomial_345(u):
     v = 1.0 - u
     return u * u * u * (10.0 - 15.0 * u + 6.0 * u * u), 30.0 * u * u * v * v, \
@@ -174,6 +192,7 @@ def polynomial_345(u):
 def _mirrored(half):
     """A law antisymmetric about u = 1/2 from its first half: s(u) = 1 − s(1 − u)."""
 
+    @register_jitable
     def s_of(u):
         if u <= 0.5:
             return half(u)
@@ -183,6 +202,7 @@ def _mirrored(half):
     return s_of
 
 
+@register_jitable
 def _trapezoid_half(u):
     a, w = TRAPEZOID_PEAK, 4.0 * math.pi
     v1 = a / w  # at u = 1/8
@@ -203,6 +223,7 @@ def _trapezoid_half(u):
             a * math.cos(w * d))  # fmt: skip
 
 
+@register_jitable
 def _sine_half(u):
     a, w, w3 = SINE_PEAK, 4.0 * math.pi, 4.0 * math.pi / 3.0
     v1 = a / w
@@ -271,21 +292,19 @@ def _phased_lift(law, theta, phase):
 
 def _spline_lift(law, theta, phase):
     knots = law.knots
-    x = theta
-    if x >= knots[knots.shape[0] - 1]:
-        x -= TWO_PI
-    elif x < 0.0:
-        x += TWO_PI
-    lo = 0
-    hi = knots.shape[0] - 1
-    while hi - lo > 1:  # knots[lo] <= x < knots[hi]
-        mid = (lo + hi) >> 1
-        if knots[mid] <= x:
-            lo = mid
-        else:
-            hi = mid
+    lo = law.span[phase, 0]
+    hi = law.span[phase, 1]
+    if theta >= knots[hi]:
+        lo = hi
+    else:
+        while hi - lo > 0:  # the interval in lo … hi whose left knot is the last ≤ θ
+            mid = (lo + hi + 1) >> 1
+            if knots[mid] <= theta:
+                lo = mid
+            else:
+                hi = mid - 1
     a, b, c, e = law.coef[lo, 0], law.coef[lo, 1], law.coef[lo, 2], law.coef[lo, 3]
-    d = x - knots[lo]
+    d = theta - knots[lo]
     return ((a * d + b) * d + c) * d + e, (3.0 * a * d + 2.0 * b) * d + c, 6.0 * a * d + 2.0 * b
 
 

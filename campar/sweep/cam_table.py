@@ -45,16 +45,27 @@ def check_angles(angles) -> tuple[float, float, float, float]:
     return phi
 
 
+def phase_bounds(angles) -> tuple[float, float, float, float, float]:
+    """0, Φ1, Φ1+Φ2, Φ1+Φ2+Φ3, 2π, as campar.core.cam computes them for the kernel."""
+    p1, p2, p3, _ = check_angles(angles)
+    return (0.0, p1, p1 + p2, p1 + p2 + p3, TWO_PI)
+
+
 @dataclass(frozen=True)
 class CamTable:
     theta: np.ndarray  # knots in [0, 2π), strictly increasing, theta[0] = 0
     lift: np.ndarray
     sha256: str  # of the file's bytes
+    name: str = "cam table"
 
-    def spline(self) -> tuple[np.ndarray, np.ndarray]:
-        """(knots with 2π appended, coefficients (a, b, c, e) a knot interval):
-        ``periodic_spline`` of the table."""
-        return periodic_spline(self.theta, self.lift)
+    def spline(self, joins: str = "smooth", bounds=None) -> tuple[np.ndarray, np.ndarray]:
+        """(knots with 2π appended, coefficients (a, b, c, e) a knot interval). ``joins``:
+        smooth, one periodic C² spline (``periodic_spline``); phases, a C² spline on each
+        cam phase between ``bounds`` (``phase_splines``: S continuous at the phase
+        boundaries, its acceleration free to jump there, as a cam made of segments)."""
+        if joins == "smooth":
+            return periodic_spline(self.theta, self.lift)
+        return phase_splines(self.theta, self.lift, bounds, self.name)
 
 
 def read_table(path: str | Path) -> CamTable:
@@ -126,7 +137,7 @@ def parse_table(text: str, name: str = "cam table", raw: bytes | None = None) ->
                          f"θ = {theta[widest]:.6g}; a cam table's points are at most "
                          f"2π/32 = {MAX_GAP:.4g} rad apart")  # fmt: skip
     digest = hashlib.sha256(raw if raw is not None else text.encode()).hexdigest()
-    return CamTable(theta, lift, digest)
+    return CamTable(theta, lift, digest, name)
 
 
 def periodic_spline(theta: np.ndarray, lift: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -150,6 +161,55 @@ def periodic_spline(theta: np.ndarray, lift: np.ndarray) -> tuple[np.ndarray, np
     coef[:, 2] = slope - h * (2.0 * m + m_next) / 6.0
     coef[:, 3] = y[:-1]
     return x, coef
+
+
+def phase_splines(theta, lift, bounds, name: str = "cam table"):
+    """A clamped cubic spline on each phase [bounds[i], bounds[i+1]] (the end slopes of a
+    quartic through the phase's five end points): C² inside a phase, S continuous across
+    the boundaries, which must be points of the table (ValueError otherwise)."""
+    x = np.append(np.asarray(theta, float), TWO_PI)
+    y = np.append(np.asarray(lift, float), lift[0])
+    coef = np.zeros((len(theta), 4))
+    for lo_b, hi_b in zip(bounds[:-1], bounds[1:], strict=True):
+        if hi_b == lo_b:
+            continue  # a dwell of no length
+        ends = []
+        for b in (lo_b, hi_b):
+            i = int(np.argmin(np.abs(x - b)))
+            if abs(x[i] - b) > ANGLE_TOL:
+                raise ValueError(
+                    f"{name}: no point at the phase boundary θ = {b:.12g}; with "
+                    "table_joins: phases every boundary is a point of the table"
+                )
+            ends.append(i)
+        i0, i1 = ends
+        if i1 - i0 < 4:
+            raise ValueError(f"{name}: {i1 - i0} intervals in the phase from θ = {lo_b:.6g}; "
+                             "with table_joins: phases each phase needs at least 4")  # fmt: skip
+        coef[i0:i1] = clamped_spline(x[i0 : i1 + 1], y[i0 : i1 + 1])
+    return x, coef
+
+
+def clamped_spline(x, y) -> np.ndarray:
+    """Coefficients (a, b, c, e) of the cubic spline through (x, y) whose end slopes are
+    those of the quartic through the five points at each end."""
+    slopes = [np.polyval(np.polyder(np.polyfit(x[:5] - x[0], y[:5], 4)), 0.0),
+              np.polyval(np.polyder(np.polyfit(x[-5:] - x[-1], y[-5:], 4)), 0.0)]  # fmt: skip
+    h = np.diff(x)
+    slope = np.diff(y) / h
+    n = len(x)
+    lower, diag, upper, rhs = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    diag[0], upper[0], rhs[0] = 2 * h[0], h[0], 6 * (slope[0] - slopes[0])
+    diag[-1], lower[-1], rhs[-1] = 2 * h[-1], h[-1], 6 * (slopes[1] - slope[-1])
+    lower[1:-1], diag[1:-1], upper[1:-1] = h[:-1], 2 * (h[:-1] + h[1:]), h[1:]
+    rhs[1:-1] = 6 * (slope[1:] - slope[:-1])
+    m = thomas(lower, diag, upper, rhs)
+    coef = np.empty((n - 1, 4))
+    coef[:, 0] = (m[1:] - m[:-1]) / (6 * h)
+    coef[:, 1] = 0.5 * m[:-1]
+    coef[:, 2] = slope - h * (2 * m[:-1] + m[1:]) / 6
+    coef[:, 3] = y[:-1]
+    return coef
 
 
 def solve_cyclic(lower, diag, upper, rhs) -> np.ndarray:

@@ -150,12 +150,16 @@ class CamSettings(Settings):
     """A CSV of (θ in radians, S in units of the stroke) over one revolution: the cam is the
     periodic C² cubic spline through it (campar.sweep.cam_table); rise and fall then have
     no say, the angles only say where the revolution's steps end."""
+    table_joins: Literal["smooth", "phases"] = "smooth"
+    """smooth: one periodic C² spline through the table; phases: a C² spline on each
+    phase, the acceleration free to jump at the phase boundaries (points of the table),
+    as a cam made of segments (a tabulated cosine law needs it)."""
     table_sha256: str | None = None
     """The table's content hash, set when the job is read: the numbers depend on it."""
 
     @model_validator(mode="after")
     def consistent(self):
-        from .cam_table import check_angles, read_table  # numpy only
+        from .cam_table import check_angles, phase_bounds, read_table  # numpy only
 
         check_angles(self.angles)
         if self.table is None:
@@ -164,7 +168,10 @@ class CamSettings(Settings):
             return self
         if (self.rise, self.fall) != ("cosine", "cosine"):
             raise ValueError("a cam is either a table or rise/fall laws, not both")
-        digest = read_table(self.table).sha256
+        table = read_table(self.table)
+        if self.table_joins == "phases":
+            table.spline("phases", phase_bounds(self.angles))  # its boundaries are points
+        digest = table.sha256
         if self.table_sha256 is not None and self.table_sha256 != digest:
             raise ValueError(
                 f"table {self.table} has changed since this job was made "
@@ -257,8 +264,8 @@ class ModelSettings(Settings):
             con = con.model_copy(update={name: value})
         if settings.table is not None:
             bounds = cam.phase_bounds(settings.angles)
-            knots, coef = read_table(settings.table).spline()
-            the_cam = cam.TabulatedCam(knots, coef, bounds)
+            knots, coef = read_table(settings.table).spline(settings.table_joins, bounds)
+            the_cam = cam.tabulated_cam(knots, coef, bounds)
         else:
             the_cam = cam.phased_cam(settings.rise, settings.fall, settings.angles)
         restitution = 0.8 if con.restitution is None else con.restitution
