@@ -43,7 +43,7 @@ PAPER_VALUES = {"f0": 0.5, "mu_kn": 0.8, "mu_cn": 0.8, "zeta": 0.2}
 # ``direction`` dimension (its tiles: every row range down, then every one up).
 DIRECTIONS = ("down", "up")
 
-OUTPUT_NAMES = ("label", "dc", "eps", "pn", "sections", "multipliers", "lyapunov")
+OUTPUT_NAMES = ("label", "dc", "eps", "pn", "sections", "multipliers", "lyapunov", "separation")
 DEFAULT_OUTPUTS = ("label", "dc", "eps", "pn")
 
 
@@ -538,7 +538,9 @@ class Job(Settings):
             return self
         section = LAW_PARAMETERS[name]
         settings = getattr(self.model, section)
-        if name in settings.model_fields_set:
+        default = type(settings).model_fields[name].default
+        if name in settings.model_fields_set and getattr(settings, name) != default:
+            # (a normalised job states the default there: the sweep overrides it row by row)
             raise ValueError(f"{name} is both swept and set in model.{section}")
         if name == "restitution" and self.model.contact.law == "hunt-crossley":
             raise ValueError(
@@ -559,6 +561,14 @@ class Job(Settings):
             except ValidationError as exc:
                 message = exc.errors()[0]["msg"].removeprefix("Value error, ")
                 raise ValueError(f"sweep.{name}.{end} = {value:g}: {message}") from None
+        return self
+
+    @model_validator(mode="after")
+    def separation_of_map_rows(self):
+        if self.kind == "basin" and self.wants("separation"):
+            raise ValueError(
+                "outputs: separation is a speed along a map's ω rows; a basin has none"
+            )
         return self
 
     @model_validator(mode="after")

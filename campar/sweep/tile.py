@@ -36,7 +36,7 @@ from .plan import Tile, chain_order, chain_parameters, first_column_parameters
 
 def output_bits(job: Job) -> int:
     bits = 0
-    if job.wants("dc") or job.wants("eps") or job.wants("pn"):
+    if any(job.wants(name) for name in ("dc", "eps", "pn", "separation")):
         bits |= OUT_STATS
     if job.wants("sections"):
         bits |= OUT_SECTIONS
@@ -152,6 +152,8 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
             job.law(row), starts[row], solver, settings, out,
         )  # fmt: skip
         extra = census_of(job, par, out.state, job.law(row))
+        if job.wants("separation"):
+            extra.update(separation_of(job, par, out, job.law(row), solver, settings))
         for name in names:
             result[name][r][order] = extra[name] if name in extra else getattr(out, name)
     return result
@@ -203,6 +205,18 @@ def census_of(job: Job, par: dict, state: np.ndarray, law) -> dict[str, np.ndarr
     from .multistable import census_row  # it builds on this module's settings and buffers
 
     return census_row(job, par, state, law)
+
+
+def separation_of(job: Job, par: dict, out: CellOutputs, law, solver, settings) -> dict:
+    """The ``separation`` arrays of a chain: its row's values in every cell (one chunk a
+    tile, as every per-cell array)."""
+    from .separation import SEPARATION_ARRAYS, separation_row
+
+    def allocate(n):
+        return allocate_outputs(n, settings.output_bits, job.n_sections)
+
+    values = separation_row(job, par, out, law, solver, settings, allocate)
+    return {name: np.full(len(out.n), v) for name, v in zip(SEPARATION_ARRAYS, values, strict=True)}
 
 
 # Seeds of ``chains.start: continue`` by job digest: every rank computes the same first
