@@ -7,7 +7,13 @@ The package, layer by layer (each may import only the layers above it):
 - ``campar.sweep``: the sweep machinery (job, plan, tile, runner, progress, store);
 - ``campar.views``: one cell, one bifurcation line, and figures;
 - ``campar.paper``: the study of the source paper (claims, figure set, report);
-- ``campar.bench``: ``campar bench``; ``campar.cli``: the ``campar`` command.
+- ``campar.api``: what the commands do, from Python (``run``, ``forecast``, ``line``);
+- ``campar.bench``: ``campar bench``; ``campar.cli``: the ``campar`` command, a module
+  per command family.
+
+The public names (``dir(campar)``, docs/cli.md): ``run``, ``forecast``, ``line``,
+``open``, ``simulate_point``, ``PointResult``, ``find_attractors``, ``BifurcationLine``,
+``Job``, ``load_job``.
 
 Importing campar does nothing but define names: the numba cache is checked when
 the kernel is first run (``campar.core.jitcache.ensure_fresh_cache``).
@@ -17,12 +23,18 @@ __version__ = "0.1.0"
 
 # Lazy: importing campar for its version or CLI must not compile the kernel.
 _EXPORTS = {
+    "run": "campar.api",
+    "forecast": "campar.api",
+    "line": "campar.api",
+    "open": "campar.views.dataset",
     "simulate_point": "campar.views.point",
     "PointResult": "campar.views.point",
+    "find_attractors": "campar.views.attractors",
+    "BifurcationLine": "campar.views.line",
     "Job": "campar.sweep.job",
     "load_job": "campar.sweep.job",
-    "open": "campar.views.dataset",
 }
+__all__ = ["__version__", *_EXPORTS]
 
 
 def __getattr__(name):
@@ -31,3 +43,7 @@ def __getattr__(name):
 
         return getattr(importlib.import_module(_EXPORTS[name]), name)
     raise AttributeError(f"module 'campar' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(__all__)

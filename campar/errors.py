@@ -45,6 +45,13 @@ class OutputError(CamparError):
     exit_code = 73  # EX_CANTCREAT
 
 
+class ContinuationError(CamparError):
+    """A periodic orbit, a branch or a bifurcation curve could not be computed as asked
+    (Newton did not converge, the integration failed); the message says where and why."""
+
+    exit_code = 1
+
+
 class Interrupted(CamparError):
     """A run stopped on a signal; running the same command again resumes it."""
 

@@ -15,10 +15,22 @@ LAYERS = {
     "errors": set(),
     "core": {"errors"},
     "sweep": {"core", "errors"},
-    "views": {"core", "sweep", "errors"},
-    "paper": {"core", "sweep", "views", "errors"},
-    "bench": {"core", "sweep", "views", "errors"},
-    "cli": {"core", "sweep", "views", "paper", "bench", "errors", "__init__"},
+    "continuation": {"core", "sweep", "errors"},
+    "views": {"core", "sweep", "continuation", "errors"},
+    "paper": {"core", "sweep", "continuation", "views", "errors"},
+    "bench": {"core", "sweep", "continuation", "views", "errors"},
+    "api": {"core", "sweep", "continuation", "views", "errors"},
+    "cli": {
+        "core",
+        "sweep",
+        "continuation",
+        "views",
+        "paper",
+        "bench",
+        "api",
+        "errors",
+        "__init__",
+    },
 }
 
 
@@ -76,7 +88,7 @@ def test_imports_point_down_the_layers(name):
 
 
 def test_every_subpackage_says_what_it_holds_and_may_import():
-    for sub in ("core", "sweep", "views", "paper", "bench"):
+    for sub in ("core", "sweep", "continuation", "views", "paper", "bench", "cli"):
         doc = ast.get_docstring(ast.parse((PACKAGE / sub / "__init__.py").read_text()))
         assert doc and "import" in doc, sub
 

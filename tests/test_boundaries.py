@@ -295,6 +295,20 @@ def test_plot_bifurcations_json_counts_every_typed_segment(pd_store, tmp_path, c
     assert main(zoomed) == 1 and "no cell centre of omega" in capsys.readouterr().err
 
 
+def test_plot_bifurcations_json_writes_no_image_unless_asked(pd_store, tmp_path, monkeypatch,
+                                                            capsys):  # fmt: skip
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    assert main(["plot", str(pd_store), "--bifurcations", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["figure"] is None and list(here.iterdir()) == []
+    assert main(["plot", str(pd_store), "--bifurcations", "--json", "-o", "asked.png"]) == 0
+    asked = json.loads(capsys.readouterr().out)
+    assert asked["figure"] == "asked.png" and [p.name for p in here.iterdir()] == ["asked.png"]
+    assert {**asked, "figure": None} == data
+
+
 def test_a_store_of_both_sweeps_types_the_sweep_asked_for(tmp_path):
     """chains.direction both: each sweep's map typed on its own; "before" is the cell its
     chain computed first (the larger ω down, the smaller up)."""

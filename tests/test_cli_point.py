@@ -93,12 +93,12 @@ def test_the_readme_tour_shows_what_campar_point_prints():
     from pathlib import Path
 
     readme = (Path(__file__).parents[1] / "README.md").read_text().splitlines()
-    start = readme.index("    $ campar point --omega 3") + 1
+    start = readme.index("$ campar point --omega 3") + 1
     shown = []
     for line in readme[start:]:
-        if line.lstrip().startswith("$ "):
+        if line.startswith(("$ ", "```")):
             break
-        shown.append(line[4:])
+        shown.append(line)
     out = campar("point", "--omega", "3")
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines() == shown

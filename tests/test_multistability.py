@@ -8,6 +8,7 @@ monostable cell, ``find_attractors`` at the same cells, resume, MPI, both direct
 ``campar.open``; a job without the key keeps its hash and its store's layout.
 """
 
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -210,6 +211,56 @@ def test_plot_multistability_draws_the_counts_and_refuses_a_store_without(census
         plot_store(tmp_path / "plain.zarr", "multistability", tmp_path / "p.png")
     result = run_campar("plot", path, "--what", "multistability", "-o", tmp_path / "c.png")
     assert result.returncode == 0, result.stderr
+
+
+def test_status_and_the_set_map_count_each_set_of_coexisting_attractors(census, tmp_path):
+    """The sets campar status lists and the set map's legend, against the attractor labels
+    campar.open gives each cell (xarray's path through the store, sorted here)."""
+    from campar.sweep.progress import describe
+    from campar.sweep.store import read_store
+
+    path, _ = census
+    expected = Counter()
+    with campar.open(path) as ds:
+        for labels, count in zip(ds.attractor_label.values.reshape(-1, CAP),
+                                 ds.n_attractors.values.reshape(-1), strict=True):  # fmt: skip
+            if count >= 2:
+                more = {"…"} if count > CAP else set()
+                expected[frozenset({str(x) for x in labels if x} | more)] += 1
+    assert expected[frozenset({"1-1", "3-2"})] >= 1  # the bistable cell's pair
+    with read_store(path) as reader:
+        (line,) = [x for x in describe(reader).splitlines() if x.startswith("sets")]
+    listed = line.removeprefix("sets    ").split("  (cells where")[0].split(", ")
+    shown = {frozenset(name.split(" + ")): int(c) for name, c in (x.rsplit(" ", 1) for x in listed)}
+    assert shown == dict(expected)
+    out = plot_store(path, "attractor_sets", tmp_path / "sets.png")
+    assert out.stat().st_size > 0
+
+
+def test_the_set_map_ignores_the_order_of_the_slots_and_marks_sets_beyond_the_cap():
+    from campar.sweep.attractor_sets import attractor_sets
+    from campar.views.plot import plot_map
+
+    job = Job.from_dict(merge(GRID, {"sweep": {"mu_kn": {"points": 2}}}))
+    kind = np.array([[[0, 0, -1], [0, 0, -1], [0, -1, -1]],
+                     [[0, 0, 0], [0, 1, -1], [0, 0, 0]]], np.int8)  # fmt: skip
+    n = np.array([[[1, 3, -1], [3, 1, -1], [1, -1, -1]], [[1, 3, 2], [1, 0, -1], [1, 3, 2]]])
+    p = np.array([[[1, 2, -1], [2, 1, -1], [1, -1, -1]], [[1, 2, 2], [1, 0, -1], [1, 2, 2]]])
+    count = np.array([[2, 2, 1], [3, 2, 5]], np.int16)
+    codes, names = attractor_sets(kind, n, p, count)
+    assert [names[c] for c in codes.reshape(-1)] == [
+        "1-1 + 3-2",
+        "1-1 + 3-2",
+        "1-1",
+        "1-1 + 2-2 + 3-2",
+        "1-1 + QP",
+        "1-1 + 2-2 + 3-2 + …",
+    ]
+    arrays = {"n_attractors": count, "attractor_kind": kind, "attractor_n": n, "attractor_p": p}
+    figure = plot_map(job, arrays, "attractor_sets")
+    entries = [t.get_text() for t in figure.axes[0].get_legend().get_texts()]
+    assert entries[:2] == ["1 attractor (1)", "1-1 + 3-2 (2)"]  # the most frequent set first
+    assert sorted(entries[2:]) == ["1-1 + 2-2 + 3-2 (1)", "1-1 + 2-2 + 3-2 + … (1)", "1-1 + QP (1)"]
 
 
 def test_the_map_s_categories_are_1_2_3_4_or_more_and_not_computed():

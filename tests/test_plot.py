@@ -19,7 +19,7 @@ from campar.core.codes import CHAOTIC, PERIODIC, QUASIPERIODIC, cell_label
 from campar.core.codes import FAILED as KIND_FAILED
 from campar.sweep.job import Job
 from campar.sweep.plan import plan_tiles
-from campar.views.plot import MAP_VIEWS, PlotError, parse_range
+from campar.views.plot import MAP_VIEWS, PlotError, parse_range, plot_store
 from campar.views.plot.colour import srgb_to_lab
 from campar.views.plot.labels import (
     DESIGNED,
@@ -43,7 +43,6 @@ from campar.views.plot.maps import (
     cell_runs,
     computed_mask,
     plot_map,
-    plot_store,
     quantity_scale,
     select_cells,
 )
@@ -84,6 +83,9 @@ def random_map(rows, cols, seed=0):
         "lyapunov": rng.normal(size=dc.shape),
         "hysteresis": (kind == P) & (rng.random(dc.shape) < 0.3),  # of a both-direction map
         "n_attractors": rng.integers(-1, 6, dc.shape),  # of a census (-1: not computed)
+        "attractor_kind": np.where(rng.random((rows, cols, 3)) < 0.7, P, -1).astype(np.int8),
+        "attractor_n": rng.choice([1, 2, 3], size=(rows, cols, 3)),
+        "attractor_p": rng.choice([0, 1, 2], size=(rows, cols, 3)),
     }
     return {"kind": kind, "n": n, "p": p, **values}
 
@@ -347,7 +349,8 @@ def test_every_view_renders_headless(what):
 
 
 def test_views_and_quantities_agree():
-    assert set(MAP_VIEWS) == {"labels", "kind", "hysteresis", "multistability", *QUANTITIES}
+    assert set(MAP_VIEWS) == {"labels", "kind", "hysteresis", "multistability", "attractor_sets",
+                              *QUANTITIES}  # fmt: skip
     with pytest.raises(PlotError, match="choose one of"):
         plot_map(grid_of(2, 2), random_map(2, 2), "steps")
     with pytest.raises(PlotError, match="needs the arrays n, p"):

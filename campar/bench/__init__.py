@@ -95,6 +95,18 @@ def names(text: str) -> list[str]:
 # -- the benchmarks ----------------------------------------------------------
 
 
+@benchmark("continuation", "periodic-orbit continuation: speed of a branch, PD and fold "
+           "points against SciPy, the hysteresis bands' folds, a map's curves",
+           needs=("scipy",))  # fmt: skip
+def _continuation_arguments(p):
+    p.add_argument("--points", type=int, default=1000,
+                   help="points of the speed branch (1000)")  # fmt: skip
+    p.add_argument("--hysteresis-job", default="jobs/mu_kn_both.yaml",
+                   help="a chains.direction: both job (jobs/mu_kn_both.yaml)")  # fmt: skip
+    p.add_argument("--store", help="a map store whose curves to compute and compare")
+    p.add_argument("--quick", action="store_true", help="the speed branch only")
+
+
 @benchmark("precision", "wall time and steps against error: DP5(4) tolerances, RK4 steps",
            needs=("scipy",))  # fmt: skip
 def _precision_arguments(p):

@@ -38,7 +38,11 @@ REV_EPS_MAX = 3
 REV_PN_MAX = 4
 REV_LOG_STRETCH = 5  # growth of the tangent vector (Lyapunov exponent)
 REV_GRAZE = 6  # smallest |ε| at a local minimum of ε: a shallow flight or a near miss
-N_REV_STATS = 7
+# ε at the interior local extremum of ε (minimum or maximum) nearest 0, signed: where it
+# crosses 0 the contact pattern changes (a grazing contact or flight), so a continuation
+# locates grazing as a root of it (campar.continuation)
+REV_TOUCH = 7
+N_REV_STATS = 8
 
 # Longest Newton jump taken on agreeing estimates (assess_revolution).
 TRUSTED_JUMP_MAX = 0.2
@@ -175,6 +179,47 @@ def assess_revolution(xs, jac, est, k, base, n_max, conv_tol, window_tol, jump_r
 
 
 @hot
+def unstable_cycle_nearby(xs, jac, k, base, n_max, reach):
+    """The unstable cycle the motion lingers at, if any: (n, z0, z1, v0, v1).
+
+    The smallest period n ≤ n_max (using revolutions after ``base``) with
+    |x_k − x_{k−n}| ≤ reach, growing since n revolutions before (the motion moves away
+    from the cycle, it does not settle on it), whose one-Newton-step fixed point z of
+    P^n lies within reach of x_k and has a real multiplier μ, |μ| > 1; v is μ's unit
+    eigenvector (of DP^n at x_k). n = 0 when there is none. Next to a period doubling
+    (μ ≈ −1) or a fold the escape from such a cycle takes hundreds of revolutions, and
+    its window reads as a torus or as chaos; the kernel leaves along v instead.
+    """
+    avail = min(n_max, (k - base) // 2)
+    if avail < 1:
+        return 0, 0.0, 0.0, 0.0, 0.0
+    m = jacobian_at(jac, k - 1)
+    for n in range(1, avail + 1):
+        if n > 1:
+            m = mat2_mul(m, jacobian_at(jac, k - n))
+        r = max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1]))
+        before = max(abs(xs[k - n, 0] - xs[k - 2 * n, 0]), abs(xs[k - n, 1] - xs[k - 2 * n, 1]))
+        if r > reach or not r > before:
+            continue
+        mu, im, _, _ = eig2(m)
+        if im != 0.0 or not abs(mu) > 1.0:
+            continue
+        z0, z1, dist_now, _ = newton_fixed_point(xs[k, 0], xs[k, 1], xs[k - n, 0], xs[k - n, 1], m)
+        if not dist_now <= reach:
+            continue
+        # (M − μI) v = 0 from its larger row
+        a, b, c, d = m[0] - mu, m[1], m[2], m[3] - mu
+        if abs(a) + abs(b) >= abs(c) + abs(d):
+            v0, v1 = -b, a
+        else:
+            v0, v1 = -d, c
+        norm = math.hypot(v0, v1)
+        if norm > 0.0:
+            return n, z0, z1, v0 / norm, v1 / norm
+    return 0, 0.0, 0.0, 0.0, 0.0
+
+
+@hot
 def slow_cycle_nearby(xs, jac, k, first, n_max, reach, margin):
     """True when, from the section points after ``first``, some P^n (n ≤ n_max)
     has a stable fixed point within ``reach`` of xs[k] (one Newton step) with a
@@ -270,6 +315,7 @@ def reset_revolution_stats(row):
     row[REV_PN_MAX] = 0.0
     row[REV_LOG_STRETCH] = 0.0
     row[REV_GRAZE] = math.inf
+    row[REV_TOUCH] = math.inf
 
 
 @hot
@@ -305,9 +351,14 @@ def add_step_stats(row, h, free, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, d
         lo = min(lo, dip)
         # a local minimum of ε near 0 is where a detachment can appear or vanish
         row[REV_GRAZE] = min(row[REV_GRAZE], abs(dip))
+        if abs(dip) < abs(row[REV_TOUCH]):
+            row[REV_TOUCH] = dip
     th, peak = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MAXIMUM)
     if th > 0.0:
         hi = max(hi, peak)
+        # … and a local maximum near 0, where an impact can appear or vanish
+        if abs(peak) < abs(row[REV_TOUCH]):
+            row[REV_TOUCH] = peak
     row[REV_EPS_MIN] = min(row[REV_EPS_MIN], lo)
     row[REV_EPS_MAX] = max(row[REV_EPS_MAX], hi)
     if not free:

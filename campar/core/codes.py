@@ -27,6 +27,7 @@ FLAG_SLOW = 2
 FLAG_GRAZING = 4
 FLAG_WARM_EXTRAPOLATED = 8
 FLAG_RESTARTED = 16
+FLAG_ESCAPED = 32
 
 
 class Status(enum.IntEnum):
@@ -91,6 +92,9 @@ class Flag(enum.IntFlag):
     WARM_EXTRAPOLATED = FLAG_WARM_EXTRAPOLATED
     # the previous cell failed; this one started from the job's state
     RESTARTED = FLAG_RESTARTED
+    # the transient lingered at an unstable cycle and was moved off it along its unstable
+    # direction (next to a period doubling or a fold)
+    ESCAPED = FLAG_ESCAPED
 
 
 def status_message(code: int) -> str:

@@ -3,27 +3,26 @@
 Three decorators. ``hot`` for the per-step path: numba's reference counting off.
 Each array passed down a call (and the stepper passes ~10 of them, in named
 tuples) otherwise costs an atomic increment and decrement that numba's pruning
-pass does not remove across calls; measured with numba 0.68 on this machine,
-one revolution took 195 µs with it and 70 µs without (perf: 67 % of the time
-in NRT_incref/NRT_decref). ``hot`` functions must not allocate or return
+pass does not remove across calls: with reference counting on, a revolution
+takes ~2.8× as long (numba 0.68; perf puts 67 % of the time in
+NRT_incref/NRT_decref). ``hot`` functions must not allocate or return
 arrays; numba refuses to compile them if they do. Buffers are allocated in
 Python (``make_work``, ``make_chain_work``) and handed down.
 
 ``inlined`` for the kernel's per-cell layer (a cell, its transient, one
 revolution's bookkeeping): inlined into the chain at numba's IR level, so it is
-typed and compiled once, as part of the entry point. As separate functions each
-of them was compiled on its own and then again, LLVM-optimised and turned into
-machine code, inside every caller (numba links callees into the caller's
-module), and numba compiled literal-argument variants of some (four of
-``step_revolution``): 22.7 → 17.9 CPU s of compilation with an empty cache
-(measured with numba 0.68). Only for functions with few call sites: inlining
-the integrator too made the entry point's compilation slower (27.6 s).
+typed and compiled once, as part of the entry point. A separate function is
+compiled on its own and then again, LLVM-optimised and turned into machine code,
+inside every caller (numba links callees into the caller's module), and numba
+compiles literal-argument variants of some: inlining them saves ~20 % of a cold
+compile (numba 0.68). Only for functions with few call sites: inlining the
+integrator too makes the entry point's compilation slower.
 
 ``hot`` functions have no CPython wrapper and no C callback (numba's ``@overload``
 default, for functions only compiled code calls). A dispatcher otherwise compiles both,
 which unbox every argument (named tuples of ~10 arrays): more IR for LLVM to optimise
-and turn into machine code in every library; without them a cold ``campar point``
-compiled in 13.3 s instead of 16.4 s (numba 0.68). Without a wrapper numba's entry
+and turn into machine code in every library; leaving them out saves ~20 % of a cold
+``campar point``'s compile (numba 0.68). Without a wrapper numba's entry
 pointer is null and a call from Python would crash the interpreter, so a ``hot``
 function raises TypeError there: Python calls ``entry`` functions, and tests reach
 the others through ``through_numba``.
@@ -71,9 +70,9 @@ def hot(function):
 def collector_paused():
     """Python's cyclic garbage collector off while numba compiles. A cold kernel compile
     builds millions of objects (types, IR, LLVM wrappers) that live until it ends, and the
-    collector's full passes walk them again and again: a cold ``campar point`` took
-    7.8–8.1 s with it and 6.7–7.0 s without (~48 MB more at its peak), measured with
-    numba 0.68 on this machine. The cycles it leaves are collected once it is back on."""
+    collector's full passes walk them again and again: with it paused a cold
+    ``campar point`` is ~14 % faster and peaks ~48 MB higher (numba 0.68). The cycles it
+    leaves are collected once it is back on."""
     enabled = gc.isenabled()
     gc.disable()
     try:

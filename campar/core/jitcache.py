@@ -15,11 +15,12 @@ import hashlib
 import os
 from pathlib import Path
 
+from . import numba_internals
+
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_MODULES = (
     "jit", "codes", "hermite", "dop853", "entry_steps", "cam", "contact", "model",
-    "integrator", "analysis",
-    "revolution", "revolution_call", "kernel", "tracer",
+    "integrator", "analysis", "revolution", "revolution_call", "kernel", "tracer", "shooting",
 )  # fmt: skip
 STAMP = "campar-core.digest"
 
@@ -35,16 +36,22 @@ def cache_dirs() -> list[Path]:
     """Where numba keeps the core's compiled functions: the directory its cache locator
     chose for the core's sources (beside them; under NUMBA_CACHE_DIR, a subdirectory named
     after the source directory and its hash; numba's user-wide cache for a read-only
-    install), and the in-tree ``__pycache__``. Every module of the core shares it."""
-    located, in_tree = located_cache_dir(), PACKAGE / "__pycache__"
+    install), and the in-tree ``__pycache__``. Every module of the core shares it. Where
+    numba's cache cannot be asked (``numba_internals``), the directories numba documents."""
+    from .kernel import chain_compiled  # defines the dispatchers, compiles nothing
+
+    located, in_tree = numba_internals.cache_path(chain_compiled), PACKAGE / "__pycache__"
+    if located is None:
+        return numba_internals.documented_cache_dirs(PACKAGE)
     return [in_tree] if located == in_tree else [in_tree, located]
 
 
-def located_cache_dir() -> Path:
-    """The one directory numba reads the core's compiled functions from in this process."""
+def located_cache_dir() -> Path | None:
+    """The one directory numba reads the core's compiled functions from in this process;
+    None where numba's cache cannot be asked (``numba_internals``)."""
     from .kernel import chain_compiled  # defines the dispatchers, compiles nothing
 
-    return Path(chain_compiled._cache.cache_path)
+    return numba_internals.cache_path(chain_compiled)
 
 
 @functools.cache

@@ -3,8 +3,8 @@
 numba compiles a callee while it types the caller, and links the callee's code into
 the caller's module, where LLVM optimises it and turns it into machine code again. For
 ``run_revolution`` (the integrator, the field and the events under it: ~40 % of the
-kernel's compile) that meant a cold chain compile could not start its own typing past
-the first revolution before the revolution was compiled, and then compiled it twice.
+kernel's compile) a direct call means a cold chain compile cannot type past the first
+revolution before the revolution is compiled, and then compiles it twice.
 Called through an address (``call_revolution``), the chain types against the
 revolution's signature alone: it compiles while a forked helper compiles the
 revolution (campar.core.split_compile), and its module holds none of the revolution's

@@ -1,7 +1,7 @@
 """Compile the map kernel with an empty cache on two cores instead of one.
 
-numba compiles in one process, one function after the other: a cold ``campar point``
-compiled for ~12 s on one core while the other idled. The chain calls one revolution
+numba compiles in one process, one function after the other, on one core while the
+other idles. The chain calls one revolution
 through its address (campar.core.revolution_call), so the two halves of the kernel
 compile apart: a forked helper compiles one revolution (``run_revolution`` with the
 integrator, the field and the events under it) into numba's on-disk cache while this
@@ -21,8 +21,8 @@ share a cache split the same way without a fork (``share_with_ranks``): ranks of
 index there compile the chain first, those of odd index the revolution, and each then
 waits for the other half to reach the cache and loads it. With a warm cache nothing is
 forked and nobody waits. The cache is cold for a job when it lacks the revolution that
-job's laws need (``in_cache``): a job of another cam or contact law splits its own cold
-compile even where the paper's kernel is cached.
+job's laws need (``numba_internals.cache_indexes``): a job of another cam or contact law
+splits its own cold compile even where the paper's kernel is cached.
 """
 
 import os
@@ -33,7 +33,7 @@ import time
 
 from numba import typeof, types
 
-from . import jitcache
+from . import jitcache, numba_internals
 from .kernel import chain_compiled, make_chain_work
 from .model import PAPER_LAW
 from .revolution import make_trace, run_revolution
@@ -43,12 +43,13 @@ HELPER_SECONDS = 300.0  # a helper takes ~5 s here; one still running after this
 POLL_SECONDS = 0.05  # between looks into the cache for another rank's half
 
 
-def in_cache(dispatcher, signature) -> bool:
-    """numba's on-disk cache holds ``dispatcher`` compiled for ``signature`` (its index names
-    it; nothing is loaded)."""
-    cache = dispatcher._cache
-    key = cache._index_key(tuple(signature), dispatcher.targetctx.codegen())
-    return key in cache._cache_file._load_index()
+def cold_for(dispatcher, signatures) -> bool:
+    """numba's cache lacks ``dispatcher`` for one of ``signatures`` (its index does not name
+    it); False where the cache cannot be asked (``numba_internals``): nothing is split then."""
+    if not numba_internals.split_available(dispatcher):
+        return False
+    found = [numba_internals.cache_indexes(dispatcher, s) for s in signatures]
+    return None not in found and not all(found)
 
 
 def can_fork() -> bool:
@@ -101,7 +102,7 @@ def start_helper(solver, cs, trace: bool = False, law=PAPER_LAW) -> Helper | Non
     work = make_chain_work(cs).w6
     recorders = [types.none, typeof(make_trace(0, 0, 1))] if trace else [types.none]
     signatures = [revolution_args(solver, cs, work, recorder, law) for recorder in recorders]
-    if all(in_cache(run_revolution, signature) for signature in signatures):
+    if not cold_for(run_revolution, signatures):
         return None
     pid = os.fork()
     if pid == 0:  # the helper: compile, then leave without running the parent's exit code
@@ -145,7 +146,7 @@ def share_with_ranks(share, solver, cs, chain_signature, law=PAPER_LAW) -> None:
     (``CompiledCallersOnly.awaiting``). The caller compiles the chain next either way:
     compiled here, or loaded from the cache. Nothing is split for one rank, or when the
     cache holds this chain already."""
-    if share is None or share[1] < 2 or in_cache(chain_compiled, chain_signature):
+    if share is None or share[1] < 2 or not cold_for(chain_compiled, [chain_signature]):
         return
     revolution = revolution_args(solver, cs, make_chain_work(cs).w6, law=law)
     if share[0] % 2 == 0:
@@ -160,9 +161,10 @@ def until_cached(dispatcher, signature, helper: Helper | None = None) -> None:
     rank compiles it), the helper has exited, or HELPER_SECONDS have passed (a helper still
     running is killed): then the caller compiles what is missing here. numba names an
     entry in its index before it writes the entry's data, whole, under a temporary name
-    that it then renames: an entry whose data is not there yet is not found."""
+    that it then renames: an entry whose data is not there yet is not found. Where numba's
+    cache cannot be asked (``numba_internals``) it returns at once."""
     deadline = time.monotonic() + HELPER_SECONDS
-    while dispatcher._cache.load_overload(signature, dispatcher.targetctx) is None:
+    while numba_internals.cache_serves(dispatcher, signature) is False:
         if helper is not None and not helper.running():
             return
         if time.monotonic() > deadline:

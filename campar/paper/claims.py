@@ -265,18 +265,6 @@ def distinct_labels(plane: Plane, rows: np.ndarray) -> int:
 # -- point claims (Fig. 6 and the text on Fig. 4d / 5c) ----------------------------
 
 
-def hopf_claim(ev: Evidence) -> Verdict:
-    r = ev.continued(3.208583, setups.FIG6_MU_KN).result
-    mult = r.multipliers or ()
-    moduli = [abs(m) for m in mult]
-    complex_pair = bool(mult) and abs(mult[0].imag) > 1e-9
-    text = f"{r.label}, |λ| = {', '.join(fmt(m) for m in moduli) or '–'}" + (
-        " (complex pair)" if complex_pair else " (real)")  # fmt: skip
-    if r.kind != "periodic":
-        return Verdict(f"{r.label} (no multipliers of a cycle)", None)
-    return Verdict(text, complex_pair and max(moduli) > 0.98)
-
-
 def multiplier_claim(index: int) -> Callable:
     omega, quoted, _ = setups.QUOTED_MULTIPLIERS[index]
 

@@ -21,8 +21,8 @@ not depend on the report's size; M rows (maps) do.
 import time
 
 from .. import __version__
+from . import continued, setups
 from . import map_claims as mc
-from . import setups
 from .claims import (
     LONG_RUN,
     Claim,
@@ -32,7 +32,6 @@ from .claims import (
     fig3,
     fig8,
     force_peak_phase,
-    hopf_claim,
     multiplier_claim,
     never_fully_detached,
     series_trend,
@@ -94,9 +93,11 @@ def _claims() -> list[Claim]:
     mu = setups.QUOTED_MU_KN
     rows += [
         Claim("P7", "text on Figs. 4d, 5c", "μkn = 0.91: Hopf (Neimark–Sacker) bifurcation of "
-              "the period-1 motion at ω = 3.208583", "multipliers of the cycle there "
-              "(continuation along ω from 6.0, step ≤ 0.005): a complex pair with |λ| > 0.98",
-              hopf_claim, command=continued_command(3.208583, setups.FIG6_MU_KN)),
+              "the period-1 motion at ω = 3.208583", "an NS point (a complex pair of "
+              "multipliers crossing the unit circle, located on the cycles themselves) on any "
+              "branch between ω 3.1 and 3.3: every periodic attractor of the paper's path and "
+              "of a census of 8 starts at 9 speeds, continued over ω 2…6 with switching",
+              continued.ns_claim, command=continued.structure_command),
         Claim("E1", "Fig. 5b1", f"μkn = 0.90, ω = {w1}: λ1,2 = −0.354351 ± 0.263715i, "
               "'satisfies the period-doubling condition'", "campar's multipliers at ω "
               "(continuation) within 0.01 of the quoted ones", multiplier_claim(0),
@@ -203,14 +204,24 @@ def _claims() -> list[Claim]:
         ("N3", "Fig. 2", "chattering 1-p̃ (p ≥ 7), with 1-0 embedded in its window along f0",
          "not encoded: M2 counts 1-p cells only; whether 1-0 sits inside a 1-p̃ window along "
          "f0 is a statement about the arrangement of regions, which no test reads"),
-        ("N4", "Figs. 4d, 5c", "the period-doubling cascade 1-1 → PD → 2-2 → PD → 4-4 → long "
-         "periods → chaos at μkn = 0.91", "not encoded as a cascade test (P rows test its "
-         "labels one by one; a cascade test would check PD-typed transitions in order)"),
         ("N5", "Fig. 9", "Pn lags yc (hysteresis from contact damping)", "not testable as "
          "stated: the paper names no feature whose delay it means (peak, onset, centre of "
          "mass); T12 tests the angle of the peak of Pn"),
     ]  # fmt: skip
     rows += [Claim(key, src, text, "–", None, untested=why) for key, src, text, why in never]
+    rows.append(
+        Claim(
+            "N4",
+            "Figs. 4d, 5c",
+            "the period-doubling cascade 1-1 → PD → 2-2 → PD → 4-4 → long "
+            "periods → chaos at μkn = 0.91",
+            "PD points in a row from the 1-cycles (a branch of "
+            "period 4 switched from one of period 2 switched from the 1-cycles), on the branch "
+            "structure of P7",
+            continued.cascade_claim,
+            command=continued.structure_command,
+        )
+    )
     return rows
 
 

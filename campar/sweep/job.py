@@ -17,20 +17,14 @@ from typing import Annotated, Literal
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import Field, ValidationError, field_validator, model_validator
 
 from ..errors import JobError
+from .job_file import UniqueKeyLoader, format_validation_error
+from .laws import LAW_PARAMETERS, CamSettings, ContactSettings, check_law_axis
+from .settings import Settings, wants_number  # noqa: F401 (their home for the schema's users)
 
 PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
-# Parameters of the job's laws (model.cam, model.contact) that a map may sweep as its
-# second axis: the name in ``sweep`` and the model section it overrides row by row.
-LAW_PARAMETERS = {
-    "phi1": "cam", "phi2": "cam", "phi3": "cam", "phi4": "cam",
-    "n": "contact", "restitution": "contact",
-}  # fmt: skip
-# The cam angle that takes up the difference when one is swept (they sum to 2π): the near
-# dwell, or the far dwell when the near dwell itself is swept.
-TAKES_UP = {"phi1": "phi4", "phi2": "phi4", "phi3": "phi4", "phi4": "phi2"}
 MAP_AXES = (*PARAMETERS, *LAW_PARAMETERS)
 # The axes of a basin job: the initial state (y, y') at θ = 0, y along the first
 # (columns), y' along the second (rows); its parameters are all fixed.
@@ -74,30 +68,6 @@ def check_parameter(name: str, value: float) -> float:
     return value
 
 
-class Settings(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
-
-    @field_validator("*", mode="before")
-    @classmethod
-    def booleans_are_not_numbers(cls, value, info):
-        """YAML's true/false where a number belongs is a mistake (pydantic reads true as 1)."""
-        annotation = cls.model_fields[info.field_name].annotation
-        values = value.values() if isinstance(value, dict) else [value]
-        if any(isinstance(v, bool) for v in values) and wants_number(annotation):
-            raise ValueError("must be a number, not true or false")
-        return value
-
-
-def wants_number(annotation) -> bool:
-    """A field typed int or float (inside Annotated, Optional or a dict's values)."""
-    if annotation in (int, float):
-        return True
-    args = typing.get_args(annotation)
-    if typing.get_origin(annotation) is dict:
-        return wants_number(args[1])
-    return any(wants_number(a) for a in args if a is not bool)
-
-
 class Axis(Settings):
     """A grid axis: ``points`` values from ``from`` to ``to`` inclusive, evenly spaced."""
 
@@ -130,96 +100,6 @@ def cell_edges(centres) -> np.ndarray:
     return np.concatenate([[2 * c[0] - mid[0]], mid, [2 * c[-1] - mid[-1]]])
 
 
-MOTION_LAWS = ("cosine", "cycloidal", "polynomial-345", "modified-trapezoid", "modified-sine")
-CONTACT_LAWS = ("hunt-crossley", "lankarani-nikravesh", "flores")
-ANGLES = ("phi1", "phi2", "phi3", "phi4")
-PAPER_ANGLES = (math.pi / 3.0, 2.0 * math.pi / 3.0, math.pi / 3.0, 2.0 * math.pi / 3.0)
-
-
-class CamSettings(Settings):
-    """The cam: a motion law for the rise and one for the fall over the phase angles
-    phi1 … phi4 (rise, far dwell, fall, near dwell; radians, summing to 2π), or a table."""
-
-    rise: Literal[MOTION_LAWS] = "cosine"
-    fall: Literal[MOTION_LAWS] = "cosine"
-    phi1: float = PAPER_ANGLES[0]
-    phi2: float = PAPER_ANGLES[1]
-    phi3: float = PAPER_ANGLES[2]
-    phi4: float = PAPER_ANGLES[3]
-    table: str | None = None
-    """A CSV of (θ in radians, S in units of the stroke) over one revolution: the cam is the
-    periodic C² cubic spline through it (campar.sweep.cam_table); rise and fall then have
-    no say, the angles only say where the revolution's steps end."""
-    table_joins: Literal["smooth", "phases"] = "smooth"
-    """smooth: one periodic C² spline through the table; phases: a C² spline on each
-    phase, the acceleration free to jump at the phase boundaries (points of the table),
-    as a cam made of segments (a tabulated cosine law needs it)."""
-    table_sha256: str | None = None
-    """The table's content hash, set when the job is read: the numbers depend on it."""
-
-    @model_validator(mode="after")
-    def consistent(self):
-        from .cam_table import check_angles, phase_bounds, read_table  # numpy only
-
-        check_angles(self.angles)
-        if self.table is None:
-            if self.table_sha256 is not None:
-                raise ValueError("table_sha256 belongs to a table: give table too")
-            return self
-        if (self.rise, self.fall) != ("cosine", "cosine"):
-            raise ValueError("a cam is either a table or rise/fall laws, not both")
-        table = read_table(self.table)
-        if self.table_joins == "phases":
-            table.spline("phases", phase_bounds(self.angles))  # its boundaries are points
-        digest = table.sha256
-        if self.table_sha256 is not None and self.table_sha256 != digest:
-            raise ValueError(
-                f"table {self.table} has changed since this job was made "
-                f"(sha256 {digest[:12]}…, the job says {self.table_sha256[:12]}…)"
-            )
-        object.__setattr__(self, "table_sha256", digest)
-        return self
-
-    @property
-    def angles(self) -> tuple[float, float, float, float]:
-        return (self.phi1, self.phi2, self.phi3, self.phi4)
-
-    def with_angle(self, name: str, value: float) -> "CamSettings":
-        """These settings with angle ``name`` at ``value``, TAKES_UP's angle taking up the
-        difference (ValueError where that leaves the angles inconsistent)."""
-        if value == getattr(self, name):
-            return self  # the angles as they are, bit for bit
-        other = TAKES_UP[name]
-        rest = sum(getattr(self, key) for key in ANGLES if key not in (name, other))
-        update = {name: value, other: 2.0 * math.pi - rest - value}
-        return CamSettings.model_validate({**self.model_dump(), **update})
-
-
-class ContactSettings(Settings):
-    """The contact force law Pn = k ε^n (1 + c ε') (campar.core.contact)."""
-
-    law: Literal[CONTACT_LAWS] = "hunt-crossley"
-    """hunt-crossley: c from μcn (the paper's); lankarani-nikravesh, flores: c from the
-    coefficient of restitution and the impact velocity."""
-    n: Annotated[float, Field(ge=1.0, le=3.0)] = 1.5
-    """Exponent of the penetration: 1.5 Hertz point contact; line contacts ≈ 1.0–1.1."""
-    restitution: Annotated[float, Field(gt=0.0, le=1.0)] | None = None
-    """Coefficient of restitution e (lankarani-nikravesh, flores: default 0.8)."""
-    impact_floor: Annotated[float, Field(gt=0.0)] | None = None
-    """Impact velocities below this count as this (lankarani-nikravesh, flores: default
-    0.001, in units of h ωn)."""
-
-    @model_validator(mode="after")
-    def restitution_only_where_used(self):
-        for key in ("restitution", "impact_floor"):
-            if self.law == "hunt-crossley" and getattr(self, key) is not None:
-                raise ValueError(
-                    f"{key}: hunt-crossley takes its damping from mu_cn; "
-                    f"{key} belongs to lankarani-nikravesh and flores"
-                )
-        return self
-
-
 class ModelSettings(Settings):
     tensile: Literal["clamp", "allow"] = "clamp"
     """clamp: Pn = max(0, …), contact cannot pull (default); allow: the paper's literal formula."""
@@ -245,34 +125,10 @@ class ModelSettings(Settings):
     @property
     def law(self):
         """The kernel's ``law`` (campar.core.model.Law) of these settings: what make_params,
-        run_chain and trace_orbit take."""
-        return self.law_at()
+        run_chain and trace_orbit take (``laws.kernel_law``)."""
+        from .laws import kernel_law
 
-    def law_at(self, name: str | None = None, value: float | None = None, swept=()):
-        """The kernel's Law with law parameter ``name`` (LAW_PARAMETERS) at ``value``;
-        ``swept``: the law parameters a map sweeps (a swept exponent n compiles the general
-        power even at 1.5, so every row runs one kernel)."""
-        from ..core import cam, contact  # here: numba only for those who compute
-        from ..core.model import Law
-        from .cam_table import read_table
-
-        settings = self.cam
-        con = self.contact
-        if name in ANGLES:
-            settings = settings.with_angle(name, value)
-        elif name is not None:
-            con = con.model_copy(update={name: value})
-        if settings.table is not None:
-            bounds = cam.phase_bounds(settings.angles)
-            knots, coef = read_table(settings.table).spline(settings.table_joins, bounds)
-            the_cam = cam.tabulated_cam(knots, coef, bounds)
-        else:
-            the_cam = cam.phased_cam(settings.rise, settings.fall, settings.angles)
-        restitution = 0.8 if con.restitution is None else con.restitution
-        floor = contact.IMPACT_FLOOR if con.impact_floor is None else con.impact_floor
-        the_contact = contact.contact_law(con.law, con.n, restitution, floor,
-                                          general="n" in swept)  # fmt: skip
-        return Law(np.int64(self.law_bits), the_cam, the_contact)
+        return kernel_law(self)
 
 
 # Model options whose default leaves a job's hash as it was before the option existed,
@@ -419,6 +275,21 @@ def field_choices(settings: type[Settings], name: str) -> tuple[str, ...]:
 
 
 class Job(Settings):
+    """A validated job, frozen, every key explicit: jobs/README.md gives each key's meaning.
+
+    Parameters
+    ----------
+    name, sweep, fixed, model, initial, integrator, transient : the job's sections
+    classify, outputs, tiles, chains, attractors, store : the job's sections
+
+    Examples
+    --------
+    >>> import campar
+    >>> job = campar.load_job("jobs/smoke.yaml")
+    >>> job.shape, job.fixed["mu_kn"], job.chains.direction
+    ((24, 40), 0.8, 'down')
+    """
+
     name: Annotated[str, Field(min_length=1, max_length=200, pattern=r"^[A-Za-z0-9_.\-]+$")]
     sweep: dict[str, Axis]
     fixed: dict[str, float] = {}
@@ -533,34 +404,8 @@ class Job(Settings):
 
     @model_validator(mode="after")
     def law_axis_fits_the_model(self):
-        name = self.second if self.kind == "map" else None
-        if name not in LAW_PARAMETERS:
-            return self
-        section = LAW_PARAMETERS[name]
-        settings = getattr(self.model, section)
-        default = type(settings).model_fields[name].default
-        if name in settings.model_fields_set and getattr(settings, name) != default:
-            # (a normalised job states the default there: the sweep overrides it row by row)
-            raise ValueError(f"{name} is both swept and set in model.{section}")
-        if name == "restitution" and self.model.contact.law == "hunt-crossley":
-            raise ValueError(
-                "restitution: a hunt-crossley contact has none to sweep; "
-                "model.contact.law: lankarani-nikravesh or flores"
-            )
-        if name in ANGLES and settings.table is not None and name in ("phi1", "phi3"):
-            raise ValueError(f"{name}: a tabulated cam has no rise or fall angle to sweep")
-        axis = self.sweep[name]
-        for end, value in (("from", axis.start), ("to", axis.stop)):
-            try:
-                if name in ANGLES:
-                    settings.with_angle(name, value)
-                else:
-                    ContactSettings.model_validate(
-                        {**settings.model_dump(exclude_unset=True), name: value}
-                    )
-            except ValidationError as exc:
-                message = exc.errors()[0]["msg"].removeprefix("Value error, ")
-                raise ValueError(f"sweep.{name}.{end} = {value:g}: {message}") from None
+        if self.kind == "map":
+            check_law_axis(self.model, self.second, self.sweep[self.second])
         return self
 
     @model_validator(mode="after")
@@ -644,8 +489,10 @@ class Job(Settings):
         """The kernel's Law (campar.core.model.Law) of chain ``row``: the model's laws with a
         swept law parameter (LAW_PARAMETERS) at the row's value."""
         if self.kind == "map" and self.second in LAW_PARAMETERS:
+            from .laws import kernel_law
+
             value = float(self.second_values[row])
-            return self.model.law_at(self.second, value, swept=(self.second,))
+            return kernel_law(self.model, self.second, value, swept=(self.second,))
         return self.model.law
 
     @property
@@ -697,7 +544,7 @@ class Job(Settings):
         try:
             return cls.model_validate(data)
         except ValidationError as exc:
-            raise JobError(format_validation_error(exc, source)) from None
+            raise JobError(format_validation_error(exc, source, allowed_keys)) from None
 
 
 def job_digest(data: dict) -> str:
@@ -711,27 +558,6 @@ def job_digest(data: dict) -> str:
                          or MODEL_OPTION_DEFAULTS[key] != value}  # fmt: skip
     text = json.dumps(data, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
-
-
-def format_validation_error(exc: ValidationError, source: str) -> str:
-    lines = []
-    for err in exc.errors():
-        where = ".".join(str(part) for part in err["loc"]) or "(top level)"
-        message = err["msg"].removeprefix("Value error, ")
-        if err["type"] == "extra_forbidden":
-            message = f"unknown key; allowed here: {', '.join(allowed_keys(err['loc'][:-1]))}"
-        elif err["type"] == "missing":
-            message = "required key is missing"
-        elif err["type"] in ("model_type", "dict_type"):
-            message = "must be a mapping of keys (key: value, or {key: value})"
-        got = err.get("input")
-        detail = (
-            ""
-            if err["type"] in ("extra_forbidden", "missing") or isinstance(got, dict)
-            else f", got {got!r}"
-        )
-        lines.append(f"{source}: {where}: {message}{detail}")
-    return "\n".join(lines)
 
 
 def allowed_keys(loc: tuple) -> list[str]:
@@ -749,27 +575,30 @@ def allowed_keys(loc: tuple) -> list[str]:
     return [field.alias or name for name, field in node.model_fields.items()]
 
 
-class UniqueKeyLoader(yaml.SafeLoader):
-    """YAML's safe loader, refusing a key given twice in one mapping (YAML requires keys to
-    be unique; PyYAML would keep the last value silently)."""
-
-
-def _unique_mapping(loader: UniqueKeyLoader, node: yaml.MappingNode, deep: bool = False):
-    seen = {}
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        if isinstance(key, typing.Hashable) and key in seen:
-            lines = f"lines {seen[key] + 1} and {key_node.start_mark.line + 1}"
-            raise yaml.YAMLError(f"the key {key!r} is given twice ({lines})")
-        seen[key] = key_node.start_mark.line
-    return loader.construct_mapping(node, deep=deep)
-
-
-UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _unique_mapping)
-
-
 def load_job(path: str | Path) -> Job:
-    """Read and validate a YAML job file."""
+    """Read and validate a YAML job file (jobs/README.md: every key and its default).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The job file.
+
+    Returns
+    -------
+    Job
+        The validated job.
+
+    Raises
+    ------
+    campar.errors.JobError
+        The file unreadable, not YAML, or a key unknown, repeated, mistyped or out of range.
+
+    Examples
+    --------
+    >>> import campar
+    >>> campar.load_job("jobs/smoke.yaml").integrator.method
+    'dop853'
+    """
     path = Path(path)
     try:
         text = path.read_text()

@@ -22,6 +22,7 @@ import numpy as np
 
 from .. import __version__
 from ..core.codes import KIND_NAMES, Kind, cell_label, status_message
+from .attractor_sets import attractor_sets
 from .job import DIRECTIONS
 from .store import read_store, verify_store
 
@@ -136,6 +137,7 @@ class Tally:
         self.cells = 0
         self.failed, self.kinds = Counter(), Counter()
         self.labels: dict[str | None, Counter] = {}  # by sweep direction (None: the job's one)
+        self.sets: dict[str | None, Counter] = {}  # cells where attractors coexist, by set
 
     def add(self, check) -> None:
         """One verified tile (``_integrity.TileCheck``)."""
@@ -151,6 +153,13 @@ class Tally:
             for pair, count in _counts(pairs):
                 n, p = pair >> 32, pair & 0xFFFFFFFF
                 labels[cell_label(0, n, p, self.chatter_p)] += count
+        if "n_attractors" in a:  # a census map: which attractors coexist (2 or more)
+            codes, names = attractor_sets(a["attractor_kind"], a["attractor_n"], a["attractor_p"],
+                                          a["n_attractors"], self.chatter_p)  # fmt: skip
+            several = self.sets.setdefault(check.tile.direction, Counter())
+            for code, count in _counts(codes):
+                if "+" in names[code]:
+                    several[names[code]] += count
 
 
 def summarize(reader) -> dict:
@@ -173,6 +182,7 @@ def summarize(reader) -> dict:
                 tally.labels.items(), key=lambda item: DIRECTIONS.index(item[0]) if item[0] else -1
             )
         },  # fmt: skip
+        "sets": {way: dict(c.most_common()) for way, c in tally.sets.items()},
         "damaged": report.damaged,
         "problems": report.problems,
         "checksums": report.checksums,
@@ -207,6 +217,12 @@ def describe(reader, max_labels: int = 12) -> str:
         shown = ", ".join(f"{label} {c}" for label, c in top[:max_labels])
         more = f", … {len(top) - max_labels} more" if len(top) > max_labels else ""
         lines.append(f"labels  {f'({way}) ' if way else ''}{shown}{more}")
+    for way, sets in s["sets"].items():  # a census map: the attractor sets of 2 or more
+        top = list(sets.items())
+        shown = ", ".join(f"{name} {c}" for name, c in top[:max_labels]) or "none"
+        more = f", … {len(top) - max_labels} more" if len(top) > max_labels else ""
+        lines.append(f"sets    {f'({way}) ' if way else ''}{shown}{more}  (cells where "
+                     "several attractors coexist)")  # fmt: skip
     if s["runs"]:
         lines.append(
             f"runs    {s['runs']} ({s['last_outcome']} last), {format_duration(s['seconds'])} "

@@ -15,13 +15,12 @@ signal check: with two ranks on two cores both cores compute.
 
 Every lane holds its next tile as well (``TILES_HELD``, while the queue has one for
 every lane): it starts it the moment the last one is done, whatever the master is
-doing. Without it a lane waited 3–6 ms a tile for the master's answer and the GIL
-(0.45 lane-seconds of a 7.5 s plane on two ranks). The master probes every ≤ 1 ms,
-except while every lane is provided for — holds its next tile, and no worker is writing
-one (``provided_for``) —: then it waits on its own lane for up to a quarter of the
-shortest tile. On the 2-rank plane that took its wake-ups from ~7,300 to ~1,900 and the
-plane's time down 3 % (docs/scaling.md). A wait whenever every lane held two tiles,
-writing or not, had made 16 stand-in ranks fall behind (89 → 57 tiles/s).
+doing, instead of waiting 3–6 ms a tile for the master's answer and the GIL. The master
+probes every ≤ 1 ms, except while every lane is provided for — holds its next tile, and
+no worker is writing one (``provided_for``) —: then it waits on its own lane for up to a
+quarter of the shortest tile, which on the 2-rank plane wakes it a quarter as often
+(docs/scaling.md). It does not wait while a worker writes: a master that waits whenever
+every lane holds two tiles falls behind at 16 stand-in ranks.
 
 The wire protocol between the master and its worker ranks is ``campar.sweep.wire``'s.
 

@@ -30,7 +30,8 @@ from ..core.model import N_STATE
 from ..core.revolution import make_trace
 from ..core.tracer import compile_tracer, trace_orbit
 from .arrays import array_names, array_spec
-from .job import LAW_PARAMETERS, Job
+from .job import Job
+from .laws import LAW_PARAMETERS
 from .plan import Tile, chain_order, chain_parameters, first_column_parameters
 
 

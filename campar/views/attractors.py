@@ -63,8 +63,22 @@ KIND_CODES = {name: int(code) for code, name in KIND_NAMES.items()}
 class Attractor:
     """One attractor of a cell and the starts that reached it.
 
-    ``result`` is the first start's cell (label, multipliers, σn points, …); ``state``
-    is a point of the attractor at θ = 0 (its final state), a start that lands on it.
+    Parameters
+    ----------
+    result : PointResult
+        The first start's cell (label, multipliers, σn points, …); ``state`` is a point
+        of the attractor at θ = 0 (its final state), a start that lands on it.
+    starts : tuple of int
+        Indices into the census' starts that reached it, the first the representative.
+    fraction : float
+        ``len(starts) / K``: its basin fraction in the box of starts.
+
+    Examples
+    --------
+    >>> from campar.views.attractors import find_attractors
+    >>> first = find_attractors(5.8, count=16, mu_kn=0.86).attractors[0]
+    >>> first.label, first.kind, len(first.starts)
+    ('1-1', 'periodic', 9)
     """
 
     result: PointResult
@@ -94,7 +108,30 @@ class Attractor:
 
 @dataclass(frozen=True)
 class AttractorCensus:
-    """What K starts of one cell reached: distinct attractors, most frequent first."""
+    """What K starts of one cell reached: distinct attractors, most frequent first.
+
+    Parameters
+    ----------
+    parameters : dict
+        ω, f0, μkn, μcn, ζ, the force law and its options.
+    starts : numpy.ndarray
+        The K starts (y, y') at θ = 0, shape (K, 2).
+    attractors : tuple of Attractor
+        The distinct attractors, most frequent first.
+    basin : numpy.ndarray
+        Shape (K,): the index into ``attractors`` each start reached; -1 unsettled.
+    unsettled : tuple
+        (start index, its PointResult) of the starts that settled on none.
+    match_tol : float
+        ∞-norm tolerance within which two cycles' σn points are one.
+
+    Examples
+    --------
+    >>> from campar.views.attractors import find_attractors
+    >>> census = find_attractors(5.8, count=16, mu_kn=0.86)
+    >>> census.basin.tolist()
+    [0, 0, 1, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1]
+    """
 
     parameters: dict  # omega, f0, mu_kn, mu_cn, zeta, tensile
     starts: np.ndarray  # (K, 2) initial (y, y') at θ = 0
@@ -148,12 +185,44 @@ def find_attractors(
 ) -> AttractorCensus:
     """Run ``count`` starts at one cell and group them into distinct attractors.
 
-    ``starts`` ((K, 2) array of (y, y') at θ = 0) replaces the spread of
-    ``spread_starts(count, omega, given)``. ``settings``: the keywords of
-    ``campar.views.point.point_job`` (parameters, tensile, transient, integrator)
-    but y0, v0 and sections; ``chaos_after`` defaults to CHAOS_AFTER. Multipliers are
-    always computed (one 2×2 eigenvalue problem per cycle). Raises JobError for a
-    parameter out of range.
+    Two periodic results are one attractor when their σn points agree up to a cyclic
+    shift within ``match_tolerance()``; quasi-periodic and chaotic results are grouped
+    by kind and by the overlap of their section clouds. Multipliers are always computed.
+
+    Parameters
+    ----------
+    omega : float
+        Cam speed ω.
+    count : int
+        Number of starts K: rest, then ``given``, then Halton points over
+        y ∈ [−1, 2], y' ∈ ±1.5 ω at θ = 0 (``spread_starts``).
+    starts : array_like, optional
+        (K, 2) starts (y, y') at θ = 0, replacing that spread.
+    given : sequence of (float, float)
+        Starts to try right after rest.
+    lyapunov : bool
+        Also compute each start's largest Lyapunov exponent.
+    **settings
+        The keywords of :func:`campar.simulate_point` but ``y0``, ``v0`` and
+        ``sections``; ``chaos_after`` defaults to ``CHAOS_AFTER`` (a chaos verdict waits
+        for the whole budget).
+
+    Returns
+    -------
+    AttractorCensus
+        The distinct attractors, most frequent first, each with its basin fraction.
+
+    Raises
+    ------
+    campar.errors.JobError
+        A parameter unknown or out of range.
+
+    Examples
+    --------
+    >>> from campar.views.attractors import find_attractors
+    >>> census = find_attractors(5.8, count=16, mu_kn=0.86)
+    >>> [(a.label, a.fraction) for a in census.attractors]
+    [('1-1', 0.5625), ('3-2', 0.4375)]
     """
     settings.setdefault("chaos_after", CHAOS_AFTER)
     if starts is None:

@@ -84,7 +84,29 @@ class Segment:
 
 @dataclass(frozen=True)
 class MapBoundaries:
-    """The typed boundaries of a map (or of its zoomed part)."""
+    """The typed boundaries of a map (or of its zoomed part).
+
+    Parameters
+    ----------
+    segments : tuple of Segment
+        Every typed edge between neighbouring cells of different labels.
+    second_name : str
+        The map's second parameter.
+    multipliers : bool
+        Whether the store held Floquet multipliers (without them PD, SN, NS and jump
+        cannot be told).
+    traced : bool
+        Grazing judged from traced orbits (else from the stored ε extremes).
+    notes : tuple of str
+        What limited the typing, in words.
+
+    Examples
+    --------
+    >>> from campar.views.boundaries import store_boundaries
+    >>> found = store_boundaries("results/smoke.zarr")
+    >>> found.counts()["PD"], found.counts()["G"] > 0
+    (0, True)
+    """
 
     segments: tuple[Segment, ...]
     second_name: str
@@ -298,6 +320,35 @@ def store_boundaries(path, *, omega=None, second=None, trace: bool = False,
     kernel; a few ms per periodic cell on an edge where the detachments change).
     direction: of a ``chains.direction: both`` store, the sweep whose map is typed
     ("down", the default, or "up"); else None or the store's own direction.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The store.
+    omega, second : tuple of float, optional
+        Zoom ranges ``(a, b)`` of ω and the second parameter, either order; None: the
+        whole axis.
+    trace : bool
+        Judge grazing from orbits traced from the stored states with the store's job.
+    direction : str, optional
+        Of a ``chains.direction: both`` store, the sweep whose map is typed.
+
+    Returns
+    -------
+    MapBoundaries
+        The typed edges, and notes on what limited the typing.
+
+    Raises
+    ------
+    campar.errors.StoreError
+        The store cannot be read, or it is a basin store (no parameter plane).
+
+    Examples
+    --------
+    >>> from campar.views.boundaries import store_boundaries
+    >>> found = store_boundaries("results/smoke.zarr")
+    >>> found.multipliers, found.second_name
+    (False, 'mu_cn')
     """
     from ..sweep.store import read_store, verify_store
     from .plot import PlotError  # cheap: matplotlib is not loaded

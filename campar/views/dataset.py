@@ -66,7 +66,38 @@ TYPED_ATTRS = ("_FillValue", "flag_values", "flag_masks")  # CF: the variable's 
 
 
 def open(path: str | Path) -> xr.Dataset:
-    """The store at ``path`` (Zarr directory or HDF5 file) as a labelled xarray Dataset."""
+    """The store at ``path`` (Zarr directory or HDF5 file) as a labelled xarray Dataset.
+
+    The integer codes stay integers, −1 where a cell is not computed yet; ``label`` adds
+    the n-p text of every cell, a ``both`` store ``hysteresis``, a census
+    ``attractor_label``, a basin store ``basin`` and the attractors' variables.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A Zarr store (a directory) or an HDF5 store (``.h5``, ``.hdf5``).
+
+    Returns
+    -------
+    xarray.Dataset
+        Every per-cell array over (second parameter, ω), with CF metadata.
+
+    Raises
+    ------
+    campar.errors.StoreError
+        No readable campar store at ``path``.
+    campar.errors.StoreDamaged
+        An HDF5 file damaged (``campar run`` repairs it).
+
+    Examples
+    --------
+    >>> import campar
+    >>> ds = campar.open("results/smoke.zarr")
+    >>> ds.sizes["mu_cn"], ds.sizes["omega"]
+    (24, 40)
+    >>> ds.label.sel(omega=3, mu_cn=0.8, method="nearest").item()
+    '1-1'
+    """
     path = Path(path)
     with read_store(path) as reader:
         if reader.file_damage:  # xarray would hand the damaged file to HDF5 itself

@@ -43,6 +43,7 @@ ROW_PARAMETER = "mu_kn"
 PAPER_START = 6.0  # ω where the paper's continuations start (docs/model.md, sweeps)
 CONTINUATION_STEP = 0.005  # ω step of ``continued_state``: a third of the paper's map step
 DEFAULT_SECTIONS = 64  # σn points kept per non-periodic cell (periodic ones keep n)
+DEFAULT_POINTS = 2000  # ω values of a line (campar line, campar.line)
 LINE_OUTPUTS = ("label", "dc", "eps", "sections", "multipliers")
 
 
@@ -51,6 +52,40 @@ class BifurcationLine:
     """Cells of one continuation chain, in the order computed (ω decreasing).
 
     Shapes: N = number of ω values, S = σn points stored per cell.
+
+    Parameters
+    ----------
+    omega : numpy.ndarray
+        (N,) cam speeds, decreasing.
+    sections : numpy.ndarray
+        (N, S, 2) σn points (y, y'), NaN-padded.
+    n, p, kind : numpy.ndarray
+        (N,) period, detachments and ``campar.core.codes.Kind`` code of every cell.
+    dc : numpy.ndarray
+        (N,) duty cycle.
+    state : numpy.ndarray
+        (N, 2) final (y, y') at θ = 0 of each cell.
+    parameters : dict
+        f0, μkn, μcn, ζ (floats) and ``tensile``.
+    chatter_p, window : int
+        p from which a label is chattering; the read window in revolutions.
+    multipliers : numpy.ndarray or None
+        (N, 2, 2): (re, im) of both Floquet multipliers; NaN where not periodic.
+    flags : numpy.ndarray or None
+        (N,) ``campar.core.codes.Flag`` bits.
+    eps_min, eps_max : numpy.ndarray or None
+        (N,) extremes of ε over the steady window.
+    transitions : tuple of Transition
+        The typed boundaries between labels (:func:`find_transitions`).
+    job : Job or None
+        The line's job.
+
+    Examples
+    --------
+    >>> from campar.views.line import bifurcation_line
+    >>> line = bifurcation_line((2.0, 4.0), 50, mu_kn=0.91)
+    >>> [label for label, first, last in line.runs()]
+    ['2-1', '2-2', '1-1']
     """
 
     omega: np.ndarray  # (N,) cam speed, decreasing
@@ -60,7 +95,7 @@ class BifurcationLine:
     kind: np.ndarray  # (N,) campar.core.codes.Kind codes
     dc: np.ndarray  # (N,) duty cycle
     state: np.ndarray  # (N, 2) final (y, y') at θ = 0 of each cell
-    parameters: dict  # f0, mu_kn, mu_cn, zeta (floats) and tensile
+    parameters: dict  # f0, mu_kn, mu_cn, zeta (floats); tensile, duty_cycle, cam_velocity
     chatter_p: int = DEFAULT_CLASSIFY.chatter_p
     window: int = DEFAULT_CLASSIFY.window_revolutions  # read window (p of non-periodic cells)
     multipliers: np.ndarray | None = None  # (N, 2, 2) (re, im) of both; NaN if not periodic
@@ -114,6 +149,8 @@ def line_job(
     points: int,
     *,
     tensile: str = DEFAULT_MODEL.tensile,
+    duty_cycle: str = DEFAULT_MODEL.duty_cycle,
+    cam_velocity: str = DEFAULT_MODEL.cam_velocity,
     sections: int = DEFAULT_SECTIONS,
     transient: str = DEFAULT_TRANSIENT.mode,
     revolutions: int = DEFAULT_TRANSIENT.max_revolutions,
@@ -124,10 +161,46 @@ def line_job(
 ) -> Job:
     """The one-row job of a line: ``points`` ω values from max(omega) down to min(omega).
 
-    ``parameters``: f0, mu_kn, mu_cn, zeta; those not given take the paper's base values.
-    ``sections`` σn points are stored per non-periodic cell (chaos, quasi-periodic
-    clouds); ``transient`` and ``revolutions`` as in a job's ``transient``.
-    Raises JobError for a parameter unknown or out of range.
+    Parameters
+    ----------
+    omega : tuple of float
+        The ω range, either order; the chain runs from the larger value down.
+    points : int
+        Number of ω values.
+    tensile, duty_cycle, cam_velocity : str
+        The job's ``model:`` section: the force law (``"clamp"`` or ``"allow"``) and its
+        options (docs/model.md).
+    sections : int
+        σn points stored per non-periodic cell (chaos, quasi-periodic clouds).
+    transient : str
+        ``"converged"`` or ``"fixed"``, as in a job's ``transient.mode``.
+    revolutions : int
+        The transient's budget (converged) or length (fixed).
+    initial : tuple of float
+        The start (y, y') at θ = 0 of the line's first cell.
+    rtol : float
+        The integrator's relative tolerance.
+    name : str
+        The job's name.
+    **parameters : float
+        f0, mu_kn, mu_cn, zeta; those not given take the paper's base values.
+
+    Returns
+    -------
+    Job
+        A validated one-row job with the outputs a line needs.
+
+    Raises
+    ------
+    campar.errors.JobError
+        A parameter unknown or out of range.
+
+    Examples
+    --------
+    >>> from campar.views.line import line_job
+    >>> job = line_job((2.0, 4.0), 50, mu_kn=0.91)
+    >>> float(job.omega[0]), float(job.omega[-1]), job.shape
+    (4.0, 2.0, (1, 50))
     """
     hi, lo = max(omega), min(omega)
     values = with_paper_values(parameters)
@@ -139,7 +212,7 @@ def line_job(
             ROW_PARAMETER: {"from": row, "to": row, "points": 1},
         },
         "fixed": values,
-        "model": {"tensile": tensile},
+        "model": {"tensile": tensile, "duty_cycle": duty_cycle, "cam_velocity": cam_velocity},
         "initial": {"y": initial[0], "v": initial[1]},
         "integrator": {"rtol": rtol},
         "transient": {"mode": transient, "max_revolutions": revolutions},
@@ -151,8 +224,32 @@ def line_job(
 
 
 def compute_line(job: Job, *, transitions: bool = True) -> BifurcationLine:
-    """Run the chain of a one-row job (``line_job``) and collect its cells; with
-    ``transitions``, type its label boundaries (``campar.views.transitions``)."""
+    """Run the chain of a one-row job (``line_job``) and collect its cells.
+
+    Parameters
+    ----------
+    job : Job
+        A one-row job with the ``sections`` output (:func:`line_job`).
+    transitions : bool
+        Type the line's label boundaries (:func:`campar.views.transitions.find_transitions`).
+
+    Returns
+    -------
+    BifurcationLine
+        The line's cells in the order computed.
+
+    Raises
+    ------
+    ValueError
+        The job has more than one row or no ``sections`` output.
+
+    Examples
+    --------
+    >>> from campar.views.line import compute_line, line_job
+    >>> line = compute_line(line_job((2.0, 4.0), 50, mu_kn=0.91))
+    >>> [(t.type, t.before.label, t.after.label) for t in line.transitions]
+    [('G', '2-1', '2-2'), ('PD', '2-2', '1-1')]
+    """
     if job.shape[0] != 1 or not job.wants("sections"):
         raise ValueError("compute_line needs a one-row job with the 'sections' output")
     from ..sweep.tile import run_tile  # numba loads here: the CLI reads this module's defaults
@@ -161,7 +258,7 @@ def compute_line(job: Job, *, transitions: bool = True) -> BifurcationLine:
     cells = {name: values[0] for name, values in run_tile(job, Tile(0, 0, 1)).items()}
     parameters = {name: float(job.parameter(name)) for name in ("f0", "mu_cn", "zeta")}
     parameters[ROW_PARAMETER] = float(job.second_values[0])
-    parameters["tensile"] = job.model.tensile
+    parameters.update(job.model.model_dump())  # tensile, duty_cycle, cam_velocity
     line = BifurcationLine(
         omega=job.omega,
         sections=cells["sections"],
@@ -183,7 +280,36 @@ def compute_line(job: Job, *, transitions: bool = True) -> BifurcationLine:
 
 
 def bifurcation_line(omega: tuple[float, float], points: int, **options) -> BifurcationLine:
-    """``compute_line(line_job(omega, points, **options))``."""
+    """A bifurcation line along ω with its typed transitions.
+
+    ``compute_line(line_job(omega, points, **options))``.
+
+    Parameters
+    ----------
+    omega : tuple of float
+        The ω range; the chain runs from the larger value down.
+    points : int
+        Number of ω values.
+    **options
+        The keywords of :func:`line_job`.
+
+    Returns
+    -------
+    BifurcationLine
+        The line's cells, labels and transitions.
+
+    Raises
+    ------
+    campar.errors.JobError
+        A parameter unknown or out of range.
+
+    Examples
+    --------
+    >>> from campar.views.line import bifurcation_line
+    >>> line = bifurcation_line((2.0, 4.0), 50, mu_kn=0.91)
+    >>> len(line.omega), line.labels[0], line.labels[-1]
+    (50, '2-1', '1-1')
+    """
     return compute_line(line_job(omega, points, **options))
 
 

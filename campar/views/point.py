@@ -66,6 +66,56 @@ class OrbitTrace:
 
 @dataclass(frozen=True)
 class PointResult:
+    """One cell's steady motion, as :func:`simulate_point` classifies it (frozen).
+
+    Parameters
+    ----------
+    parameters : dict
+        ω, f0, μkn, μcn, ζ of the cell, its force law ``tensile`` and the law's options
+        ``duty_cycle`` and ``cam_velocity``.
+    label : str
+        ``n-p`` (period n revolutions, p detachments in them), ``n-p~`` for chattering
+        impacts, ``QP``, ``chaos``, or the reason it has none.
+    n, p : int
+        Period in revolutions (0 if not periodic) and detachments per period (of a
+        non-periodic motion: in the read window).
+    kind : str
+        ``periodic``, ``quasi-periodic``, ``chaotic``, ``unconverged`` or ``failed``.
+    status : str
+        ``ok``, or why the integration failed (step budget, step size underflow, …).
+    flags : tuple of str
+        Notes on the cell: ``newton`` (Newton jumps shortened its transient), ``slow``,
+        ``grazing``, … (``campar.core.codes.Flag``).
+    dc : float
+        Duty cycle: the fraction of a period the follower is detached (ε < 0).
+    eps_min, eps_max : float
+        Extremes of the penetration ε over the steady motion (ε > 0: in contact).
+    pn_max : float
+        Largest contact force Pn (dimensionless).
+    revolutions, steps : int
+        Cam revolutions integrated and accepted integrator steps.
+    state : tuple of float
+        Final state (y, y') at θ = 0, a point of the attractor: a start that lands on it.
+    sections : numpy.ndarray
+        σn points (y, y') of the cycle, shape (n, 2); of a non-periodic motion a cloud of
+        up to ``sections`` points.
+    multipliers : tuple of complex or None
+        Floquet multipliers of the cycle, when asked for (``multipliers=True``).
+    lyapunov : float or None
+        Largest Lyapunov exponent per revolution, when asked for (``lyapunov=True``).
+    trace : OrbitTrace or None
+        The steady orbit sampled densely, when asked for (``trace=True``).
+
+    Examples
+    --------
+    >>> import campar
+    >>> cell = campar.simulate_point(3.0)
+    >>> cell.label, cell.kind, cell.n, cell.p
+    ('1-1', 'periodic', 1, 1)
+    >>> cell.to_dict()["dc"] == cell.dc
+    True
+    """
+
     parameters: dict
     label: str
     n: int
@@ -191,12 +241,56 @@ def simulate_point(
 ) -> PointResult:
     """Simulate one cell from (y0, v0) at θ = 0 and classify its steady motion.
 
-    ``settings`` are the keywords of ``point_job`` (f0, mu_kn, mu_cn, zeta, tensile,
-    duty_cycle, cam_velocity, y0, v0, transient, revolutions, chaos_after, rtol, atol,
-    method, sections), each defaulting to the paper's base value or the job model's
-    default. With ``trace``, the steady orbit (its period, or up to 64 revolutions when
-    not periodic) is integrated once more from the final state and recorded. Raises
-    JobError for a parameter unknown or out of range.
+    Parameters
+    ----------
+    omega : float
+        Cam speed ω (dimensionless; θ = ωt).
+    multipliers : bool
+        Also compute the cycle's Floquet multipliers.
+    lyapunov : bool
+        Also compute the largest Lyapunov exponent per revolution.
+    trace : bool
+        Integrate the steady orbit once more from the final state (its period, or up to
+        64 revolutions when not periodic) and record it densely (``PointResult.trace``).
+    **settings
+        The keywords of ``point_job``, each defaulting to the paper's base value or the
+        job model's default (jobs/README.md):
+
+        - ``f0``, ``mu_kn``, ``mu_cn``, ``zeta`` : float — preload, contact stiffness
+          and damping ratios, damping (0.5, 0.8, 0.8, 0.2);
+        - ``tensile`` : ``"clamp"`` or ``"allow"`` — the contact force law;
+        - ``duty_cycle`` : ``"separation"`` or ``"force"``;
+          ``cam_velocity`` : ``"chain"`` or ``"literal"`` — the paper's ambiguities;
+        - ``y0``, ``v0`` : float — the start (y, y') at θ = 0 (0, 0);
+        - ``transient`` : ``"converged"`` or ``"fixed"``; ``revolutions`` : int — its
+          budget or length (500); ``chaos_after`` : int — the earliest chaotic verdict
+          (0: only at the budget);
+        - ``method`` : ``"dop853"``, ``"dp54"`` or ``"rk4"``; ``rtol``, ``atol`` : float;
+        - ``sections`` : int or None — σn points kept of a non-periodic cell.
+
+    Returns
+    -------
+    PointResult
+        The cell's label, kind, duty cycle, ε extremes, Pn max, final state, σn points
+        and what was asked for.
+
+    Raises
+    ------
+    campar.errors.JobError
+        A parameter unknown or out of range.
+
+    Examples
+    --------
+    >>> import campar
+    >>> cell = campar.simulate_point(3.0)
+    >>> cell.label, round(cell.dc, 4)
+    ('1-1', 0.4802)
+    >>> campar.simulate_point(3.15, mu_kn=0.91, multipliers=True).label
+    '2-2'
+    >>> campar.simulate_point(3.0, mu_kn=2.0)
+    Traceback (most recent call last):
+    ...
+    campar.errors.JobError: mu_kn must be in (0, 1), got 2.0
     """
     outputs = [*POINT_OUTPUTS]
     if multipliers:

@@ -164,7 +164,29 @@ class Approach:
 
 @dataclass(frozen=True)
 class Transition:
-    """The boundary between cells ``before.index`` and ``after.index`` = before.index + 1."""
+    """The boundary between cells ``before.index`` and ``after.index`` = before.index + 1.
+
+    Parameters
+    ----------
+    before : Side
+        The cell computed first (larger ω on a line running down): its label,
+        multipliers and ε extremes, and those of its neighbour away from the boundary.
+    after : Side
+        The cell computed next.
+    type : str
+        ``PD``, ``SN``, ``NS``, ``G``, ``chaos``, ``jump`` or ``unknown``.
+    reason : str
+        Why this type, in words.
+    evidence : Approach or None
+        The quantity that approaches its critical value, where one does.
+
+    Examples
+    --------
+    >>> from campar.views.line import bifurcation_line
+    >>> flip = bifurcation_line((2.0, 4.0), 50, mu_kn=0.91).transitions[-1]
+    >>> flip.type, round(flip.omega, 3)
+    ('PD', 2.347)
+    """
 
     before: Side  # the cell computed first (larger ω on a line running down)
     after: Side
@@ -311,12 +333,30 @@ def classify_boundary(before: Side, after: Side, direction: str = "ω decreasing
 
 
 def find_transitions(line, *, trace=None) -> tuple[Transition, ...]:
-    """Every boundary of a line (``BifurcationLine``) with its type, in the line's order.
+    """Every boundary of a line with its type, in the line's order.
 
-    ``trace(index, revolutions)`` returns the (t, ε) samples of cell ``index``'s steady
-    orbit over that many revolutions, or (None, None); by default the line's own job
-    traces it (``campar.views.point.trace_steady``); without a job, no grazing
-    evidence. Multipliers come from the line (its job must compute them).
+    Parameters
+    ----------
+    line : BifurcationLine
+        The line; its job must compute multipliers for PD, SN and NS to be told.
+    trace : callable, optional
+        ``trace(index, revolutions)`` returns the (t, ε) samples of cell ``index``'s
+        steady orbit over that many revolutions, or (None, None); by default the line's
+        own job traces it (``campar.views.point.trace_steady``); without a job, no
+        grazing evidence.
+
+    Returns
+    -------
+    tuple of Transition
+        One per pair of neighbouring cells with different labels.
+
+    Examples
+    --------
+    >>> from campar.views.line import compute_line, line_job
+    >>> from campar.views.transitions import find_transitions
+    >>> line = compute_line(line_job((2.0, 4.0), 50, mu_kn=0.91), transitions=False)
+    >>> [t.type for t in find_transitions(line)]
+    ['G', 'PD']
     """
     labels = line.labels
     trace = trace or line_tracer(line)

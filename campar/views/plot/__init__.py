@@ -5,9 +5,12 @@ a point simulation) and never recomputes them; nothing here imports the kernel.
 Figures are headless (Agg) and returned, so a caller can adjust or save them.
 
 - ``labels``: n-p categories and their fixed colours (``label_colour``, ``map_labels``).
-- ``maps``: two-parameter maps (``MapGrid``, ``plot_map``, ``select_cells``, ``plot_store``).
+- ``maps``: two-parameter maps (``MapGrid``, ``plot_map``, ``select_cells``).
+- ``stores``: maps of result stores (``plot_store``, ``read_map``).
+- ``compare``: two maps side by side, and the cells whose labels differ (``plot_compare``).
 - ``hysteresis``: maps of a two-direction store (which direction; down against up).
-- ``multistability``: the number of attractors per cell of a census (job key ``attractors``).
+- ``multistability``: the number of attractors per cell of a census (job key ``attractors``),
+  and which attractors coexist (their set).
 - ``basin``: the basin of attraction of a basin store, starts coloured by attractor.
 - ``style``: fonts, the field's notation, ``save_figure``.
 - ``orbit``: one steady orbit (``plot_orbit``; ``plot_phase``, ``plot_gap``, ``plot_force``).
@@ -37,8 +40,8 @@ class PlotError(CamparError):
 
 # What ``plot_map`` / ``campar plot --what`` can draw.
 MAP_VIEWS = (
-    "labels", "kind", "dc", "eps_max", "eps_min", "pn_max", "revolutions", "lyapunov", "hysteresis",
-    "multistability",
+    "labels", "kind", "n", "p", "dc", "eps_max", "eps_min", "pn_max", "revolutions", "lyapunov",
+    "hysteresis", "multistability", "attractor_sets",
 )  # fmt: skip
 # What ``campar plot --what`` can draw of a store: the map views, and a basin store's one.
 STORE_VIEWS = (*MAP_VIEWS, "basin")
@@ -53,7 +56,9 @@ _EXPORTS = {
     "QUANTITIES": "maps",
     "computed_mask": "maps",
     "plot_map": "maps",
-    "plot_store": "maps",
+    "plot_store": "stores",
+    "read_map": "stores",
+    "plot_compare": "compare",
     "select_cells": "maps",
     "save_figure": "style",
     "plot_orbit": "orbit",

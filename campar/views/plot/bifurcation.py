@@ -21,6 +21,7 @@ from matplotlib.colors import ListedColormap
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
 
+from ...sweep.job import MODEL_OPTION_DEFAULTS
 from .labels import PERIODIC, category_of, label_colour, legend_text, order_key
 from .maps import EDGE, cell_edges
 from .style import axis_label, figure_style, new_figure, parameter_text
@@ -34,8 +35,10 @@ STRIP_RATIO = 0.09  # height of the label strip relative to the σn panel
 def line_title(line, *, parameters=LINE_PARAMETERS) -> str:
     par = line.parameters
     text = parameter_text({name: par[name] for name in parameters if name in par})
-    tensile = par.get("tensile", "clamp")
-    return text + ("" if tensile == "clamp" else ",  tensile allowed")
+    notes = [] if par.get("tensile", "clamp") == "clamp" else ["tensile allowed"]
+    notes += [f"{name.replace('_', ' ')} {par[name]}" for name, default
+              in MODEL_OPTION_DEFAULTS.items() if par.get(name, default) != default]  # fmt: skip
+    return text + "".join(f",  {note}" for note in notes)
 
 
 def section_points(line) -> tuple[np.ndarray, np.ndarray]:

@@ -9,10 +9,8 @@ into the colour scale: they are left transparent over a hatch, dark red
 cross-hatch for failed cells (NaN), light grey for tiles not computed yet.
 """
 
-import logging
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
-from pathlib import Path
+from dataclasses import dataclass, field
 
 import numpy as np
 from matplotlib import colormaps
@@ -20,10 +18,11 @@ from matplotlib.colors import ListedColormap, LogNorm, Normalize, TwoSlopeNorm
 from matplotlib.patches import Patch, Rectangle
 from matplotlib.ticker import FuncFormatter, MaxNLocator
 
+from ...core.codes import Kind
 from ...sweep.job import PARAMETERS, Job, cell_edges
 from ...sweep.plan import plan_tiles
 from . import MAP_VIEWS, PlotError
-from .hysteresis import HYSTERESIS_ARRAYS, draw_hysteresis, drawn_layer, store_hysteresis
+from .hysteresis import draw_hysteresis
 from .labels import (
     FAILED,
     GAP_STYLE,
@@ -36,16 +35,13 @@ from .labels import (
     map_kinds,
     map_labels,
 )
-from .multistability import draw_multistability
-from .style import axis_label, figure_style, new_figure, parameter_text, save_figure
+from .multistability import draw_attractor_sets, draw_multistability
+from .style import axis_label, figure_style, new_figure, parameter_text
 
 NICE_TICKS = MaxNLocator(4, steps=[1, 2, 2.5, 5, 10])
 LEGEND_ROWS = 16  # entries per legend column before a new column starts
 LEGEND_MAX = 32  # entries a legend shows; rarer n-p are grouped in "other" (listed)
 EDGE = "0.45"  # outline of legend swatches, so white and pale ones show
-MAX_DRAWN = 1000  # cells per axis a map of a store draws at most (more do not show at 300 dpi)
-
-log = logging.getLogger("campar.views")
 
 
 @dataclass(frozen=True)
@@ -60,10 +56,13 @@ class Quantity:
     vmax: float | None = None
 
 
+PERIODIC_ONLY = ("n", "p")  # quantities of periodic cells: others have no value on their map
 LOG_SPAN = 30.0  # max/min ratio from which an "auto" quantity is drawn on a log scale
 
 # ε and y are in units of the stroke h, forces in units of K1·h, time in units of 1/ωn.
 QUANTITIES = {
+    "n": Quantity("period n (revolutions; no value: not periodic)", "viridis"),
+    "p": Quantity("detachments p in n revolutions (no value: not periodic)", "magma"),
     "dc": Quantity(
         "duty cycle DC (dimensionless: fraction of time separated)", "viridis", vmin=0.0, vmax=1.0
     ),
@@ -151,6 +150,10 @@ def arrays_for(what: str) -> tuple[str, ...]:
         raise PlotError(f"cannot draw {what!r}; choose one of {', '.join(MAP_VIEWS)}")
     if what == "multistability":
         return ("n_attractors",)
+    if what == "attractor_sets":
+        return ("n_attractors", "attractor_kind", "attractor_n", "attractor_p")
+    if what in PERIODIC_ONLY:
+        return (what, "kind")
     return ("kind", "n", "p") if what == "labels" else ("kind",) if what == "kind" else (what,)
 
 
@@ -174,9 +177,12 @@ def plot_map(
     grid: a MapGrid or the Job that made the arrays.
     arrays: name → array (second, omega): "kind", "n", "p" for labels and kind, the
         quantity itself otherwise; optional "computed" (bool) marks computed cells.
-    what: "labels" (n-p), "kind", "multistability" (int "n_attractors": attractors per
-        cell), "hysteresis" (bool "hysteresis", optional bool
-        "compared": both directions periodic), or a quantity of QUANTITIES.
+    what: "labels" (n-p), "kind", "n" or "p" (of the periodic cells; with "kind"),
+        "multistability" (int "n_attractors": attractors per cell), "attractor_sets"
+        (which attractors coexist: "n_attractors" and the census's "attractor_kind",
+        "attractor_n", "attractor_p", shaped (second, omega, cap)), "hysteresis" (bool
+        "hysteresis", optional bool "compared": both directions periodic), or a quantity
+        of QUANTITIES.
     omega, second: (a, b) ranges to zoom into, like the paper's detail panels.
     ax: draw into this axes instead of a new figure.
     title: text above the map; None states the fixed parameters, "" none.
@@ -214,7 +220,14 @@ def plot_map(
             if ax is None:
                 ax = new_figure(4.3 + 1.6 * legend, height).add_subplot()
             draw_multistability(ax, xe, ye, arrays, legend=legend)
+        elif what == "attractor_sets":
+            if ax is None:
+                ax = new_figure(4.3 + 2.4 * legend, height).add_subplot()
+            draw_attractor_sets(ax, xe, ye, arrays, grid.chatter_p, legend=legend)
         else:
+            if what in PERIODIC_ONLY:  # n and p of the periodic cells only
+                periodic = np.asarray(arrays["kind"]) == Kind.PERIODIC
+                arrays = {**arrays, what: np.where(periodic, arrays[what], np.nan)}
             if ax is None:
                 ax = new_figure(4.9, height).add_subplot()
             gaps_legend = draw_quantity(ax, xe, ye, arrays, what, legend=legend, log=log,
@@ -393,100 +406,3 @@ def swatch(category: str, text: str, colour) -> Patch:
     if category == OTHER:
         return Patch(label=text, **{**OTHER_STYLE, "linewidth": 0.4})
     return Patch(facecolor=colour, edgecolor=EDGE, linewidth=0.4, label=text)
-
-
-def plot_store(
-    path, what: str = "labels", output=None, omega=None, second=None, curves=None, direction=None
-) -> Path:
-    """Draw a map of a result store into an image file; returns the file's path.
-
-    direction: of a ``chains.direction: both`` store, the direction whose map is drawn
-    ("down", the default, or "up"); its "hysteresis" map draws both (``hysteresis``).
-
-    omega, second: (a, b) zoom ranges. output defaults to "<store name>-<what>.png"
-    in the current directory; it is checked before the store's arrays are read (its
-    job is read first: a basin store draws its basin, ``basin_view``). Tiles not
-    committed yet are drawn as "not computed", and so are tiles that fail their
-    checksum (with a warning). ``curves``: typed bifurcation edges to overlay
-    (``campar.views.boundaries.store_boundaries``), computed on the full grid.
-    The store is read tile by tile and at most
-    ``MAX_DRAWN`` cells are drawn along each axis (every k-th, said in the title),
-    so memory does not grow with the grid.
-    """
-    from ...sweep.store import fill_value, read_store, verify_store  # only this view reads files
-    from ..output import figure_file
-
-    with read_store(path) as store:
-        basin = store.job.kind == "basin"
-    if basin or what == "basin":
-        return basin_view(path, what, output, basin, zoomed=(omega, second, curves, direction))
-    output = figure_file(output or f"{Path(path).stem}-{what}.png")
-    needed = arrays_for(what)
-    with read_store(path) as store:
-        layer = drawn_layer(store.job, what, direction)
-        stored = HYSTERESIS_ARRAYS if what == "hysteresis" else needed
-        missing = [name for name in stored if name not in store.names]
-        if missing:
-            raise PlotError(
-                f"{path} holds no {', '.join(missing)} (it has {', '.join(store.names)}); "
-                + (
-                    "give the job an attractors key (attractors: {starts: 8}) and run it"
-                    if what == "multistability"
-                    else "add the output to the job's outputs and run it"
-                )
-            )
-        full = MapGrid.from_job(store.job)
-        rows = drawn_indices(full.second, second, full.second_name)
-        cols = drawn_indices(full.omega, omega, "omega")
-        shape = (len(rows), len(cols))
-        dtypes = {**store.array_dtypes, "hysteresis": np.dtype(bool)}
-        arrays = {n: np.full(shape, fill_value(dtypes[n])) for n in needed}
-        arrays["computed"] = np.zeros(shape, bool)
-        slot = np.full(full.shape[0], -1)
-        slot[rows] = np.arange(len(rows))
-
-        def take(check):  # one verified tile (of the drawn direction): its drawn cells
-            if check.tile.layer != layer or what == "hysteresis":
-                return
-            local = slot[check.tile.rows]
-            keep = local >= 0
-            for name in needed:
-                arrays[name][local[keep]] = check.arrays[name][keep][:, cols]
-            arrays["computed"][local[keep]] = True
-
-        report = verify_store(store, take)
-        if what == "hysteresis":
-            arrays.update(store_hysteresis(store, report.verified, rows, cols))
-    if report.damaged:
-        log.warning(
-            "%s: %d damaged tiles drawn as not computed (`campar verify %s` says why)",
-            path, len(report.damaged), path,
-        )  # fmt: skip
-    grid = replace(full, omega=full.omega[cols], second=full.second[rows])
-    step = (-(-full.shape[0] // len(rows)), -(-full.shape[1] // len(cols)))
-    title = None if step == (1, 1) else (
-        f"{parameter_text(grid.fixed)}   (every {step[0]}th × {step[1]}th cell drawn)"
-    )  # fmt: skip
-    if layer is not None:  # one direction of a both store: say which
-        title = f"{title or parameter_text(grid.fixed)}   (ω swept {direction or 'down'})"
-    return save_figure(plot_map(grid, arrays, what, title=title, curves=curves), output)
-
-
-def basin_view(path, what: str, output, basin: bool, zoomed) -> Path:
-    """``plot_store`` of a basin store: its one view, the basin figure (``basin``)."""
-    from .basin import plot_basin_store
-
-    if not basin:
-        raise PlotError(f"{path} is a map; --what basin draws a basin store (sweep y0, ydot0)")
-    if what not in ("labels", "basin"):
-        raise PlotError(f"{path} is a basin store: it draws --what basin (the default), not {what}")
-    if any(option is not None for option in zoomed):
-        raise PlotError(f"{path} is a basin store: zooms, curves and directions are for maps")
-    return plot_basin_store(path, output)
-
-
-def drawn_indices(centres: np.ndarray, bounds, name: str) -> np.ndarray:
-    """Indices of the cells a map of a store draws along one axis: those in the zoom range,
-    every k-th of them so that at most MAX_DRAWN remain."""
-    inside = np.arange(len(centres))[centre_range(centres, bounds, name)]
-    return inside[:: -(-len(inside) // MAX_DRAWN)]

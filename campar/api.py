@@ -1,0 +1,226 @@
+"""What the ``campar`` commands do, from Python: ``campar.run`` computes a job's map into its
+store, ``campar.forecast`` says what that run would cost, ``campar.line`` computes a
+bifurcation line. Each returns what its command writes (the store's path, the line).
+
+May import core, sweep and views (the layers below the command line).
+"""
+
+from pathlib import Path
+
+from .errors import JobError
+from .sweep.job import (
+    DEFAULT_MODEL,
+    DEFAULT_TRANSIENT,
+    PAPER_VALUES,
+    Job,
+    load_job,
+)
+from .views.line import DEFAULT_POINTS, DEFAULT_SECTIONS, BifurcationLine
+
+
+def job_of(job, settings: dict | None = None) -> Job:
+    """A validated Job from a Job, a job file's path or a job mapping, with the dotted
+    keys of ``settings`` changed (``campar.sweep.overrides``)."""
+    from .sweep.overrides import with_settings
+
+    if isinstance(job, Job):
+        found = job
+    elif isinstance(job, dict):
+        found = Job.from_dict(job)
+    elif isinstance(job, (str, Path)):
+        found = load_job(job)
+    else:
+        raise JobError(f"a job is a Job, a job file's path or a mapping, got {type(job).__name__}")
+    return with_settings(found, settings or {})
+
+
+def run(
+    job,
+    *,
+    store: str | Path | None = None,
+    settings: dict | None = None,
+    overwrite: bool = False,
+    grace: float = 30.0,
+    max_store: int | None = None,
+    max_memory: int | None = None,
+) -> Path:
+    """Compute every pending cell of a job's map into its store, as ``campar run`` does.
+
+    Serial in this process, or one rank of an MPI run when the script runs under
+    ``mpirun`` (every rank calls ``run`` alike). A store of the same job resumes where
+    it stopped; its progress goes to the ``campar.run`` logger.
+
+    Parameters
+    ----------
+    job : Job, str, Path or dict
+        The job: a validated ``Job``, the path of a YAML job file, or a job mapping
+        as a file holds it.
+    store : str or Path, optional
+        The result store (a Zarr directory, or HDF5 for ``.h5``); default the job's
+        ``store:``.
+    settings : dict, optional
+        Dotted job keys and their values, as ``campar run --set KEY=VALUE`` takes
+        them, e.g. ``{"sweep.omega.points": 200, "model.tensile": "allow"}``;
+        the changed job is validated as a job file is.
+    overwrite : bool
+        Replace a store that holds another job (default: refuse it).
+    grace : float
+        Seconds to wait for tiles in flight after a stop signal.
+    max_store, max_memory : int, optional
+        Refuse a job whose store (uncompressed) or whose ranks' memory would exceed
+        this many bytes (``campar.sweep.budget``'s defaults if None).
+
+    Returns
+    -------
+    Path
+        The store's path; read it with ``campar.open``.
+
+    Raises
+    ------
+    JobError
+        The job is invalid, names no store, is over the limits, or the store holds
+        another job (before anything is computed).
+    Interrupted
+        A stop signal ended the run (its exit code is 75); calling ``run`` again
+        resumes it.
+    CamparError
+        A tile failed twice, or the store could not be written.
+
+    Examples
+    --------
+    >>> import tempfile, campar
+    >>> store = campar.run("jobs/smoke.yaml", store=tempfile.mkdtemp() + "/smoke.zarr",
+    ...                    settings={"sweep.omega.points": 8})
+    >>> campar.open(store)["label"].shape
+    (24, 8)
+    """
+    from .sweep.runner import run_job
+
+    job = job_of(job, settings)  # before anything touches the disk
+    path = store or job.store
+    run_job(job, path, overwrite=overwrite, grace=grace, max_store=max_store,
+            max_memory=max_memory)  # fmt: skip
+    return Path(path)
+
+
+def forecast(
+    job,
+    *,
+    store: str | Path | None = None,
+    settings: dict | None = None,
+    ranks: int = 1,
+    overwrite: bool = False,
+    max_store: int | None = None,
+    max_memory: int | None = None,
+):
+    """What ``run`` would do with these arguments, writing nothing (``campar run --dry-run``).
+
+    The time is estimated by computing a few of the job's chains here and timing them
+    (``campar.sweep.forecast``); their results are dropped.
+
+    Parameters
+    ----------
+    job, store, settings
+        As for ``run``.
+    ranks : int
+        The MPI ranks the run would have (``tiles.rows: auto`` depends on them).
+    overwrite, max_store, max_memory
+        As for ``run``.
+
+    Returns
+    -------
+    campar.sweep.forecast.Forecast
+        Cells, tiles, what the store holds already, its size, each rank's memory and
+        an estimated time (``describe()``: the text ``--dry-run`` prints).
+
+    Raises
+    ------
+    JobError
+        The job or ``settings`` are invalid.
+
+    Examples
+    --------
+    >>> import campar
+    >>> plan = campar.forecast("jobs/smoke.yaml", store="/nonexistent/smoke.zarr")
+    >>> plan.cells, plan.tiles, plan.pending_cells, plan.store_state
+    (960, 12, 960, 'new')
+    """
+    from .sweep.forecast import forecast as plan
+
+    if ranks < 1:
+        raise JobError(f"ranks must be ≥ 1, got {ranks}")
+    return plan(job_of(job, settings), store, ranks=ranks, overwrite=overwrite,
+                max_store=max_store, max_memory=max_memory)  # fmt: skip
+
+
+def line(
+    omega: tuple[float, float],
+    points: int = DEFAULT_POINTS,
+    *,
+    f0: float = PAPER_VALUES["f0"],
+    mu_kn: float = PAPER_VALUES["mu_kn"],
+    mu_cn: float = PAPER_VALUES["mu_cn"],
+    zeta: float = PAPER_VALUES["zeta"],
+    tensile: str = DEFAULT_MODEL.tensile,
+    duty_cycle: str = DEFAULT_MODEL.duty_cycle,
+    cam_velocity: str = DEFAULT_MODEL.cam_velocity,
+    transient: str = DEFAULT_TRANSIENT.mode,
+    revolutions: int = DEFAULT_TRANSIENT.max_revolutions,
+    sections: int = DEFAULT_SECTIONS,
+) -> BifurcationLine:
+    """A bifurcation line along ω, as ``campar line`` computes it.
+
+    One continuation chain: the line starts at the larger ω of ``omega`` from rest,
+    (y, y') = (0, 0) at θ = 0, and each next cell (ω decreasing) starts from the
+    previous cell's final state — exactly one row of a map with these parameters.
+
+    Parameters
+    ----------
+    omega : (float, float)
+        The ω range, either order; computed from the larger value down.
+    points : int
+        ω values, evenly spaced, at least 2.
+    f0, mu_kn, mu_cn, zeta : float
+        The model's parameters (default: the paper's base values).
+    tensile : {"clamp", "allow"}
+        The force law: no tensile contact force, or the paper's formula as printed.
+    duty_cycle : {"separation", "force"}
+        What the duty cycle counts: time with ε < 0, or time with Pn = 0.
+    cam_velocity : {"chain", "literal"}
+        The cam velocity in the contact force: ω dyc/dθ, or the paper's eq. 6, dyc/dθ.
+    transient : {"converged", "fixed"}
+        Stop each cell's transient once it settles, or after ``revolutions`` as the
+        paper does.
+    revolutions : int
+        The transient's budget (converged) or length (fixed).
+    sections : int
+        σn points kept per non-periodic cell.
+
+    Returns
+    -------
+    BifurcationLine
+        The cells in the order computed: ω, σn points, n, p, kind, duty cycle, final
+        states, Floquet multipliers, and the typed transitions between labels
+        (``to_npz`` writes what ``campar line --npz`` writes, ``to_dict`` what
+        ``--json`` prints; ``campar.views.plot.plot_line`` draws its figure).
+
+    Raises
+    ------
+    JobError
+        A parameter or option unknown or out of range.
+
+    Examples
+    --------
+    >>> import campar
+    >>> result = campar.line((1.0, 0.9), points=3)
+    >>> result.omega.round(2).tolist(), result.labels
+    ([1.0, 0.95, 0.9], ['1-1', '1-1', '1-1'])
+    """
+    from .views.line import compute_line, line_job
+
+    if points < 2:
+        raise JobError(f"a line has at least 2 points, got {points}")
+    job = line_job(omega, points, f0=f0, mu_kn=mu_kn, mu_cn=mu_cn, zeta=zeta, tensile=tensile,
+                   duty_cycle=duty_cycle, cam_velocity=cam_velocity, transient=transient,
+                   revolutions=revolutions, sections=sections)  # fmt: skip
+    return compute_line(job)

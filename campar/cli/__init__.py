@@ -1,0 +1,147 @@
+"""The ``campar`` command: argument parsing and dispatch only.
+
+One module per command family (``point``, ``line``, ``maps``: run, status and verify;
+``plot``; ``paper``: gallery and report; ``tools``: warm-up and bench), each with an
+``add_<name>(subparsers)`` function per command that registers its parser and sets
+``handler`` to a function that calls the module owning the logic, so every behaviour is
+reachable from Python without the CLI. ``options`` holds the flags several commands
+share (the model's parameters and options), defined once.
+
+May import every layer of campar (it is the top one).
+"""
+
+import argparse
+import difflib
+import gc
+import os
+import re
+import sys
+
+# Before numpy is imported: one OpenBLAS thread. campar's work runs on its own threads and
+# ranks, and BLAS only ever sees tiny matrices; numpy's and SciPy's OpenBLAS pools (SciPy
+# comes with numba's BLAS check) spin idle after their start, ~0.13 s of CPU a process
+# taken from the kernel's cores (benchmarks/RESULTS.md). The caller's setting wins.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+from .. import __version__  # noqa: E402
+from ..errors import CamparError, Interrupted, JobError  # noqa: E402
+from . import continuation, line, maps, paper, plot, point, tools  # noqa: E402
+
+# The subcommands, in the order ``campar --help`` lists them.
+SUBCOMMANDS = [
+    point.add_point,
+    plot.add_plot,
+    plot.add_separation,
+    maps.add_run,
+    maps.add_status,
+    maps.add_verify,
+    tools.add_warm_up,
+    tools.add_bench,
+    line.add_line,
+    continuation.add_continue,
+    paper.add_gallery,
+    paper.add_report,
+]
+
+
+class CommandParser(argparse.ArgumentParser):
+    """argparse's parser without abbreviated flags (``--mu`` is not ``--mu-kn``: a flag added
+    later would change what an abbreviation means), naming the closest command or flag
+    when one is misspelled."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message):
+        choice = re.match(r"argument \S+: invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if choice:
+            choices = [c.strip("'") for c in choice.group(2).split(", ")]
+            message += did_you_mean(choice.group(1), choices)
+        super().error(message)
+
+
+def did_you_mean(word: str, candidates) -> str:
+    """ " (did you mean --mu-kn?)": the candidates that begin with ``word`` (an abbreviation),
+    else the closest to it; "" if none is close."""
+    candidates = list(candidates)
+    close = [c for c in candidates if c.startswith(word)][:3]
+    close = close or difflib.get_close_matches(word, candidates, n=2, cutoff=0.75)
+    return f" (did you mean {' or '.join(close)}?)" if close else ""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = CommandParser(
+        prog="campar",
+        description="Two-parameter bifurcation maps of the cam–follower impact oscillator.",
+    )
+    parser.add_argument("--version", action="version", version=f"campar {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for add in SUBCOMMANDS:
+        add(sub)
+    return parser
+
+
+def parse_arguments(parser: argparse.ArgumentParser, argv) -> argparse.Namespace:
+    """``parser.parse_args``, but an unknown flag is reported by its command's parser (its
+    usage, and the flag it may have meant) instead of the top-level usage."""
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:
+        command = command_parser(parser, args.command)
+        flags = [f for p in nested_parsers(command) for a in p._actions for f in a.option_strings]
+        hints = "".join(did_you_mean(u, flags) for u in unknown if u.startswith("-"))
+        command.error(f"unrecognized arguments: {' '.join(unknown)}{hints}")
+    return args
+
+
+def command_parser(parser: argparse.ArgumentParser, name: str) -> argparse.ArgumentParser:
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    return sub.choices[name]
+
+
+def nested_parsers(parser: argparse.ArgumentParser):
+    """The parser and those of its subcommands (``campar bench NAME``), depth first."""
+    yield parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                yield from nested_parsers(child)
+
+
+def main(argv=None) -> int:
+    """The program (``argv`` None: a stop signal after the work is done is ignored), or a
+    command from Python (``argv`` a list: the caller's signal handlers are restored)."""
+    from ..sweep.signals import finished, guard_start, restore_signals
+
+    saved = guard_start()  # a stop signal from here on: one line, never a traceback
+    command = "campar"
+    try:
+        args = parse_arguments(build_parser(), argv)
+        command = f"campar {args.command}"
+        return int(args.handler(args) or 0)
+    except CamparError as exc:
+        if not repeated_by_other_rank(exc):
+            print(f"{command}: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except BrokenPipeError:  # `campar status S | head`: the reader left
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+    finally:
+        if argv is not None:
+            restore_signals(saved)
+        else:  # the program: its work is over, its exit code decided
+            finished()
+            # Nothing left to collect that matters: spare the exit the collector's passes
+            # over all the program built (after a cold compile numba's IR, ~0.5 s).
+            gc.freeze()
+
+
+def repeated_by_other_rank(exc: CamparError) -> bool:
+    """Under mpirun, an error every rank meets alike (the job, a signal before the start) or
+    one the master reports: printed by rank 0 only."""
+    rank = next((os.environ[v] for v in MPI_RANK_ENV if v in os.environ), "0")
+    alike = isinstance(exc, (JobError, Interrupted)) or getattr(exc, "rank", 0)
+    return rank.isdigit() and int(rank) > 0 and bool(alike)
+
+
+MPI_RANK_ENV = ("PMI_RANK", "OMPI_COMM_WORLD_RANK", "PMIX_RANK")

@@ -1,0 +1,144 @@
+"""``campar continue``: a branch of periodic orbits, its bifurcations, switching, curves."""
+
+import argparse
+
+from ..errors import JobError
+from .options import PARAMETER_HELP, add_model_options, flag_of, model_options
+
+CONTINUATION_PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
+HELP = {"omega": "cam speed / natural frequency", **PARAMETER_HELP}
+
+
+def value_or_range(text: str):
+    """A parameter flag's value: "0.91" → 0.91, "6:2" → (6.0, 2.0)."""
+    try:
+        parts = [float(part) for part in text.split(":")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number or A:B, got {text!r}") from None
+    if len(parts) == 1:
+        return parts[0]
+    if len(parts) == 2:
+        return tuple(parts)
+    raise argparse.ArgumentTypeError(f"expected a number or A:B, got {text!r}")
+
+
+def named_range(text: str):
+    """--second's value: "mu_kn:0.7:0.95" → ("mu_kn", (0.7, 0.95))."""
+    parts = text.split(":")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        return parts[0].replace("-", "_"), (float(parts[1]), float(parts[2]))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected NAME:A:B, got {text!r}") from None
+
+
+def add_continue(sub):
+    from ..sweep.job import PAPER_VALUES
+
+    p = sub.add_parser(
+        "continue",
+        help="continue a periodic orbit along a parameter: stable and unstable cycles, "
+        "PD/SN/NS/G points, branch switching, two-parameter curves",
+        description="Simulate the cell at the start of the range (as campar point does), "
+        "solve for its periodic orbit by Newton's method on the section map, and follow "
+        "the orbit's branch by pseudo-arclength continuation through folds; PD, SN, BP, "
+        "NS and G points are located to 1e-10 in the parameter. Exactly one parameter "
+        "takes a range A:B (the branch starts at A).",
+    )
+    p.add_argument("--omega", type=value_or_range, required=True, metavar="W or A:B",
+                   help=HELP["omega"])  # fmt: skip
+    for name, value in PAPER_VALUES.items():
+        p.add_argument(flag_of(name), type=value_or_range, default=value, metavar="X or A:B",
+                       help=f"{HELP[name]} ({value:g})")  # fmt: skip
+    add_model_options(p)
+    p.add_argument("--y0", type=float, default=0.0, help="the start cell's initial y (rest)")
+    p.add_argument("--v0", type=float, default=0.0, help="the start cell's initial y' (rest)")
+    p.add_argument("--cycle", type=int, metavar="N",
+                   help="the period to solve for (default: the simulated cell's)")  # fmt: skip
+    p.add_argument("--switch", type=int, default=0, metavar="DEPTH",
+                   help="follow period doublings DEPTH deep from every PD point (0)")  # fmt: skip
+    p.add_argument("--max-step", type=float, default=0.02, help="longest arclength step (0.02)")
+    p.add_argument("--max-points", type=int, default=5000, help="points per branch (5000)")
+    p.add_argument("--curves", metavar="TYPES", help="continue the curves of these special "
+                   "points in a plane, e.g. PD,SN,G (with --second)")  # fmt: skip
+    p.add_argument("--second", type=named_range, metavar="NAME:A:B",
+                   help="the curves' second parameter and range, e.g. mu_kn:0.7:0.95")  # fmt: skip
+    p.add_argument("--line", type=int, metavar="POINTS",
+                   help="with -o and a range of omega: draw the brute-force bifurcation "
+                   "diagram (campar line, POINTS cells) beneath the branches")  # fmt: skip
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("-o", "--output", metavar="FILE.png",
+                   help="the branches (stable solid, unstable dashed, special points "
+                   "marked); with --curves a second figure FILE-curves.png")  # fmt: skip
+    p.set_defaults(handler=run_continue)
+
+
+def split_parameters(args) -> tuple[str, tuple[float, float], dict]:
+    """(the parameter with a range, its range, the other parameters' values)."""
+    values = {name: getattr(args, name) for name in CONTINUATION_PARAMETERS}
+    ranged = [name for name, value in values.items() if isinstance(value, tuple)]
+    if len(ranged) != 1:
+        raise JobError("give exactly one parameter a range A:B (e.g. --omega 6:2), got "
+                       f"{len(ranged)}")  # fmt: skip
+    name = ranged[0]
+    fixed = {k: v for k, v in values.items() if k != name}
+    return name, values[name], fixed
+
+
+def run_continue(args) -> int:
+    import json
+
+    from ..continuation.branch import BranchSettings
+    from ..views.continuation import continue_from_cell, describe_continuation
+
+    parameter, span, fixed = split_parameters(args)
+    if args.switch < 0:
+        raise JobError(f"--switch must be ≥ 0, got {args.switch}")
+    if args.cycle is not None and args.cycle < 1:
+        raise JobError(f"--cycle must be ≥ 1, got {args.cycle}")
+    if not 0.0 < args.max_step <= 1.0:
+        raise JobError(f"--max-step must be in (0, 1], got {args.max_step}")
+    if args.max_points < 2:
+        raise JobError(f"--max-points must be ≥ 2, got {args.max_points}")
+    if args.line is not None and (parameter != "omega" or not args.output):
+        raise JobError("--line draws campar line's diagram along omega: it needs a range of "
+                       "--omega and -o")  # fmt: skip
+    types = tuple(t.strip().upper() for t in args.curves.split(",")) if args.curves else ()
+    second, window = args.second if args.second else (None, None)
+    if args.output:
+        from ..views.output import figure_file
+
+        figure_file(args.output)  # before computing
+    settings = BranchSettings(max_step=args.max_step, max_points=args.max_points,
+                              step=min(0.01, args.max_step))  # fmt: skip
+    result = continue_from_cell(
+        parameter, span, fixed, y0=args.y0, v0=args.v0, cycle=args.cycle, switch=args.switch,
+        model=model_options(args), settings=settings, curve_types=types, second=second,
+        second_window=window,
+    )  # fmt: skip
+    print(json.dumps(result.to_dict()) if args.json else describe_continuation(result))
+    if args.output:
+        draw(args, result, parameter, span, fixed)
+    return 0
+
+
+def draw(args, result, parameter, span, fixed) -> None:
+    from pathlib import Path
+
+    from ..views.plot.branches import plot_bifurcation_curves, plot_branches
+
+    line = None
+    if args.line:
+        from ..views.line import compute_line, line_job
+
+        others = {k: v for k, v in fixed.items() if k != "omega"}
+        line = compute_line(line_job(span, args.line, **model_options(args), **others),
+                            transitions=False)  # fmt: skip
+    plot_branches(result.root, line=line).savefig(args.output, dpi=200)
+    if result.curves:
+        path = Path(args.output)
+        window = (span, args.second[1])
+        plot_bifurcation_curves(result.curves, window=window).savefig(
+            path.with_name(f"{path.stem}-curves{path.suffix}"), dpi=200
+        )

@@ -1,0 +1,529 @@
+"""Pseudo-arclength continuation of a periodic orbit along one parameter.
+
+The unknowns are u = (y, y', λ): a point of Pⁿ's section and the parameter. A branch is
+the curve F(u) = Pⁿ(x; λ) − x = 0 in that 3-space, followed by predictor and corrector
+(Keller 1977; as AUTO and BifurcationKit's ``PALC``): from a point u with unit tangent t
+(the null vector of DF = [DPⁿ − I | ∂Pⁿ/∂λ], the cross product of its two rows), the
+predictor u + Δs t is corrected by Newton's method on F(u) = 0, t·(u − u_pred) = 0. The
+tangent's parameter component is free to change sign, so the branch runs through folds,
+where it turns back in λ. The corrector recomputes DPⁿ exactly at every iterate and keeps
+the parameter column of the last accepted point (a chord in that column only: one
+integration an iterate instead of three, still converging to newton_tol in 2–4).
+
+Step control: a step whose corrector fails, or whose tangent turns by more than
+``max_turn``, is retried with half the step; a step that converged in ≤ 2 iterates lets
+the next one grow by 1.5, up to ``max_step``. Between consecutive points the test
+functions of campar.continuation.special detect PD, SN, BP, NS and G points, which are
+then located on the branch.
+
+The branch ends where it leaves the parameter window, reaches ``max_points``, where the
+step falls below ``min_step`` (no point found ahead), where its parameter leaves the
+model's range, or where the orbit's minimal period drops (a doubled branch returning
+onto the branch it was born from).
+"""
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ContinuationError
+from .orbit import PeriodicOrbit, orbit_at, section_points
+from .section_map import PARAMETER_ORDER, SectionMap, Shot, in_range, parameter_index
+from .special import (
+    LOCATE_TOL,
+    PD,
+    G,
+    SpecialPoint,
+    crossings,
+    illinois,
+    test_function,
+)
+
+
+@dataclass(frozen=True)
+class BranchSettings:
+    """Step control of a branch (arclength in (y, y', λ) units).
+
+    step: the first step; min_step: below it the branch ends; max_step: the longest
+    step; max_points: the branch's points at most; max_turn: the largest angle (radians)
+    between consecutive tangents before a step is halved; max_newton: corrector iterates.
+    """
+
+    step: float = 0.01
+    min_step: float = 1e-7
+    max_step: float = 0.05
+    max_points: int = 5000
+    max_turn: float = 0.5
+    max_newton: int = 6
+
+
+@dataclass
+class BranchPoint:
+    """A converged point of a branch: u = (y, y', λ), its shot (at the fixed point, with
+    DPⁿ), the parameter column ∂Pⁿ/∂λ and the unit tangent."""
+
+    u: np.ndarray
+    shot: Shot
+    column: np.ndarray
+    tangent: np.ndarray
+    s: float = 0.0  # arclength from the branch's first point
+
+    @property
+    def jacobian(self) -> np.ndarray:
+        return self.shot.jacobian
+
+    @property
+    def p(self) -> int:
+        return self.shot.detachments
+
+    @property
+    def touch(self) -> float:
+        return self.shot.touch
+
+
+@dataclass
+class Branch:
+    """A branch of n-cycles along ``parameter``, point by point (arrays of length N).
+
+    values: the parameter; states (N, 2) and sections (N, n, 2): the orbit at θ = 0;
+    multipliers (N, 2) complex; stable, p, dc, eps_min, eps_max, pn_max, touch per point;
+    special: the located special points in branch order; end: why the branch stopped;
+    origin: the PD point it was switched from (None for a branch started from an orbit);
+    children: the branches switched from its PD points.
+    """
+
+    parameter: str
+    n: int
+    parameters: dict  # the other parameters (fixed along the branch)
+    model: dict
+    values: np.ndarray
+    states: np.ndarray
+    sections: np.ndarray
+    multipliers: np.ndarray
+    stable: np.ndarray
+    p: np.ndarray
+    dc: np.ndarray
+    eps_min: np.ndarray
+    eps_max: np.ndarray
+    pn_max: np.ndarray
+    touch: np.ndarray
+    special: list[SpecialPoint]
+    end: str
+    origin: SpecialPoint | None = None
+    children: list["Branch"] = field(default_factory=list)
+    switch_failures: list[str] = field(default_factory=list)
+    shots: int = 0  # integrations of n revolutions it took
+    returned: bool = False  # ended where it returned onto the branch of period n/2
+
+    @property
+    def labels(self) -> list[str]:
+        return [f"{self.n}-{p}" for p in self.p]
+
+    def walk(self):
+        """This branch, then its children's branches, depth first."""
+        yield self
+        for child in self.children:
+            yield from child.walk()
+
+    def to_dict(self) -> dict:
+        def complex_pairs(row):
+            return [[float(m.real), float(m.imag)] for m in row]
+
+        return {
+            "parameter": self.parameter,
+            "n": self.n,
+            "parameters": self.parameters,
+            "model": self.model,
+            "end": self.end,
+            "origin": self.origin.to_dict() if self.origin else None,
+            "points": [
+                {
+                    "value": float(self.values[i]),
+                    "state": self.states[i].tolist(),
+                    "sections": self.sections[i].tolist(),
+                    "label": self.labels[i],
+                    "stable": bool(self.stable[i]),
+                    "multipliers": complex_pairs(self.multipliers[i]),
+                    "dc": float(self.dc[i]),
+                    "eps_min": float(self.eps_min[i]),
+                    "eps_max": float(self.eps_max[i]),
+                    "pn_max": float(self.pn_max[i]),
+                }
+                for i in range(len(self.values))
+            ],
+            "special": [sp.to_dict() for sp in self.special],
+            "children": [child.to_dict() for child in self.children],
+        }
+
+
+class Continuation:
+    """The continuation of n-cycles along parameter ``name`` at fixed other parameters
+    ``par`` (PARAMETER_ORDER vector), inside the window [lo, hi] of that parameter."""
+
+    def __init__(self, smap: SectionMap, par: np.ndarray, name: str, n: int,
+                 window: tuple[float, float], settings: BranchSettings | None = None):  # fmt: skip
+        self.smap = smap
+        self.par = np.array(par, dtype=np.float64)
+        self.name = name
+        self.index = parameter_index(name)
+        self.n = n
+        self.lo, self.hi = sorted(window)
+        self.settings = settings or BranchSettings()
+        self.returned = False  # the last run ended on the branch of period n/2
+
+    # -- points ----------------------------------------------------------------------
+    def parameters_at(self, lam: float) -> np.ndarray:
+        par = self.par.copy()
+        par[self.index] = lam
+        return par
+
+    def column(self, u: np.ndarray) -> np.ndarray:
+        return self.smap.parameter_derivative(u[:2], self.parameters_at(u[2]), self.n, self.index)
+
+    def tangent(self, shot: Shot, column: np.ndarray, reference: np.ndarray | None) -> np.ndarray:
+        """The unit null vector of DF = [DPⁿ − I | ∂Pⁿ/∂λ], oriented along ``reference``."""
+        a = np.column_stack([shot.jacobian - np.eye(2), column])
+        t = np.cross(a[0], a[1])
+        norm = np.linalg.norm(t)
+        if not (norm > 0.0 and math.isfinite(norm)):
+            raise ContinuationError(f"the branch is singular at {self.name}={shot_value(t)}")
+        t /= norm
+        if reference is not None and np.dot(t, reference) < 0.0:
+            t = -t
+        return t
+
+    def point(self, u: np.ndarray, shot: Shot, reference: np.ndarray | None,
+              s: float = 0.0) -> BranchPoint:  # fmt: skip
+        column = self.column(u)
+        return BranchPoint(u, shot, column, self.tangent(shot, column, reference), s)
+
+    def correct(self, guess: np.ndarray, normal: np.ndarray, anchor: np.ndarray,
+                column: np.ndarray) -> tuple[np.ndarray, Shot, int] | None:  # fmt: skip
+        """Newton on Pⁿ(x; λ) − x = 0 with normal·(u − anchor) = 0, from ``guess``.
+
+        Returns (u, shot at u, iterates) or None when it does not converge, leaves the
+        model's parameter range or the integration fails.
+        """
+        tol = self.smap.precision.newton_tol
+        u = guess.copy()
+        for iteration in range(self.settings.max_newton + 1):
+            if not in_range(self.name, u[2]):
+                return None
+            try:
+                shot = self.smap.shoot(u[:2], self.parameters_at(u[2]), self.n)
+            except ContinuationError:
+                return None
+            residual = shot.residual
+            if np.max(np.abs(residual)) <= tol:
+                return u, shot, iteration
+            if iteration == self.settings.max_newton:
+                return None
+            system = np.zeros((3, 3))
+            system[:2, :2] = shot.jacobian - np.eye(2)
+            system[:2, 2] = column
+            system[2] = normal
+            rhs = np.concatenate([-residual, [-np.dot(normal, u - anchor)]])
+            try:
+                step = np.linalg.solve(system, rhs)
+            except np.linalg.LinAlgError:
+                return None
+            if not np.all(np.isfinite(step)):
+                return None
+            u = u + step
+        return None
+
+    def first_point(self, orbit: PeriodicOrbit, direction: float,
+                    tangent: np.ndarray | None = None) -> BranchPoint:  # fmt: skip
+        """The branch point of a converged orbit; the tangent oriented so the parameter
+        moves along ``direction`` (±1), or along ``tangent`` when given."""
+        u = np.array([*orbit.state, orbit.parameters[self.name]])
+        shot = self.smap.shoot(u[:2], self.parameters_at(u[2]), self.n)
+        reference = tangent if tangent is not None else np.array([0.0, 0.0, direction])
+        return self.point(u, shot, reference)
+
+    # -- the branch --------------------------------------------------------------------
+    def run(self, start: BranchPoint) -> tuple[list[BranchPoint], list[SpecialPoint], str]:
+        """Follow the branch from ``start`` along its tangent; returns its points, its
+        special points and why it ended."""
+        cfg = self.settings
+        points = [start]
+        special: list[SpecialPoint] = []
+        ds = min(cfg.step, cfg.max_step)
+        end = f"reached {cfg.max_points} points (max_points)"
+        while len(points) < cfg.max_points:
+            a = points[-1]
+            predicted = a.u + ds * a.tangent
+            found = self.correct(predicted, a.tangent, predicted, a.column)
+            b = None
+            if found is not None:
+                u, shot, iterations = found
+                b = self.point(u, shot, a.tangent, a.s + ds)
+                if np.dot(a.tangent, b.tangent) < math.cos(cfg.max_turn):
+                    b = None  # turned too sharply: a step this long may jump branches
+            if b is None:
+                ds *= 0.5
+                if ds < cfg.min_step:
+                    value = a.u[2]
+                    if not in_range(self.name, value + a.tangent[2] * 2 * cfg.min_step):
+                        end = f"left the model's range of {self.name} at {value:.10g}"
+                    else:
+                        end = f"no point found ahead of {self.name}={value:.10g} (step < min_step)"
+                    break
+                continue
+            if self.halves_between(a, b):
+                pt = self.vertex(a, b)
+                if pt is not None:
+                    points.append(pt)
+                    self.returned = True
+                    end = (f"returned onto the {self.n // 2}-cycles at their PD point "
+                           f"{self.name}={pt.u[2]:.10g}")  # fmt: skip
+                    break
+            for kind in crossings(a, b):
+                located = self.locate(a, b, kind)
+                if located is not None:
+                    special.append(located[0])
+            lam = b.u[2]
+            if not self.lo <= lam <= self.hi:
+                edge = self.hi if lam > self.hi else self.lo
+                last = self.at_value(a, edge)
+                if last is not None:
+                    points.append(last)
+                end = f"left the window at {self.name}={edge:.10g}"
+                break
+            points.append(b)
+            if iterations <= 2:
+                ds = min(1.5 * ds, cfg.max_step)
+            elif iterations >= 4:
+                ds *= 0.7
+        special.sort(key=lambda sp: sp.arclength)
+        return points, special, end
+
+    def halves_between(self, a: BranchPoint, b: BranchPoint) -> bool:
+        """True when an even-period branch passes a PD point of the n/2-cycles between a
+        and b: its halves' difference P^{n/2}(x) − x reverses there (the doubled branch's
+        two arms, x* ± a v, meet at the PD point, and a continuation that went on would
+        follow the other arm: the same cycles, half a period shifted)."""
+        if self.n % 2:
+            return False
+        return float(np.dot(half_difference(a), half_difference(b))) < 0.0
+
+    def vertex(self, a: BranchPoint, b: BranchPoint) -> BranchPoint | None:
+        """The branch point between a and b where the halves' difference vanishes."""
+        reference = half_difference(a)
+        span = b.s - a.s
+        cache = {0.0: a, span: b}
+
+        def sigma(s):
+            if s not in cache:
+                pt = self.along(a, s)
+                if pt is None:
+                    raise ContinuationError(f"no branch point at arclength {s} past {a.u}")
+                cache[s] = pt
+            return float(np.dot(half_difference(cache[s]), reference))
+
+        def small(s0, s1):
+            return abs(cache[s0].u[2] - cache[s1].u[2]) <= LOCATE_TOL and abs(s1 - s0) <= 1e-9
+
+        try:
+            s = illinois(sigma, 0.0, span, sigma(0.0), sigma(span), small)
+        except ContinuationError:
+            return None
+        return cache[s]
+
+    def at_value(self, a: BranchPoint, value: float) -> BranchPoint | None:
+        """The branch point at parameter ``value`` past a (corrected with λ fixed)."""
+        if abs(a.tangent[2]) < 1e-12:
+            return None
+        ds = (value - a.u[2]) / a.tangent[2]
+        guess = a.u + ds * a.tangent
+        guess[2] = value
+        found = self.correct(guess, np.array([0.0, 0.0, 1.0]), guess, a.column)
+        if found is None:
+            return None
+        u, shot, _ = found
+        return self.point(u, shot, a.tangent, a.s + ds)
+
+    # -- special points ---------------------------------------------------------------
+    def along(self, a: BranchPoint, s: float) -> BranchPoint | None:
+        """The corrected branch point at arclength s past a (on a's tangent's normal plane)."""
+        anchor = a.u + s * a.tangent
+        found = self.correct(anchor, a.tangent, anchor, a.column)
+        if found is None:
+            return None
+        u, shot, _ = found
+        return self.point(u, shot, a.tangent, a.s + s)
+
+    def locate(self, a: BranchPoint, b: BranchPoint,
+               kind: str) -> tuple[SpecialPoint, BranchPoint] | None:  # fmt: skip
+        """The special point of ``kind`` between a and b, located to LOCATE_TOL in λ, and
+        the branch point there."""
+        span = b.s - a.s
+        cache = {0.0: a, span: b}
+
+        def at(s):
+            if s not in cache:
+                pt = self.along(a, s)
+                if pt is None:
+                    raise ContinuationError(f"no branch point at arclength {s} past {a.u}")
+                cache[s] = pt
+            return cache[s]
+
+        def small(s0, s1):
+            return abs(at(s0).u[2] - at(s1).u[2]) <= LOCATE_TOL and abs(s1 - s0) <= 1e-6
+
+        psi = test_function(kind)
+        try:
+            fa, fb = psi(a), psi(b)
+            if kind == G and np.sign(fa) == np.sign(fb):
+                s = self.bisect_pattern(at, 0.0, span, a.p)
+            else:
+                s = illinois(lambda s: psi(at(s)), 0.0, span, fa, fb, small)
+        except ContinuationError:
+            return None
+        pt = at(s)
+        lo, hi = bracket_of(cache, s, kind, psi, a.p)
+        return self.special_point(kind, pt, a, b, abs(at(hi).u[2] - at(lo).u[2])), pt
+
+    def bisect_pattern(self, at, s0: float, s1: float, p0: int) -> float:
+        """Where the detachment count changes from p0 between arclengths s0 and s1."""
+        while abs(at(s1).u[2] - at(s0).u[2]) > LOCATE_TOL and s1 - s0 > 1e-12:
+            mid = 0.5 * (s0 + s1)
+            if at(mid).p == p0:
+                s0 = mid
+            else:
+                s1 = mid
+        return s1
+
+    def special_point(self, kind: str, pt: BranchPoint, a: BranchPoint, b: BranchPoint,
+                      accuracy: float) -> SpecialPoint:  # fmt: skip
+        from .orbit import multipliers_of
+
+        par = self.parameters_at(pt.u[2])
+        vector = None
+        if kind == PD:
+            values, vectors = np.linalg.eig(pt.jacobian)
+            i = int(np.argmin(np.abs(values + 1.0)))
+            v = np.real(vectors[:, i])
+            vector = tuple(float(c) for c in v / np.linalg.norm(v))
+        stable_a = max(abs(m) for m in multipliers_of(a.jacobian)) < 1.0
+        stable_b = max(abs(m) for m in multipliers_of(b.jacobian)) < 1.0
+        return SpecialPoint(
+            type=kind,
+            parameter=self.name,
+            value=float(pt.u[2]),
+            state=(float(pt.u[0]), float(pt.u[1])),
+            n=self.n,
+            multipliers=multipliers_of(pt.jacobian),
+            labels=(f"{self.n}-{a.p}", f"{self.n}-{b.p}"),
+            stable=(stable_a, stable_b),
+            accuracy=accuracy,
+            parameters=dict(zip(PARAMETER_ORDER, map(float, par), strict=True)),
+            eigenvector=vector,
+            arclength=float(pt.s),
+        )
+
+
+def half_difference(pt: BranchPoint) -> np.ndarray:
+    """P^{n/2}(x) − x of an even-period branch point (zero on the n/2-cycles)."""
+    n = len(pt.shot.points)
+    return pt.shot.points[n // 2 - 1] - pt.u[:2]
+
+
+def bracket_of(cache: dict, s: float, kind: str, psi, p0: int) -> tuple[float, float]:
+    """The closest evaluated arclengths on either side of the root at s."""
+    keys = sorted(cache)
+    if kind == G:
+        sides = [k for k in keys if cache[k].p == p0]
+        others = [k for k in keys if cache[k].p != p0]
+    else:
+        sign = np.sign(psi(cache[keys[0]]))
+        sides = [k for k in keys if np.sign(psi(cache[k])) == sign]
+        others = [k for k in keys if np.sign(psi(cache[k])) != sign]
+    lo = max((k for k in sides if k <= s), default=s)
+    hi = min((k for k in others if k >= s), default=s)
+    return lo, hi
+
+
+def shot_value(t) -> str:
+    return ", ".join(f"{v:.6g}" for v in t)
+
+
+def continue_branch(orbit: PeriodicOrbit, parameter: str, window: tuple[float, float], *,
+                    direction: float | None = None, section_map: SectionMap | None = None,
+                    settings: BranchSettings | None = None) -> Branch:  # fmt: skip
+    """Continue the branch of ``orbit`` along ``parameter`` inside ``window``.
+
+    Parameters
+    ----------
+    orbit : PeriodicOrbit
+        The branch's first point (``find_cycle``).
+    parameter : str
+        omega, f0, mu_kn, mu_cn or zeta.
+    window : (float, float)
+        The parameter's range; the branch ends where it leaves it.
+    direction : float, optional
+        +1 or −1: which way the parameter moves at the start; by default towards the far
+        end of the window.
+    section_map : SectionMap, optional
+        Reused between calls; by default one for the orbit's force law.
+    settings : BranchSettings, optional
+        Step control.
+
+    Returns
+    -------
+    Branch
+        Its points, special points (PD, SN, BP, NS, G, located to 1e-10 in the
+        parameter) and why it ended.
+    """
+    smap = section_map or SectionMap(orbit.model)
+    par = np.array([orbit.parameters[name] for name in PARAMETER_ORDER])
+    engine = Continuation(smap, par, parameter, orbit.n, window, settings)
+    value = orbit.parameters[parameter]
+    if direction is None:
+        lo, hi = sorted(window)
+        direction = 1.0 if hi - value >= value - lo else -1.0
+    shots0 = smap.shots
+    start = engine.first_point(orbit, direction)
+    points, special, end = engine.run(start)
+    return assemble(engine, points, special, end, shots=smap.shots - shots0)
+
+
+def assemble(engine: Continuation, points: list[BranchPoint], special: list[SpecialPoint],
+             end: str, origin: SpecialPoint | None = None, shots: int = 0) -> Branch:  # fmt: skip
+    """The Branch of a continuation's points."""
+    from .orbit import multipliers_of
+
+    n = engine.n
+    period = [n * 2.0 * math.pi / engine.parameters_at(pt.u[2])[0] for pt in points]
+    mult = np.array([multipliers_of(pt.jacobian) for pt in points], dtype=complex).reshape(-1, 2)
+    others = {
+        k: float(v) for k, v in zip(PARAMETER_ORDER, engine.par, strict=True) if k != engine.name
+    }
+    return Branch(
+        parameter=engine.name,
+        n=n,
+        parameters=others,
+        model=dict(engine.smap.model),
+        values=np.array([pt.u[2] for pt in points]),
+        states=np.array([pt.u[:2] for pt in points]).reshape(-1, 2),
+        sections=np.array([section_points(pt.shot) for pt in points]).reshape(-1, n, 2),
+        multipliers=mult,
+        stable=np.abs(mult).max(axis=1) < 1.0 if len(points) else np.zeros(0, bool),
+        p=np.array([pt.p for pt in points], dtype=int),
+        dc=np.array([pt.shot.time_free / T for pt, T in zip(points, period, strict=True)]),
+        eps_min=np.array([pt.shot.eps_min for pt in points]),
+        eps_max=np.array([pt.shot.eps_max for pt in points]),
+        pn_max=np.array([pt.shot.pn_max for pt in points]),
+        touch=np.array([pt.touch for pt in points]),
+        special=special,
+        end=end,
+        origin=origin,
+        shots=shots,
+        returned=engine.returned,
+    )
+
+
+def orbit_of(engine: Continuation, pt: BranchPoint) -> PeriodicOrbit:
+    """The PeriodicOrbit of a branch point."""
+    return orbit_at(engine.smap, pt.shot, engine.parameters_at(pt.u[2]), engine.n)

@@ -1,0 +1,187 @@
+"""Pⁿ with its derivatives, for any parameter of the model: what the continuation solves.
+
+``SectionMap`` wraps the compiled shooting entry (campar.core.shooting): one call gives
+the image Pⁿ(x; λ), the exact Jacobian DPⁿ (variational equations) and the orbit's contact
+pattern. The parameter derivative ∂Pⁿ/∂λ is a central difference quotient with the step
+``Precision.fd_step`` relative to max(1, |λ|): with the integrator at rtol 1e-12 its
+rounding part (~rtol/h ≈ 1e-7) and its truncation part (~h² ≈ 1e-12) both lie far below
+what Newton's method needs — the residual Pⁿ(x) − x is computed exactly and the column
+only enters the Jacobian, so it costs convergence speed, never accuracy
+(benchmarks/RESULTS.md, "Continuation").
+"""
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..core.codes import status_message
+from ..core.shooting import (
+    SHOT_DETACH,
+    SHOT_EPS_MAX,
+    SHOT_EPS_MIN,
+    SHOT_PN_MAX,
+    SHOT_STEPS,
+    SHOT_T_FREE,
+    SHOT_TOUCH,
+    Shooter,
+    compile_shooter,
+)
+from ..errors import ContinuationError, JobError
+from ..sweep.job import PAPER_VALUES, Job, check_parameter
+from ..sweep.tile import cell_settings, solver_options
+
+# The model's parameters in the order the compiled core takes them (model.make_params).
+PARAMETER_ORDER = ("omega", "zeta", "f0", "mu_kn", "mu_cn")
+
+
+@dataclass(frozen=True)
+class Precision:
+    """How accurately orbits are computed.
+
+    rtol, atol, method: the integrator's (rtol 1e-12 makes the fixed points and
+    multipliers accurate to ~1e-10); newton_tol: the residual ‖Pⁿ(x) − x‖∞ a fixed point
+    must reach; max_newton: Newton iterations before a correction is refused; fd_step:
+    the relative step of the parameter difference quotient.
+    """
+
+    rtol: float = 1e-12
+    atol: float = 1e-14
+    method: str = "dop853"
+    newton_tol: float = 1e-10
+    max_newton: int = 8
+    fd_step: float = 1e-5
+
+
+@dataclass(frozen=True)
+class Shot:
+    """One integration of n revolutions from ``start``."""
+
+    start: np.ndarray  # (2,) (y, y') at θ = 0
+    image: np.ndarray  # (2,) Pⁿ(start)
+    jacobian: np.ndarray  # (2, 2) DPⁿ at start (NaN when not asked for)
+    detachments: int
+    touch: float  # ε at the extremum of ε nearest 0, signed (grazing where it is 0)
+    eps_min: float
+    eps_max: float
+    pn_max: float
+    time_free: float  # time separated in the n revolutions
+    steps: int
+    points: np.ndarray  # (n, 2): P¹(start), …, Pⁿ(start)
+
+    @property
+    def residual(self) -> np.ndarray:
+        return self.image - self.start
+
+
+def model_settings(tensile="clamp", duty_cycle="separation", cam_velocity="chain") -> dict:
+    """The job model's options as a dict (validated when the SectionMap is built)."""
+    return {"tensile": tensile, "duty_cycle": duty_cycle, "cam_velocity": cam_velocity}
+
+
+def parameter_vector(parameters: dict) -> np.ndarray:
+    """(ω, ζ, f0, μkn, μcn) from a dict (ω required; the paper's base values for the rest),
+    each checked against its range (JobError)."""
+    unknown = sorted(set(parameters) - set(PARAMETER_ORDER))
+    if unknown:
+        raise JobError(f"unknown parameter {unknown[0]!r}; the model's parameters: "
+                       f"{', '.join(PARAMETER_ORDER)}")  # fmt: skip
+    if "omega" not in parameters:
+        raise JobError("omega is required")
+    values = {**PAPER_VALUES, **parameters}
+    vector = np.empty(len(PARAMETER_ORDER))
+    for i, name in enumerate(PARAMETER_ORDER):
+        try:
+            vector[i] = check_parameter(name, float(values[name]))
+        except ValueError as exc:
+            raise JobError(str(exc)) from None
+    return vector
+
+
+def parameter_index(name: str) -> int:
+    if name not in PARAMETER_ORDER:
+        raise JobError(f"{name!r} is not a parameter of the model; one of "
+                       f"{', '.join(PARAMETER_ORDER)}")  # fmt: skip
+    return PARAMETER_ORDER.index(name)
+
+
+def in_range(name: str, value: float) -> bool:
+    try:
+        check_parameter(name, value)
+    except ValueError:
+        return False
+    return True
+
+
+class SectionMap:
+    """Pⁿ(x; λ), DPⁿ and ∂Pⁿ/∂λ for one force law at one precision.
+
+    ``model``: the job model's options (``model_settings``); ``precision``: a Precision.
+    """
+
+    def __init__(self, model: dict | None = None, precision: Precision | None = None):
+        self.model = model_settings(**(model or {}))
+        self.precision = precision or Precision()
+        job = self._job()
+        self.law = job.model.law
+        solver = solver_options(job)
+        settings = cell_settings(job)
+        compile_shooter(self.law, solver, settings)
+        self._shooter = Shooter(self.law, solver, settings)
+
+    def _job(self) -> Job:
+        """A one-cell job: validates the model's options and the integrator settings."""
+        pr = self.precision
+        data = {
+            "name": "continuation",
+            "sweep": {"omega": {"from": 1.0, "to": 1.0, "points": 1},
+                      "f0": {"from": 0.5, "to": 0.5, "points": 1}},
+            "model": self.model,
+            "integrator": {"method": pr.method, "rtol": pr.rtol, "atol": pr.atol},
+        }  # fmt: skip
+        return Job.from_dict(data, source="continuation")
+
+    def with_precision(self, **changes) -> "SectionMap":
+        return SectionMap(self.model, replace(self.precision, **changes))
+
+    @property
+    def shots(self) -> int:
+        """Integrations of n revolutions so far (for the benchmarks)."""
+        return self._shooter.shots
+
+    def shoot(self, x, par: np.ndarray, n: int, jacobian: bool = True) -> Shot:
+        """Integrate n revolutions from x at parameters ``par`` (PARAMETER_ORDER)."""
+        start = np.array(x, dtype=np.float64)
+        status, result, jac, points = self._shooter(par, start, n, jacobian)
+        if status != 0:
+            raise ContinuationError(f"integration failed at {describe(par)}: "
+                                    f"{status_message(status)}")  # fmt: skip
+        return Shot(
+            start=start,
+            image=result[:2].copy(),
+            jacobian=jac.copy(),
+            detachments=int(round(result[SHOT_DETACH])),
+            touch=float(result[SHOT_TOUCH]),
+            eps_min=float(result[SHOT_EPS_MIN]),
+            eps_max=float(result[SHOT_EPS_MAX]),
+            pn_max=float(result[SHOT_PN_MAX]),
+            time_free=float(result[SHOT_T_FREE]),
+            steps=int(result[SHOT_STEPS]),
+            points=points,
+        )
+
+    def parameter_derivative(self, x, par: np.ndarray, n: int, index: int) -> np.ndarray:
+        """∂Pⁿ/∂λ at x for parameter ``index`` of PARAMETER_ORDER (central differences)."""
+        h = self.precision.fd_step * max(1.0, abs(par[index]))
+        up = par.copy()
+        down = par.copy()
+        up[index] += h
+        down[index] -= h
+        forward = self.shoot(x, up, n, jacobian=False).image
+        backward = self.shoot(x, down, n, jacobian=False).image
+        return (forward - backward) / (2.0 * h)
+
+
+def describe(par) -> str:
+    return ", ".join(
+        f"{name}={value:.10g}" for name, value in zip(PARAMETER_ORDER, par, strict=True)
+    )

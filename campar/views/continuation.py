@@ -1,0 +1,283 @@
+"""Continuation from Python and for ``campar continue``: a branch from a simulated cell.
+
+``continue_from_cell`` is what the command runs: it simulates the cell at the start of
+the parameter's range (from rest or a given state, exactly as ``campar point``), solves
+for the periodic orbit there by Newton's method (the simulated period, or the one asked
+for), continues its branch across the range with branch switching at period doublings,
+and optionally continues the curves of the branch's special points in a plane.
+"""
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..continuation.branch import Branch, BranchSettings
+from ..continuation.curves import CURVE_TYPES, BifurcationCurve, continue_curve
+from ..continuation.orbit import PeriodicOrbit, find_cycle
+from ..continuation.section_map import PARAMETER_ORDER, SectionMap
+from ..continuation.switching import continue_with_switching
+from ..errors import ContinuationError, JobError
+from .point import simulate_point
+
+
+@dataclass
+class ContinuationResult:
+    """A continuation run: its first orbit, the branch tree and the curves, with its cost."""
+
+    start: PeriodicOrbit
+    root: Branch
+    curves: list[BifurcationCurve] = field(default_factory=list)
+    curve_failures: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+    shots: int = 0
+
+    def special_points(self):
+        """(branch, special point) of every branch, in tree order."""
+        for branch in self.root.walk():
+            for sp in branch.special:
+                yield branch, sp
+
+    def to_dict(self) -> dict:
+        return {
+            "start": self.start.to_dict(),
+            "branch": self.root.to_dict(),
+            "special": [{"branch_period": b.n, **sp.to_dict()} for b, sp in self.special_points()],
+            "curves": [curve.to_dict() for curve in self.curves],
+            "curve_failures": self.curve_failures,
+            "seconds": self.seconds,
+            "shots": self.shots,
+        }
+
+
+def continue_from_cell(parameter: str, span: tuple[float, float], fixed: dict, *,
+                       y0: float = 0.0, v0: float = 0.0, cycle: int | None = None,
+                       switch: int = 0, model: dict | None = None,
+                       settings: BranchSettings | None = None,
+                       curve_types=(), second: str | None = None,
+                       second_window: tuple[float, float] | None = None,
+                       section_map: SectionMap | None = None) -> ContinuationResult:  # fmt: skip
+    """Continue the periodic orbit of the cell at ``span[0]`` along ``parameter`` to span[1].
+
+    Parameters
+    ----------
+    parameter : str
+        The continuation parameter: omega, f0, mu_kn, mu_cn or zeta.
+    span : (float, float)
+        Where the branch starts and the far end of its window.
+    fixed : dict
+        The other parameters (the paper's base values for those not given).
+    y0, v0 : float
+        The simulation's start at θ = 0 (rest by default).
+    cycle : int, optional
+        The period solved for; by default the simulated cell's period.
+    switch : int
+        Period doublings to follow from each PD point (0: none).
+    model : dict, optional
+        The force law's options (tensile, duty_cycle, cam_velocity).
+    settings : BranchSettings, optional
+        Step control of the branches.
+    curve_types : iterable of str
+        PD, SN, NS, G: continue the curve of every special point of these types found on
+        the branches in the plane (parameter, ``second``) over (span, ``second_window``).
+
+    Returns
+    -------
+    ContinuationResult
+
+    Raises
+    ------
+    ContinuationError
+        The start cell is not periodic and no ``cycle`` is given, or Newton fails there.
+    JobError
+        A parameter or option out of range.
+    """
+    if parameter not in PARAMETER_ORDER:
+        raise JobError(f"cannot continue along {parameter!r}; one of {', '.join(PARAMETER_ORDER)}")
+    if span[0] == span[1]:
+        raise JobError(f"the range of {parameter} is empty: {span[0]}:{span[1]}")
+    unknown = sorted(set(curve_types) - set(CURVE_TYPES))
+    if unknown:
+        raise JobError(f"no curves of {unknown[0]}; one of {', '.join(CURVE_TYPES)}")
+    if curve_types and (second is None or second_window is None or second == parameter):
+        raise JobError("curves need a second parameter and its range (--second NAME:A:B)")
+    began = time.perf_counter()
+    model = dict(model or {})
+    smap = section_map or SectionMap(model)
+    shots0 = smap.shots
+    values = {**fixed, parameter: span[0]}
+    omega = values.pop("omega")
+    cell = simulate_point(omega, y0=y0, v0=v0, **model, **values)
+    period = cycle or cell.n
+    if not period:
+        raise ContinuationError(
+            f"the cell at {parameter}={span[0]} is {cell.label} from ({y0}, {v0}): give the "
+            "period to solve for (--cycle N) or a start on a cycle (--y0 --v0)"
+        )
+    if not all(map(math.isfinite, cell.state)):
+        raise ContinuationError(f"the cell at {parameter}={span[0]} failed: {cell.status}")
+    start = find_cycle(period, cell.state, section_map=smap, **{**fixed, parameter: span[0]})
+    direction = 1.0 if span[1] > span[0] else -1.0
+    root = continue_with_switching(start, parameter, span, switch, direction=direction,
+                                   section_map=smap, settings=settings)  # fmt: skip
+    result = ContinuationResult(start=start, root=root)
+    for _, sp in list(result.special_points()):
+        if sp.type not in curve_types:
+            continue
+        try:
+            result.curves.append(continue_curve(sp, second, (span, second_window),
+                                                section_map=smap))  # fmt: skip
+        except ContinuationError as exc:
+            result.curve_failures.append(f"{sp.type} at {parameter}={sp.value:.10g}: {exc}")
+    result.seconds = time.perf_counter() - began
+    result.shots = smap.shots - shots0
+    return result
+
+
+def describe_continuation(result: ContinuationResult) -> str:
+    """A few lines: the start, every branch with its end, every special point."""
+    start = result.start
+    state = "stable" if start.stable else "unstable"
+    lines = [f"start: {start.label} ({state}) at "
+             + ", ".join(f"{k}={v:g}" for k, v in start.parameters.items())]  # fmt: skip
+    for branch in result.root.walk():
+        where = (
+            ""
+            if branch.origin is None
+            else (
+                f", switched at the PD point {branch.origin.parameter}={branch.origin.value:.10g}"
+            )
+        )
+        lines.append(f"branch of period {branch.n}: {len(branch.values)} points{where}; "
+                     f"{branch.end}")  # fmt: skip
+        for sp in branch.special:
+            mult = ", ".join(f"{m.real:+.6f}{m.imag:+.6f}j" for m in sp.multipliers)
+            sides = " → ".join(f"{lab} {'stable' if st else 'unstable'}"
+                               for lab, st in zip(sp.labels, sp.stable, strict=True))  # fmt: skip
+            lines.append(f"  {sp.type:2s} at {sp.parameter}={sp.value:.10f} (±{sp.accuracy:.1e})"
+                         f"  {sides}  multipliers {mult}")  # fmt: skip
+        for failure in branch.switch_failures:
+            lines.append(f"  no switch: {failure}")
+    for curve in result.curves:
+        lines.append(f"{curve.type} curve of {curve.n}-cycles in ({curve.first}, {curve.second}):"
+                     f" {len(curve.values)} points; {curve.end}")  # fmt: skip
+    lines.extend(f"no curve: {failure}" for failure in result.curve_failures)
+    lines.append(f"{result.shots} integrations of the section map, {result.seconds:.2f} s")
+    return "\n".join(lines)
+
+
+@dataclass
+class LineStructure:
+    """Every branch met along a line: the periodic attractors a simulation finds along it
+    (the seeds), each continued across the window both ways with switching, and the
+    branches found twice dropped.
+
+    branches: the root branches (each with its switched children); seeds: (ω, label) of
+    the cells the branches were started from; line: the simulated line.
+    """
+
+    branches: list[Branch]
+    seeds: list[tuple[float, str]]
+    line: object
+    seconds: float = 0.0
+    shots: int = 0
+
+    def special_points(self):
+        for root in self.branches:
+            for branch in root.walk():
+                for sp in branch.special:
+                    yield branch, sp
+
+    def to_dict(self) -> dict:
+        return {
+            "seeds": [{"omega": w, "label": label} for w, label in self.seeds],
+            "branches": [root.to_dict() for root in self.branches],
+            "special": [
+                {"branch_period": b.n, **sp.to_dict()} for b, sp in self.special_points()
+            ],  # fmt: skip
+            "seconds": self.seconds,
+            "shots": self.shots,
+        }
+
+
+def line_structure(window: tuple[float, float], points: int, fixed: dict, *, switch: int = 3,
+                   census: int = 0, census_points: int = 9, model: dict | None = None,
+                   settings: BranchSettings | None = None,
+                   section_map: SectionMap | None = None) -> LineStructure:  # fmt: skip
+    """The branch structure along ω over ``window`` at the parameters ``fixed``.
+
+    The line is simulated from the window's upper end down (``campar line``, ``points``
+    cells); from the middle cell of every run of one periodic label a cycle is solved for
+    and continued both ways across the window, switching at PD points ``switch`` deep.
+    With ``census`` > 0, the attractors that many starts reach (``find_attractors``) at
+    ``census_points`` speeds spread over the window seed branches too: the attractors
+    the line's path does not visit. A seed whose cycle lies on a branch already computed
+    (its state within 1e-6 of a branch point at the same ω, up to a cyclic shift) starts
+    none.
+    """
+    from .line import compute_line, line_job
+
+    began = time.perf_counter()
+    model = dict(model or {})
+    smap = section_map or SectionMap(model)
+    shots0 = smap.shots
+    others = {k: v for k, v in fixed.items() if k != "omega"}
+    line = compute_line(line_job(window, points, **model, **others), transitions=False)
+    runs, start = [], 0
+    labels = list(line.labels)
+    for i in range(1, len(labels) + 1):
+        if i == len(labels) or labels[i] != labels[start]:
+            if line.kind[start] == 0:
+                runs.append((start, i))
+            start = i
+    candidates = []  # (ω, n, label, state, section points)
+    for a, b in runs:
+        k = (a + b) // 2
+        n = int(line.n[k])
+        candidates.append((float(line.omega[k]), n, labels[k], line.state[k],
+                           line.sections[k, :n]))  # fmt: skip
+    if census:
+        from .attractors import find_attractors
+
+        for omega in np.linspace(max(window), min(window), census_points + 2)[1:-1]:
+            found = find_attractors(float(omega), count=census, **model, **others)
+            for a in found.attractors:
+                if a.kind == "periodic":
+                    r = a.result
+                    candidates.append((float(omega), r.n, r.label, np.array(r.state),
+                                       np.asarray(r.sections)[: r.n]))  # fmt: skip
+    settings = settings or BranchSettings()
+    roots, seeds, switched = [], [], []
+    for omega, n, label, state, points in candidates:
+        if on_a_branch(roots, omega, points):
+            continue
+        try:
+            orbit = find_cycle(n, state, section_map=smap, omega=omega, **others)
+        except ContinuationError:
+            continue
+        if on_a_branch(roots, omega, orbit.sections):
+            continue
+        seeds.append((omega, label))
+        for direction in (-1.0, 1.0):
+            roots.append(continue_with_switching(orbit, "omega", window, switch,
+                                                 direction=direction, section_map=smap,
+                                                 settings=settings, switched=switched))  # fmt: skip
+    return LineStructure(roots, seeds, line, time.perf_counter() - began, smap.shots - shots0)
+
+
+def on_a_branch(roots: list[Branch], omega: float, points, tol: float = 1e-6) -> bool:
+    """True when the cycle with section ``points`` at ω lies on a computed branch."""
+    n = len(points)
+    for root in roots:
+        for branch in root.walk():
+            if branch.n != n or not len(branch.values):
+                continue
+            close = np.nonzero(np.abs(branch.values - omega) < 0.02)[0]
+            for i in close:
+                # the branch point's cycle at its own ω; compare after a cyclic shift
+                for shift in range(n):
+                    if np.abs(np.roll(branch.sections[i], shift, axis=0) - points).max() < \
+                            max(tol, 50 * abs(branch.values[i] - omega)):  # fmt: skip
+                        return True
+    return False

@@ -1,0 +1,233 @@
+"""Bifurcation curves of a map: seeds from its typed edges, and how well curves and map agree.
+
+``store_seeds`` reads a map store's typed edges (``store_boundaries``) and turns every PD,
+SN and G edge into seeds (``campar.continuation.mapscale.Seed``): the periodic cell on the
+side whose cycle bifurcates, with its stored state — for PD the side of the shorter
+period (the cycle whose multiplier goes to −1), for SN the side whose multiplier goes to
++1 (the cycle that disappears), for G each periodic side. Seeds of one type and period
+on neighbouring edges are grouped into one task (``group_seeds``).
+
+``agreement`` measures the map against its curves: the share of the map's edges of a
+type that lie within one cell of a continued curve of that type, and the share of each
+curve's length that has such edges beside it where the map is periodic on both sides.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..continuation.mapscale import SEED_TYPES, Seed, distances_to, group_seeds, in_plane
+from ..sweep.job import cell_edges
+from .boundaries import Segment, store_boundaries
+
+NEAR_CELLS = 1.0  # "within one cell"
+
+
+def seed_sides(segment: Segment) -> list:
+    """The sides (key "before"/"after", ``transitions.Side``) whose cycle bifurcates at a
+    typed edge, the likeliest first: for PD the side of the shorter period, for PD and SN
+    the side whose multiplier approaches the critical value; for G both periodic sides
+    (either cycle's branch can meet the grazing); [] where neither side is periodic."""
+    t = segment.transition
+    sides = {"before": t.before, "after": t.after}
+    periodic = {k: s for k, s in sides.items() if s.kind == "periodic" and s.multipliers}
+    if not periodic:
+        return []
+    if t.type == "PD" and len(periodic) == 2 and t.before.n != t.after.n:
+        key = min(periodic, key=lambda k: periodic[k].n)
+        return [(key, periodic[key])]
+    if t.type in ("PD", "SN") and t.evidence is not None and t.evidence.side in periodic:
+        return [(t.evidence.side, periodic[t.evidence.side])]
+    return list(periodic.items())
+
+
+def store_seeds(path, types=SEED_TYPES, *, group: bool = True) -> list[list[Seed]]:
+    """The tasks of a map store's curves of ``types`` (PD, SN, G): seeds grouped by curve
+    (``group_seeds``), or each seed a task of its own."""
+    from ..sweep.store import read_store
+    from .dataset import open as open_store
+
+    found = store_boundaries(path)
+    second_name = found.second_name
+    with read_store(path) as store:
+        job = store.job
+    with open_store(path) as ds:
+        state = np.asarray(ds["state"].values)
+        if "direction" in ds["state"].dims:
+            state = state[0]  # the down sweep, as store_boundaries types it
+        omega = np.asarray(ds["omega"].values, dtype=float)
+        second = np.asarray(ds[second_name].values, dtype=float)
+    fixed = dict(job.fixed)
+    model = job.model.model_dump()
+    window = ((float(omega.min()), float(omega.max())), (float(second.min()), float(second.max())))
+    spacing = (float(np.abs(np.diff(omega)).mean()) if len(omega) > 1 else 1.0,
+               float(np.abs(np.diff(second)).mean()) if len(second) > 1 else 1.0)  # fmt: skip
+    seeds = []
+    for segment in found.segments:
+        if segment.type not in types:
+            continue
+        for key, side in seed_sides(segment):
+            cell = segment.before if key == "before" else segment.after
+            other = segment.after if key == "before" else segment.before
+            row, col = cell
+            if not np.all(np.isfinite(state[row, col])):
+                continue
+            axis = "omega" if segment.axis == "omega" else second_name
+            neighbour = omega[other[1]] if axis == "omega" else second[other[0]]
+            seeds.append(Seed(
+                type=segment.type, n=side.n, p=side.p, cell=(int(row), int(col)),
+                parameters={**fixed, "omega": float(omega[col]),
+                            second_name: float(second[row])},
+                state=(float(state[row, col, 0]), float(state[row, col, 1])), axis=axis,
+                neighbour=float(neighbour), plane=("omega", second_name), window=window,
+                spacing=spacing, model=model,
+            ))  # fmt: skip
+    return group_seeds(seeds) if group else [[seed] for seed in seeds]
+
+
+@dataclass(frozen=True)
+class Agreement:
+    """How a map's typed edges and the continued curves agree, per type.
+
+    edges_near: of the map's edges of the type, the share within one cell of a curve of
+    the type; length_near: of the curves' length inside the map where the map is
+    periodic on both sides of the curve, the share with an edge of the type within one
+    cell; counts: (edges, curve points judged).
+    """
+
+    type: str
+    edges_near: float
+    length_near: float
+    counts: tuple[int, int]
+
+    def to_dict(self) -> dict:
+        return {"type": self.type, "edges_near": self.edges_near,
+                "length_near": self.length_near, "edges": self.counts[0],
+                "curve_points": self.counts[1]}  # fmt: skip
+
+
+def agreement(found, curves, omega, second, kinds, kind_type: str) -> Agreement:
+    """``Agreement`` of the typed edges ``found`` (MapBoundaries) with ``curves`` of type
+    ``kind_type``; ``kinds`` (second, omega): the map's kind codes (0: periodic)."""
+    omega, second = np.asarray(omega, float), np.asarray(second, float)
+    spacing = np.array([np.abs(np.diff(omega)).mean(), np.abs(np.diff(second)).mean()])
+    plane = ("omega", found.second_name)
+    mine = [c for c in curves if c.type == kind_type]
+    points = np.vstack([in_plane(c, plane) for c in mine]) if mine else np.zeros((0, 2))
+    edges = [s for s in found.segments if s.type == kind_type]
+    centres = np.array([[0.5 * (s.edge[0] + s.edge[2]), 0.5 * (s.edge[1] + s.edge[3])]
+                        for s in edges]).reshape(-1, 2)  # fmt: skip
+    near = distances_to(centres / spacing, points / spacing) <= NEAR_CELLS + 0.5
+    edges_near = float(near.mean()) if len(edges) else float("nan")
+    # the curves' points inside the map whose surrounding cells are periodic
+    xe, ye = cell_edges(omega), cell_edges(second)
+    judged, beside = 0, 0
+    for point in points:
+        j = np.searchsorted(np.sort(xe), point[0]) - 1
+        i = np.searchsorted(np.sort(ye), point[1]) - 1
+        if not (0 <= j < len(omega) and 0 <= i < len(second)):
+            continue
+        jj = j if omega[0] < omega[-1] else len(omega) - 1 - j
+        ii = i if second[0] < second[-1] else len(second) - 1 - i
+        block = kinds[max(ii - 1, 0) : ii + 2, max(jj - 1, 0) : jj + 2]
+        if not (block == 0).all():
+            continue
+        judged += 1
+        if len(centres) and np.min(np.linalg.norm((centres - point) / spacing, axis=1)) <= \
+                NEAR_CELLS + 0.5:  # fmt: skip
+            beside += 1
+    length_near = beside / judged if judged else float("nan")
+    return Agreement(kind_type, edges_near, length_near, (len(edges), judged))
+
+
+@dataclass
+class MapCurves:
+    """The continued curves of a map store and how they were found.
+
+    curves: one per bifurcation set found in the window (merged); seeds: the typed edges
+    seeded from; rounds: task rounds run (each seeds the edges no curve passed near
+    yet); failures: (cell, why) of the tasks that found no curve; seconds, shots: cost.
+    """
+
+    curves: list
+    seeds: int
+    tasks: int
+    rounds: int
+    failures: list[tuple[tuple[int, int], str]]
+    seconds: float = 0.0
+
+    def to_dict(self) -> dict:
+        return {
+            "curves": [c.to_dict() for c in self.curves], "seeds": self.seeds,
+            "tasks": self.tasks, "rounds": self.rounds,
+            "failures": [{"cell": list(cell), "why": why} for cell, why in self.failures],
+            "seconds": self.seconds,
+        }  # fmt: skip
+
+
+def run_serially(tasks: list[list[Seed]]) -> list:
+    """Each task's curve, or the ContinuationError it ended with, in one process."""
+    from ..continuation.mapscale import curve_from_task
+    from ..continuation.section_map import SectionMap
+    from ..errors import ContinuationError
+
+    maps: dict = {}
+    results = []
+    for task in tasks:
+        key = tuple(sorted(task[0].model.items()))
+        smap = maps.setdefault(key, None) or SectionMap(task[0].model)
+        maps[key] = smap
+        try:
+            results.append(curve_from_task(task, section_map=smap))
+        except ContinuationError as exc:
+            results.append(exc)
+    return results
+
+
+def covered(seed: Seed, curves, plane, spacing) -> bool:
+    """True when a curve of the seed's type and period passes within one cell (and a half,
+    the edge's own offset) of the seed's edge."""
+    i = plane.index(seed.axis)
+    centre = np.array([seed.parameters[plane[0]], seed.parameters[plane[1]]], dtype=float)
+    centre[i] = 0.5 * (centre[i] + seed.neighbour)
+    scale = np.asarray(spacing, dtype=float)
+    for curve in curves:
+        if (curve.type, curve.n) != (seed.type, seed.n):
+            continue
+        if distances_to(centre[None, :] / scale, in_plane(curve, plane) / scale)[0] <= \
+                NEAR_CELLS + 0.5:  # fmt: skip
+            return True
+    return False
+
+
+def compute_map_curves(path, types=SEED_TYPES, *, rounds: int = 3,
+                       run_tasks=run_serially) -> MapCurves:  # fmt: skip
+    """Every curve of ``types`` of a map store: rounds of tasks (``group_seeds`` of the
+    seeds no curve covers yet), each run by ``run_tasks`` (a list of tasks → a list of
+    curves or exceptions, in order: serially, or by the runner's ranks)."""
+    import time
+
+    from ..continuation.mapscale import merge_curves
+
+    began = time.perf_counter()
+    raw = [task[0] for task in store_seeds(path, types, group=False)]
+    curves, failures, tried, n_tasks, done_rounds = [], [], set(), 0, 0
+    if not raw:
+        return MapCurves([], 0, 0, 0, [], time.perf_counter() - began)
+    plane, spacing = raw[0].plane, raw[0].spacing
+    pending = raw
+    for _ in range(rounds):
+        tasks = group_seeds(pending)
+        if not tasks:
+            break
+        done_rounds += 1
+        n_tasks += len(tasks)
+        for task, result in zip(tasks, run_tasks(tasks), strict=True):
+            if isinstance(result, Exception):
+                failures.append((task[0].cell, str(result)))
+                tried.update(seed.cell for seed in task)
+            else:
+                curves.append(result)
+        curves = [curves[i] for i in merge_curves(curves, plane, spacing)]
+        pending = [s for s in raw if s.cell not in tried and not covered(s, curves, plane, spacing)]
+    return MapCurves(curves, len(raw), n_tasks, done_rounds, failures, time.perf_counter() - began)

@@ -1,0 +1,94 @@
+"""campar's private numba calls (campar.core.numba_internals): they answer under the numba
+the tests run with, and where a numba lacks them campar compiles normally, with the same
+results."""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+import tomllib
+from pathlib import Path
+
+import numba
+import pytest
+from packaging.specifiers import SpecifierSet
+
+from campar.core import jitcache, numba_internals, split_compile
+from campar.core.kernel import chain_compiled
+from campar.core.revolution import run_revolution
+from campar.sweep.tile import cell_settings, solver_options
+from campar.views.point import point_job, simulate_point
+
+ROOT = Path(__file__).resolve().parents[1]
+ANOTHER_NUMBA = "_cache_of_another_numba"  # an attribute no numba dispatcher has
+
+
+def test_the_supported_range_is_pyprojects_and_holds_the_installed_numba():
+    dependencies = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    (numba_spec,) = [d for d in dependencies["dependencies"] if d.startswith("numba")]
+    assert numba_spec == f"numba{numba_internals.SUPPORTED}"
+    assert numba.__version__ in SpecifierSet(numba_internals.SUPPORTED)
+
+
+def test_this_numbas_cache_answers():
+    simulate_point(3.0)  # loads (or compiles) the chain into this process
+    assert numba_internals.split_available(chain_compiled)
+    assert numba_internals.cache_path(chain_compiled) == jitcache.located_cache_dir()
+    assert numba_internals.cache_serves(chain_compiled, chain_compiled.signatures[0]) is True
+    # a signature nobody compiled is not served
+    from numba import types
+
+    never = (types.Array(types.float64, 3, "C"),) * 2
+    assert numba_internals.cache_serves(run_revolution, never) is False
+
+
+def test_without_the_internals_nothing_is_split_and_nothing_waits(monkeypatch):
+    monkeypatch.setattr(numba_internals, "CACHE_ATTRIBUTE", ANOTHER_NUMBA)
+    assert numba_internals.cache_path(chain_compiled) is None
+    assert numba_internals.cache_serves(chain_compiled, ()) is None
+    assert not numba_internals.split_available(run_revolution)
+    assert jitcache.located_cache_dir() is None
+    # stale entries are still looked for where numba documents its cache
+    assert jitcache.PACKAGE / "__pycache__" in jitcache.cache_dirs()
+    assert numba_internals.cache_indexes(chain_compiled, ()) is None
+    assert not split_compile.cold_for(run_revolution, [()])
+    job = point_job(omega=3.0)
+    assert split_compile.start_helper(solver_options(job), cell_settings(job)) is None
+    monkeypatch.setattr(split_compile, "HELPER_SECONDS", 60.0)
+    from numba import types
+
+    never = (types.Array(types.float64, 3, "C"),) * 2
+    split_compile.until_cached(run_revolution, never)  # returns at once, no 60 s wait
+
+
+COLD_POINT = textwrap.dedent("""
+    import json, sys
+    from campar.core import numba_internals, split_compile
+    from campar.views.point import simulate_point
+
+    numba_internals.CACHE_ATTRIBUTE = sys.argv[1]
+    forked = []
+    start = split_compile.start_helper
+    def start_helper(*args):
+        forked.append(start(*args))
+        return forked[-1]
+    split_compile.start_helper = start_helper
+    result = simulate_point(3.0, mu_cn=0.75, multipliers=True)
+    print(json.dumps({"forked": [pid is not None for pid in forked], "result": result.to_dict()}))
+""")
+
+
+@pytest.mark.slow
+def test_a_cold_compile_without_the_internals_gives_the_same_cell(tmp_path):
+    """A numba whose cache campar cannot ask: a cold ``simulate_point`` forks no helper,
+    compiles everything itself, and gives the cell this process gives."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    run = subprocess.run([sys.executable, "-c", COLD_POINT, ANOTHER_NUMBA], env=env,
+                         text=True, capture_output=True, timeout=600)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    without = json.loads(run.stdout)
+    assert without["forked"] == [False]
+    here = simulate_point(3.0, mu_cn=0.75, multipliers=True).to_dict()
+    assert json.loads(json.dumps(here)) == without["result"]
+    assert here["label"] == "1-1"
