@@ -114,7 +114,7 @@ def test_campar_open_gives_one_separation_speed_a_row(tmp_path):
 def test_a_basin_has_no_separation_output():
     from campar.errors import JobError
 
-    with pytest.raises(JobError, match="a basin has none"):
+    with pytest.raises(JobError, match="separation: a basin job"):
         Job.from_dict({"name": "b", "sweep": {"y0": {"from": 0, "to": 1, "points": 2},
                        "ydot0": {"from": 0, "to": 1, "points": 2}}, "fixed": {"omega": 3.0},
                        "outputs": ["label", "separation"]})  # fmt: skip

@@ -409,14 +409,6 @@ class Job(Settings):
         return self
 
     @model_validator(mode="after")
-    def separation_of_map_rows(self):
-        if self.kind == "basin" and self.wants("separation"):
-            raise ValueError(
-                "outputs: separation is a speed along a map's ω rows; a basin has none"
-            )
-        return self
-
-    @model_validator(mode="after")
     def sweep_and_fixed_disjoint(self):
         both = set(self.sweep) & set(self.fixed)
         if both:
@@ -435,6 +427,7 @@ class Job(Settings):
             "chains": self.chains != DEFAULT_CHAINS,
             "initial": self.initial != DEFAULT_INITIAL,
             "attractors": self.attractors is not None,
+            "separation": self.wants("separation"),  # a speed along a map's ω rows
         }
         for key in (key for key, given in unused.items() if given):
             raise ValueError(
@@ -486,14 +479,10 @@ class Job(Settings):
         return self.fixed[name]
 
     def law(self, row: int = 0):
-        """The kernel's Law (campar.core.model.Law) of chain ``row``: the model's laws with a
-        swept law parameter (LAW_PARAMETERS) at the row's value."""
-        if self.kind == "map" and self.second in LAW_PARAMETERS:
-            from .laws import kernel_law
+        """The kernel's Law (core.model.Law) of chain ``row`` (``laws.row_law``)."""
+        from .laws import row_law
 
-            value = float(self.second_values[row])
-            return kernel_law(self.model, self.second, value, swept=(self.second,))
-        return self.model.law
+        return row_law(self.model, self.second, self.second_values, row)
 
     @property
     def directions(self) -> tuple[str, ...]:

@@ -171,3 +171,11 @@ def kernel_law(model, name: str | None = None, value: float | None = None, swept
     the_contact = contact.contact_law(con.law, con.n, restitution, floor,
                                       general="n" in swept)  # fmt: skip
     return Law(np.int64(model.law_bits), the_cam, the_contact)
+
+
+def row_law(model, second: str, values, row: int):
+    """The kernel's Law of a chain: the model's laws with a swept law parameter (a map's
+    ``second`` axis in LAW_PARAMETERS) at the row's value."""
+    if second not in LAW_PARAMETERS:
+        return kernel_law(model)
+    return kernel_law(model, second, float(values[row]), swept=(second,))
