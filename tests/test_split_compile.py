@@ -127,7 +127,7 @@ def test_a_loaded_chain_serves_every_job_of_its_method():
 
 IN_CACHE = textwrap.dedent("""
     import sys
-    from campar.core import split_compile
+    from campar.core import numba_internals
     from campar.core.kernel import make_chain_work
     from campar.core.revolution import run_revolution
     from campar.core.revolution_call import revolution_args
@@ -136,10 +136,10 @@ IN_CACHE = textwrap.dedent("""
     job = point_job(omega=3.0)
     solver, settings = solver_options(job), cell_settings(job)
     signature = revolution_args(solver, settings, make_chain_work(settings).w6, law=job.law())
-    print(split_compile.in_cache(run_revolution, signature))
+    print(numba_internals.cache_indexes(run_revolution, signature))
     if sys.argv[1] == "compile":
         run_revolution.compile(signature)
-        print(split_compile.in_cache(run_revolution, signature))
+        print(numba_internals.cache_indexes(run_revolution, signature))
 """)
 
 
@@ -153,8 +153,9 @@ def in_cache_run(cache, mode: str) -> list[str]:
 
 def test_in_cache_reads_the_cache_numba_reads(tmp_path):
     """The helper forks where the job's revolution is missing from the cache numba will
-    read (``in_cache``): under NUMBA_CACHE_DIR only that directory counts, whatever the
-    source tree's ``__pycache__`` holds."""
+    read (``numba_internals.cache_indexes``, ``split_compile.cold_for``): under
+    NUMBA_CACHE_DIR only that directory counts, whatever the source tree's ``__pycache__``
+    holds."""
     assert in_cache_run(tmp_path / "cache", "look") == ["False"]
 
 
