@@ -203,16 +203,18 @@ def _mirrored(half):
 
 
 @register_jitable
+def _sine_ramp(u, a):
+    """s, s', s'' on the opening quarter sine (u ∈ [0, 1/8]) of a composite law of peak a."""
+    w = 4.0 * math.pi
+    return a / w * (u - math.sin(w * u) / w), a / w * (1.0 - math.cos(w * u)), a * math.sin(w * u)
+
+
+@register_jitable
 def _trapezoid_half(u):
     a, w = TRAPEZOID_PEAK, 4.0 * math.pi
-    v1 = a / w  # at u = 1/8
-    s1 = a / w * (0.125 - 1.0 / w)
     if u < 0.125:
-        return (
-            a / w * (u - math.sin(w * u) / w),
-            a / w * (1.0 - math.cos(w * u)),
-            a * math.sin(w * u),
-        )
+        return _sine_ramp(u, a)
+    s1, v1, _ = _sine_ramp(0.125, a)
     if u < 0.375:
         d = u - 0.125
         return s1 + v1 * d + 0.5 * a * d * d, v1 + a * d, a
@@ -225,15 +227,10 @@ def _trapezoid_half(u):
 
 @register_jitable
 def _sine_half(u):
-    a, w, w3 = SINE_PEAK, 4.0 * math.pi, 4.0 * math.pi / 3.0
-    v1 = a / w
-    s1 = a / w * (0.125 - 1.0 / w)
+    a, w3 = SINE_PEAK, 4.0 * math.pi / 3.0
     if u < 0.125:
-        return (
-            a / w * (u - math.sin(w * u) / w),
-            a / w * (1.0 - math.cos(w * u)),
-            a * math.sin(w * u),
-        )
+        return _sine_ramp(u, a)
+    s1, v1, _ = _sine_ramp(0.125, a)
     d = u - 0.125
     return (s1 + v1 * d + a / (w3 * w3) * (1.0 - math.cos(w3 * d)), v1 + a / w3 * math.sin(w3 * d),
             a * math.cos(w3 * d))  # fmt: skip
