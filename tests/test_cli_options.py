@@ -11,6 +11,7 @@ import pytest
 
 from campar.bench.scipy_model import Model, duty_cycle, integrate
 from campar.cli import build_parser, main
+from campar.cli.options import option_fields
 from campar.sweep.job import DEFAULT_MODEL, ModelSettings, field_choices
 
 CELL_COMMANDS = ("point", "line", "continue")
@@ -29,7 +30,7 @@ def option(parser: argparse.ArgumentParser, flag: str) -> argparse.Action:
 
 
 @pytest.mark.parametrize("command", CELL_COMMANDS)
-@pytest.mark.parametrize("name", list(ModelSettings.model_fields))
+@pytest.mark.parametrize("name", option_fields())
 def test_every_model_option_is_a_flag_with_the_jobs_choices_and_default(command, name):
     action = option(subparser(command), f"--{name.replace('_', '-')}")
     assert tuple(action.choices) == field_choices(ModelSettings, name)
@@ -42,7 +43,7 @@ def test_the_commands_share_one_definition_of_the_model_flags(command):
     """Same flags, same help text: a flag means the same in every command."""
     mine = {a.dest: (a.option_strings, a.help) for a in subparser(command)._actions}
     point = {a.dest: (a.option_strings, a.help) for a in subparser("point")._actions}
-    for name in ModelSettings.model_fields:
+    for name in option_fields():
         assert mine[name] == point[name], name
     if command == "line":  # a chain's transient too (continue solves for cycles instead)
         assert (mine["transient"], mine["revolutions"]) == (point["transient"],

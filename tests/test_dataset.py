@@ -32,7 +32,7 @@ from campar.views.dataset import cell_labels
 xr = pytest.importorskip("xarray")
 pytest.importorskip("h5netcdf")
 
-ALL_OUTPUTS = ["label", "dc", "eps", "pn", "sections", "multipliers", "lyapunov"]
+ALL_OUTPUTS = ["label", "dc", "eps", "pn", "sections", "multipliers", "lyapunov", "separation"]
 CREATED = "2026-01-02T03:04:05+00:00"
 RUN = {"start": CREATED, "end": CREATED, "tiles": 2, "ranks": 1, "outcome": "interrupted"}
 

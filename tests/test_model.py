@@ -8,6 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from campar.core import model as M
+from campar.core.cam import PAPER_CAM
 from campar.core.jit import through_numba
 
 BOUNDARIES = M.PHASE_BOUNDS[1:]
@@ -16,15 +17,15 @@ BOUNDARIES = M.PHASE_BOUNDS[1:]
 @pytest.mark.parametrize("i", range(4))
 def test_cam_is_c1_across_phase_boundaries(i):
     theta = BOUNDARIES[i]
-    before = through_numba(M.cam)(theta, i)
-    after = through_numba(M.cam)(theta if i < 3 else 0.0, (i + 1) % 4)
+    before = through_numba(M.cam)(theta, i, PAPER_CAM)
+    after = through_numba(M.cam)(theta if i < 3 else 0.0, (i + 1) % 4, PAPER_CAM)
     assert before[0] == pytest.approx(after[0], abs=1e-15)  # lift continuous
     assert before[1] == pytest.approx(after[1], abs=1e-14)  # velocity continuous
     assert abs(before[2] - after[2]) == pytest.approx(4.5)  # acceleration jumps by 4.5
 
 
 def cam_at(theta):
-    return through_numba(M.cam)(theta, through_numba(M.phase_of)(theta))
+    return through_numba(M.cam)(theta, through_numba(M.phase_of)(theta), PAPER_CAM)
 
 
 def test_cam_law_values():
@@ -67,7 +68,7 @@ def test_variational_part_is_the_jacobian_of_the_field(contact, phase):
     p = through_numba(M.make_params)(2.0, 0.2, 0.5, 0.9, 0.8, True)
     mode = np.array([phase, contact])
     t = 0.5 * (M.PHASE_BOUNDS[phase] + M.PHASE_BOUNDS[phase + 1]) / p.omega
-    yc = through_numba(M.cam)(p.omega * t, phase)[0]
+    yc = through_numba(M.cam)(p.omega * t, phase, p.cam)[0]
     x = np.array([yc - 0.05, 0.1, 1.0, 0.0, 0.0, 1.0])  # ε = 0.05 > 0
     dx = np.zeros(6)
     through_numba(M.rhs)(t, x, p, mode, dx)
@@ -105,5 +106,5 @@ def test_hot_functions_refuse_python_callers():
     # compiled without a CPython wrapper (campar.core.jit): a call from Python must raise,
     # not jump through numba's null entry pointer
     with pytest.raises(TypeError, match="compiled callers only"):
-        M.cam(0.1, 0)
-    assert through_numba(M.cam)(0.0, M.RISE)[0] == 0.0
+        M.cam(0.1, 0, PAPER_CAM)
+    assert through_numba(M.cam)(0.0, M.RISE, PAPER_CAM)[0] == 0.0

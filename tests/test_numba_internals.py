@@ -51,7 +51,8 @@ def test_without_the_internals_nothing_is_split_and_nothing_waits(monkeypatch):
     assert jitcache.located_cache_dir() is None
     # stale entries are still looked for where numba documents its cache
     assert jitcache.PACKAGE / "__pycache__" in jitcache.cache_dirs()
-    assert not split_compile.cache_is_cold()
+    assert numba_internals.cache_indexes(chain_compiled, ()) is None
+    assert not split_compile.cold_for(run_revolution, [()])
     job = point_job(omega=3.0)
     assert split_compile.start_helper(solver_options(job), cell_settings(job)) is None
     monkeypatch.setattr(split_compile, "HELPER_SECONDS", 60.0)

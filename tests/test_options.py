@@ -138,7 +138,7 @@ def test_law_bits_and_job_settings():
     job = Job.from_dict(base)
     literal = Job.from_dict({**base, "model": {"cam_velocity": "literal"}})
     by_force = Job.from_dict({**base, "model": {"duty_cycle": "force"}})
-    assert literal.model.law == LAW_CLAMP | LAW_CAM_LITERAL
+    assert literal.model.law_bits == LAW_CLAMP | LAW_CAM_LITERAL
     assert len({job.digest(), literal.digest(), by_force.digest()}) == 3
     # a store written before the options existed holds a job without them: same hash
     old = job.to_dict()

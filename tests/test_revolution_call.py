@@ -5,7 +5,8 @@ import pytest
 from numba import typeof
 
 from campar.core import revolution
-from campar.core.kernel import chain_compiled, law_bits, make_chain_work
+from campar.core.kernel import chain_compiled, make_chain_work
+from campar.core.model import kernel_law
 from campar.core.revolution import make_trace
 from campar.core.revolution_call import fingerprint, revolution_args, revolution_link
 from campar.core.tracer import trace_arguments, trace_compiled, tracer_link
@@ -34,7 +35,7 @@ def test_the_linked_signature_is_the_one_the_chain_calls_with(method):
     np.testing.assert_array_equal(revolution_link(solver, settings, cw.w6), link)
     assert args in revolution.run_revolution.overloads
     cw.revolution[:] = link
-    chain_compiled(*cells, law_bits(True), np.zeros(2), solver, settings, out, cw)
+    chain_compiled(*cells, kernel_law(True), np.zeros(2), solver, settings, out, cw)
     assert out.status[0] == 0 and out.n[0] >= 1
 
 
@@ -44,7 +45,7 @@ def test_a_chain_linked_for_other_arguments_raises_instead_of_calling():
     cw.revolution[:] = revolution_link(solver, settings, cw.w6)
     cw.revolution[1] ^= 1
     with pytest.raises(RuntimeError, match="other argument types"):
-        chain_compiled(*cells, law_bits(True), np.zeros(2), solver, settings, out, cw)
+        chain_compiled(*cells, kernel_law(True), np.zeros(2), solver, settings, out, cw)
     assert out.revolutions[0] == 0  # nothing was computed
 
 
@@ -52,7 +53,7 @@ def test_the_tracer_links_the_revolution_with_a_recorder_and_checks_it_too():
     _, solver, settings, _ = chain_arguments()
     rec = make_trace(100, 10, 1)
     args = trace_arguments(3.0, 0.2, 0.5, 0.8, 0.8, True, np.zeros(2), solver, settings, 2, rec)
-    link = tracer_link(solver, settings, rec)
+    link = tracer_link(solver, settings, rec, args[5])
     assert link[1] == fingerprint(revolution_args(solver, settings, args[11], typeof(rec)))
     assert link[1] != revolution_link(solver, settings, args[11])[1]  # the chain's variant
     status, y, _ = trace_compiled(*args, link)

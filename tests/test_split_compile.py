@@ -115,7 +115,7 @@ def test_a_loaded_chain_serves_every_job_of_its_method():
     signatures = len(chain_compiled.signatures)
     other = point_job(omega=2.0, outputs=("label", "dc", "sections", "multipliers", "lyapunov"),
                       transient="fixed", revolutions=20, tensile="allow")  # fmt: skip
-    assert chain_loaded(solver_options(other))
+    assert chain_loaded(solver_options(other), other.law())
     run_tile(other, Tile(0, 0, 1))
     assert len(chain_compiled.signatures) == signatures
     # another method is another chain (whether this process holds it depends on the tests
@@ -125,26 +125,43 @@ def test_a_loaded_chain_serves_every_job_of_its_method():
     )
 
 
-def test_a_chain_cached_beside_the_sources_leaves_numba_cache_dir_cold(tmp_path):
-    """Under NUMBA_CACHE_DIR numba reads only that directory: a chain cached in the source
-    tree's ``__pycache__`` (a run without it) must not stop the helper's fork."""
-    from campar.core import jitcache
+IN_CACHE = textwrap.dedent("""
+    import sys
+    from campar.core import numba_internals
+    from campar.core.kernel import make_chain_work
+    from campar.core.revolution import run_revolution
+    from campar.core.revolution_call import revolution_args
+    from campar.sweep.tile import cell_settings, solver_options
+    from campar.views.point import point_job
+    job = point_job(omega=3.0)
+    solver, settings = solver_options(job), cell_settings(job)
+    signature = revolution_args(solver, settings, make_chain_work(settings).w6, law=job.law())
+    print(numba_internals.cache_indexes(run_revolution, signature))
+    if sys.argv[1] == "compile":
+        run_revolution.compile(signature)
+        print(numba_internals.cache_indexes(run_revolution, signature))
+""")
 
-    in_tree = jitcache.PACKAGE / "__pycache__"
-    fake = in_tree / "kernel.chain_compiled-0.py311.nbi"  # no function is at line 0
-    if not os.access(jitcache.PACKAGE, os.W_OK):
-        pytest.skip("the package's directory is read-only")
-    in_tree.mkdir(exist_ok=True)
-    fake.write_bytes(b"")
-    try:
-        code = "from campar.core import split_compile; print(split_compile.cache_is_cold())"
-        env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
-        run = subprocess.run([sys.executable, "-c", code], env=env, text=True,
-                             capture_output=True, timeout=120)  # fmt: skip
-        assert run.returncode == 0, run.stderr
-        assert run.stdout.split() == ["True"]
-    finally:
-        fake.unlink(missing_ok=True)
+
+def in_cache_run(cache, mode: str) -> list[str]:
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    run = subprocess.run([sys.executable, "-c", IN_CACHE, mode], env=env, text=True,
+                         capture_output=True, timeout=300)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    return run.stdout.split()
+
+
+def test_in_cache_reads_the_cache_numba_reads(tmp_path):
+    """The helper forks where the job's revolution is missing from the cache numba will
+    read (``numba_internals.cache_indexes``, ``split_compile.cold_for``): under
+    NUMBA_CACHE_DIR only that directory counts, whatever the source tree's ``__pycache__``
+    holds."""
+    assert in_cache_run(tmp_path / "cache", "look") == ["False"]
+
+
+@pytest.mark.slow
+def test_in_cache_finds_what_was_compiled(tmp_path):
+    assert in_cache_run(tmp_path / "cache", "compile") == ["False", "True"]
 
 
 def test_a_rank_waiting_for_a_half_nobody_compiles_gives_up(monkeypatch):

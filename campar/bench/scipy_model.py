@@ -12,14 +12,24 @@ damping term as dyc/dθ (the paper's eq. 6 without ω) instead of ω dyc/dθ, wh
 ε = yc(ωt) − y and its events stay as they are; ``integrate(..., mode_time=…)``
 sums the time spent in each contact mode, from which ``duty_cycle`` counts
 either the separated time (ε < 0) or the time without force (Pn = 0).
+
+The cam and contact laws of docs/design.md are options too, written from that page
+alone: a rise and a fall law over four phase angles (the composite laws built here from
+their acceleration pieces, integrated in closed form piece by piece and scaled to a unit
+stroke — not campar's half-rise construction), or a table through SciPy's periodic
+CubicSpline; Hunt–Crossley with any exponent n, and Lankarani–Nikravesh and Flores et al.
+with the impact velocity taken at each impact event (at least ``impact_floor``; the
+floor before the first impact).
 """
 
 import math
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.interpolate import CubicSpline
 
 BOUNDS = (0.0, math.pi / 3, math.pi, 4 * math.pi / 3, 2 * math.pi)
+PAPER_ANGLES = (math.pi / 3, 2 * math.pi / 3, math.pi / 3, 2 * math.pi / 3)
 FREE, PUSH, SLACK = 0, 1, 2
 
 
@@ -28,27 +38,137 @@ def cam(theta):
     return cam_in_phase(theta, theta)
 
 
+# Acceleration pieces of the composite laws on u ∈ [0, 1], before scaling to a unit stroke:
+# (u0, u1, α, β, γ, κ) for s'' = α sin(κ (u − u0)) + β cos(κ (u − u0)) + γ.
+W4 = 4 * math.pi
+PIECES = {
+    "modified-trapezoid": [(0, 1 / 8, 1, 0, 0, W4), (1 / 8, 3 / 8, 0, 0, 1, 0),
+                           (3 / 8, 5 / 8, 0, 1, 0, W4), (5 / 8, 7 / 8, 0, 0, -1, 0),
+                           (7 / 8, 1, 0, -1, 0, W4)],
+    "modified-sine": [(0, 1 / 8, 1, 0, 0, W4), (1 / 8, 7 / 8, 0, 1, 0, W4 / 3),
+                      (7 / 8, 1, 0, -1, 0, W4)],
+}  # fmt: skip
+
+
+def piece_values(piece, d, v0, s0):
+    """s, s', s'' at d = u − u0 inside a piece starting at velocity v0, lift s0."""
+    _, _, a, b, g, k = piece
+    if k == 0:
+        return s0 + v0 * d + g * d * d / 2, v0 + g * d, g
+    sn, cs = math.sin(k * d), math.cos(k * d)
+    acc = a * sn + b * cs + g
+    vel = v0 + a * (1 - cs) / k + b * sn / k + g * d
+    lift = s0 + v0 * d + a * (d / k - sn / k**2) + b * (1 - cs) / k**2 + g * d * d / 2
+    return lift, vel, acc
+
+
+class Composite:
+    """s(u) of a law given by acceleration pieces, scaled so that s(1) = 1."""
+
+    def __init__(self, pieces):
+        self.pieces, self.starts = pieces, []
+        v, s = 0.0, 0.0
+        for piece in pieces:
+            self.starts.append((v, s))
+            s, v, _ = piece_values(piece, piece[1] - piece[0], v, s)
+        self.scale = 1.0 / s
+
+    def __call__(self, u):
+        for piece, (v0, s0) in zip(self.pieces, self.starts, strict=True):
+            if u <= piece[1] or piece is self.pieces[-1]:
+                values = piece_values(piece, u - piece[0], v0, s0)
+                return tuple(self.scale * x for x in values)
+        raise AssertionError
+
+
+def motion_law(name):
+    """s(u), s'(u), s''(u) of a rise law on u ∈ [0, 1]."""
+    if name == "cosine":
+        return lambda u: ((1 - math.cos(math.pi * u)) / 2, math.pi / 2 * math.sin(math.pi * u),
+                          math.pi**2 / 2 * math.cos(math.pi * u))  # fmt: skip
+    if name == "cycloidal":
+        return lambda u: (
+            u - math.sin(2 * math.pi * u) / (2 * math.pi),
+            1 - math.cos(2 * math.pi * u),
+            2 * math.pi * math.sin(2 * math.pi * u),
+        )
+    if name == "polynomial-345":
+        return lambda u: (10 * u**3 - 15 * u**4 + 6 * u**5, 30 * u**2 - 60 * u**3 + 30 * u**4,
+                          60 * u - 180 * u**2 + 120 * u**3)  # fmt: skip
+    return Composite(PIECES[name])
+
+
 class Model:
     def __init__(self, omega, f0=0.5, mu_kn=0.8, mu_cn=0.8, zeta=0.2, clamp=True,
-                 cam_velocity="chain"):  # fmt: skip
+                 cam_velocity="chain", rise="cosine", fall="cosine", angles=PAPER_ANGLES,
+                 table=None, contact="hunt-crossley", n=1.5, restitution=0.8,
+                 impact_floor=1e-3):  # fmt: skip
+        """``table``: (θ, S) arrays over [0, 2π) for a tabulated cam (rise, fall unused)."""
         self.omega, self.f0, self.zeta, self.clamp = omega, f0, zeta, clamp
         self.k = mu_kn / (1 - mu_kn)
         self.c = 2 * zeta * mu_cn / (1 - mu_cn)
         if cam_velocity not in ("chain", "literal"):
             raise ValueError(f"cam_velocity must be chain or literal, got {cam_velocity!r}")
         self.literal = cam_velocity == "literal"
+        self.angles = angles
+        self.bounds = tuple(np.concatenate([[0.0], np.cumsum(angles)]))
+        self.rise, self.fall = motion_law(rise), motion_law(fall)
+        self.paper_cam = (rise, fall, tuple(angles), table) == (
+            "cosine",
+            "cosine",
+            PAPER_ANGLES,
+            None,
+        )
+        self.spline = None
+        if table is not None:
+            theta, lift = table
+            self.spline = CubicSpline(np.append(theta, 2 * math.pi), np.append(lift, lift[0]),
+                                      bc_type="periodic")  # fmt: skip
+        self.n, self.contact, self.floor = n, contact, impact_floor
+        if contact == "lankarani-nikravesh":
+            self.chi = 3 * (1 - restitution**2) / 4
+        elif contact == "flores":
+            self.chi = 8 * (1 - restitution) / (5 * restitution)
+        self.impact = impact_floor
+
+    def damping(self):
+        return self.c if self.contact == "hunt-crossley" else self.chi / self.impact
+
+    def note_impact(self, t, x, theta_mid):
+        """At an impact: a restitution law's damping takes this impact's velocity."""
+        self.impact = max(self.gap(t, x, theta_mid)[1], self.floor)
+
+    def cam_in_phase(self, theta, theta_mid):
+        """yc, dyc/dθ, d²yc/dθ² with the formula of the phase that contains theta_mid."""
+        if self.paper_cam:
+            return cam_in_phase(theta, theta_mid)
+        base = theta_mid - (theta_mid % (2 * math.pi))
+        th, mid = theta - base, theta_mid - base
+        if self.spline is not None:
+            x = th % (2 * math.pi)
+            return float(self.spline(x)), float(self.spline(x, 1)), float(self.spline(x, 2))
+        b = self.bounds
+        if mid < b[1]:
+            s, ds, d2s = self.rise(th / self.angles[0])
+            return s, ds / self.angles[0], d2s / self.angles[0] ** 2
+        if mid < b[2]:
+            return 1.0, 0.0, 0.0
+        if mid < b[3]:
+            s, ds, d2s = self.fall((th - b[2]) / self.angles[2])
+            return 1 - s, -ds / self.angles[2], -d2s / self.angles[2] ** 2
+        return 0.0, 0.0, 0.0
 
     def gap(self, t, y, theta_mid):
         """ε and the ε' the force law uses (the cam velocity as the option reads it)."""
         # evaluate the cam with the formula of the phase containing theta_mid
-        yc, dyc, _ = cam_in_phase(self.omega * t, theta_mid)
+        yc, dyc, _ = self.cam_in_phase(self.omega * t, theta_mid)
         cam_speed = dyc if self.literal else self.omega * dyc
         return yc - y[0], cam_speed - y[1]
 
     def force(self, eps, deps):
         if eps <= 0:
             return 0.0
-        f = self.k * eps**1.5 * (1 + self.c * deps)
+        f = self.k * eps**self.n * (1 + self.damping() * deps)
         return max(f, 0.0) if self.clamp else f
 
     def field(self, mode, theta_mid, with_divergence=False):
@@ -59,8 +179,9 @@ class Model:
             if mode == PUSH:
                 eps, deps = self.gap(t, x, theta_mid)
                 e = max(eps, 0.0)
-                acc += self.k * e**1.5 * (1 + self.c * deps)
-                div -= self.k * e**1.5 * self.c
+                c = self.damping()
+                acc += self.k * e**self.n * (1 + c * deps)
+                div -= self.k * e**self.n * c
             if with_divergence:
                 return [v, acc, div]
             return [v, acc]
@@ -71,7 +192,7 @@ class Model:
         eps, deps = self.gap(t, x, theta_mid)
         if eps <= 0:
             return FREE
-        if self.clamp and 1 + self.c * deps <= 0:
+        if self.clamp and 1 + self.damping() * deps <= 0:
             return SLACK
         return PUSH
 
@@ -85,7 +206,7 @@ class Model:
         if self.clamp and mode != FREE:
 
             def bracket(t, x):
-                return 1 + self.c * self.gap(t, x, theta_mid)[1]
+                return 1 + self.damping() * self.gap(t, x, theta_mid)[1]
 
             bracket.terminal = True
             bracket.direction = -1 if mode == PUSH else 1
@@ -121,14 +242,18 @@ def integrate(model, x0, revolutions, *, rtol=1e-12, atol=1e-14, with_divergence
     ``mode_time`` of three numbers gets the time spent FREE, PUSH and SLACK added.
     """
     w = model.omega
+    bounds = model.bounds
+    model.impact = model.floor  # no impact yet
     x = np.array([x0[0], x0[1], 0.0] if with_divergence else list(x0[:2]), dtype=float)
     events = []
     t = 0.0
     mode = None
     for rev in range(revolutions):
         for i in range(4):
-            t_end = (2 * math.pi * rev + BOUNDS[i + 1]) / w
-            theta_mid = 2 * math.pi * rev + 0.5 * (BOUNDS[i] + BOUNDS[i + 1])
+            if bounds[i + 1] == bounds[i]:
+                continue  # a dwell of no length
+            t_end = (2 * math.pi * rev + bounds[i + 1]) / w
+            theta_mid = 2 * math.pi * rev + 0.5 * (bounds[i] + bounds[i + 1])
             if mode is None:
                 mode = model.mode_of(t, x, theta_mid)
             while t < t_end - 1e-14 * max(1.0, t_end):
@@ -145,11 +270,13 @@ def integrate(model, x0, revolutions, *, rtol=1e-12, atol=1e-14, with_divergence
                     x = sol.y_events[which][0].copy()
                     if mode == FREE:
                         events.append((t, "impact"))
+                        model.note_impact(t, x, theta_mid)
                         # the literal cam velocity can leave 1 + c ε' ≤ 0 at an impact
                         mode = model.mode_of(t, x, theta_mid)
                         if mode == FREE:  # at ε = 0 exactly: contact begins
                             _, deps = model.gap(t, x, theta_mid)
-                            mode = SLACK if model.clamp and 1 + model.c * deps <= 0 else PUSH
+                            slack = model.clamp and 1 + model.damping() * deps <= 0
+                            mode = SLACK if slack else PUSH
                     elif which == 0:
                         events.append((t, "detachment"))
                         mode = FREE

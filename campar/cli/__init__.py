@@ -40,6 +40,7 @@ from . import continuation, line, maps, paper, plot, point, tools  # noqa: E402
 SUBCOMMANDS = [
     point.add_point,
     plot.add_plot,
+    plot.add_separation,
     maps.add_run,
     maps.add_status,
     maps.add_verify,

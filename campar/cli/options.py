@@ -30,6 +30,18 @@ MODEL_OPTION_HELP = {
 }
 
 
+def option_fields() -> list[str]:
+    """The fields of a job's ``model:`` section that are a choice among words (tensile,
+    duty_cycle, cam_velocity): each a flag. The cam and contact laws are sections of their
+    own, set in job files (docs/design.md)."""
+    import typing
+
+    from ..sweep.job import ModelSettings
+
+    fields = ModelSettings.model_fields.items()
+    return [name for name, f in fields if typing.get_origin(f.annotation) is typing.Literal]
+
+
 def flag_of(name: str) -> str:
     """The command-line flag of a job key's last part: ``duty_cycle`` → ``--duty-cycle``."""
     return f"--{name.replace('_', '-')}"
@@ -61,7 +73,7 @@ def add_model_options(p) -> None:
     ``--cam-velocity``), its choices and default the job model's."""
     from ..sweep.job import DEFAULT_MODEL, ModelSettings, field_choices
 
-    for name in ModelSettings.model_fields:
+    for name in option_fields():
         default = getattr(DEFAULT_MODEL, name)
         p.add_argument(flag_of(name), choices=field_choices(ModelSettings, name),
                        default=default, help=f"{MODEL_OPTION_HELP[name]} ({default})")  # fmt: skip
@@ -87,9 +99,8 @@ def parameter_values(args) -> dict:
 def model_options(args) -> dict:
     """``{"tensile": …, "duty_cycle": …, "cam_velocity": …}`` as parsed: the job's
     ``model:`` section, and keywords of ``point_job``, ``line_job`` and ``campar.line``."""
-    from ..sweep.job import ModelSettings
 
-    return {name: getattr(args, name) for name in ModelSettings.model_fields}
+    return {name: getattr(args, name) for name in option_fields()}
 
 
 def transient_options(args) -> dict:
@@ -105,7 +116,6 @@ def transient_options(args) -> dict:
 def model_flags() -> dict[str, str]:
     """Job keys of the model options and the transient → their flags (``model.tensile`` →
     ``--tensile``), for errors that name the flag the user typed."""
-    from ..sweep.job import ModelSettings
 
-    flags = {f"model.{name}": flag_of(name) for name in ModelSettings.model_fields}
+    flags = {f"model.{name}": flag_of(name) for name in option_fields()}
     return {**flags, "transient.mode": "--transient", "transient.max_revolutions": "--revolutions"}

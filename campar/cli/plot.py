@@ -91,3 +91,28 @@ def run_compare(args) -> int:
               f"labels ({100 * share:.2g} %)")  # fmt: skip
     print(f"wrote {result.figure}")
     return 0
+
+
+def add_separation(sub):
+    p = sub.add_parser("separation", help="separation speed of each row of stores made with the "
+                       "separation output, several laws on one plot (docs/design.md)")  # fmt: skip
+    p.add_argument("stores", nargs="+", metavar="STORE", help="result stores (one curve each)")
+    p.add_argument("--plot", metavar="FILE.png", help="draw the curves into this figure")
+    p.set_defaults(handler=run_separation)
+
+
+def run_separation(args) -> int:
+    from ..views.separation import describe_curves, separation_curve
+
+    if args.plot:
+        from ..views.output import figure_file
+
+        figure_file(args.plot)  # before reading the stores
+    curves = [separation_curve(store) for store in args.stores]
+    print(describe_curves(curves))
+    if args.plot:
+        from ..views.plot.design import plot_separation
+        from ..views.plot.style import save_figure
+
+        print(f"wrote {save_figure(plot_separation(curves), args.plot)}")
+    return 0

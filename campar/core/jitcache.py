@@ -19,8 +19,8 @@ from . import numba_internals
 
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_MODULES = (
-    "jit", "codes", "hermite", "dop853", "entry_steps", "model", "integrator", "analysis",
-    "revolution", "revolution_call", "kernel", "tracer", "shooting",
+    "jit", "codes", "hermite", "dop853", "entry_steps", "cam", "contact", "model",
+    "integrator", "analysis", "revolution", "revolution_call", "kernel", "tracer", "shooting",
 )  # fmt: skip
 STAMP = "campar-core.digest"
 

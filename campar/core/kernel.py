@@ -61,7 +61,9 @@ from .model import (
     TWO_PI,
     contact_mode,
     gap,
+    kernel_law,
     make_params,
+    start_chain,
 )
 from .revolution import scale_solver_options
 from .revolution_call import call_revolution, revolution_link
@@ -443,47 +445,48 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
 def run_chain(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out):
     """Compute a continuation chain of cells in order; outputs are filled in place.
 
-    Cell i has parameters (omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i]); ``law`` holds
-    the force law's options as model.LAW_* bits (``model.law_flags``; a bool: the clamp
-    alone), passed as one integer so every option runs the same compiled code. Cell 0
+    Cell i has parameters (omega[i], zeta[i], f0[i], mu_kn[i], mu_cn[i]); ``law`` is the
+    job's model.Law (the force law's options as LAW_* bits, the cam, the contact law), or
+    LAW_* bits alone for the paper's cam and contact (``model.kernel_law``): the options
+    are one integer, so every option runs the same compiled code, and each combination of
+    laws compiles a kernel of its own. Cell 0
     starts from x_init, every later cell from the final state of the one before
     (extrapolated through the cycles of the cells before: extrapolation_order),
     and the cell after a failure from x_init again, its step control restarted
     as for cell 0. Releases the GIL, so a thread can compute while another one
     talks MPI.
     """
+    law = kernel_law(law)
     cw = make_chain_work(cs)
-    cw.revolution[:] = revolution_link(solver, cs, cw.w6)
-    chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law_bits(law), x_init, solver, cs, out, cw)
+    cw.revolution[:] = revolution_link(solver, cs, cw.w6, law=law)
+    start_chain(law)
+    chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out, cw)
 
 
-def compile_chain(signature, solver, cs) -> None:
+def compile_chain(signature, solver, cs, law) -> None:
     """Compile (or load) the chain for ``signature`` (chain_signature), then the revolution
     it calls: in this order a cold chain compiles while a forked helper compiles the
     revolution (campar.core.split_compile), and waits for it only at the end."""
     chain_compiled.compile(signature)
-    revolution_link(solver, cs, make_chain_work(cs).w6)
+    revolution_link(solver, cs, make_chain_work(cs).w6, law=law)
 
 
 def chain_signature(law, x_init, solver, cs, out) -> tuple:
     """chain_compiled's argument types for a chain with these settings."""
     none = np.empty(0)
-    args = (none, none, none, none, none, law_bits(law), x_init, solver, cs, out,
+    args = (none, none, none, none, none, kernel_law(law), x_init, solver, cs, out,
             make_chain_work(cs))  # fmt: skip
     return tuple(typeof(a) for a in args)
 
 
-def chain_loaded(solver) -> bool:
-    """This process holds ``chain_compiled`` for these solver options: compiled here or
-    loaded from the cache. Of the chain's arguments only the solver options' type differs
-    between jobs (its method tag, integrator.method_tag); every other one is fixed."""
-    solver_type = typeof(solver)
-    return any(signature[7] == solver_type for signature in chain_compiled.signatures)
-
-
-def law_bits(law) -> np.int64:
-    """The kernel's ``law`` argument: always int64 (a bool would compile a second kernel)."""
-    return np.int64(int(law))
+def chain_loaded(solver, law) -> bool:
+    """This process holds ``chain_compiled`` for these solver options and this law: compiled
+    here or loaded from the cache. Of the chain's arguments only the types of these two
+    differ between jobs (the method tag, integrator.method_tag; the laws, model.Law);
+    every other one is fixed."""
+    solver_type, law_type = typeof(solver), typeof(kernel_law(law))
+    return any(signature[7] == solver_type and signature[5] == law_type
+               for signature in chain_compiled.signatures)  # fmt: skip
 
 
 # Reference counting off, as in campar.core.jit.hot: the inlined cell layer reads arrays

@@ -29,7 +29,12 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from numba import types
+from numba.extending import overload
 
+from . import contact
+from .cam import OPTIONS, PAPER_CAM, Cosine, PhasedCam, lift
+from .contact import HERTZ, HuntCrossleyHertz, damping, force_and_rate, pushing
 from .jit import entry, hot
 
 # Cam phases of the cosine-acceleration law with stroke 1.
@@ -80,6 +85,32 @@ def law_flags(tensile: str = "clamp", duty_cycle: str = "separation",
     return bits
 
 
+class Law(NamedTuple):
+    """What a job chooses of the model besides its numbers: the LAW_* option bits, the cam
+    (campar.core.cam: PhasedCam or TabulatedCam) and the contact law (campar.core.contact).
+    Its type decides what numba compiles: one kernel per combination of laws."""
+
+    bits: np.int64
+    cam: tuple
+    contact: tuple
+
+
+PAPER_LAW = Law(np.int64(LAW_CLAMP), PAPER_CAM, HERTZ)
+
+
+def kernel_law(law) -> Law:
+    """The kernel's ``law`` argument: a Law as given (its bits as int64), or LAW_* bits (an
+    int, or a bool: the clamp bit alone) with the paper's cam and contact law."""
+    if isinstance(law, Law):
+        return law._replace(bits=np.int64(int(law.bits)))
+    return Law(np.int64(int(law)), PAPER_CAM, HERTZ)
+
+
+def start_chain(law: Law) -> None:
+    """Before a chain's first cell: forget what its laws remember (the last impact)."""
+    contact.start_chain(law.contact)
+
+
 class ModelParams(NamedTuple):
     """Parameters of one grid cell, in the form the vector field uses."""
 
@@ -91,20 +122,49 @@ class ModelParams(NamedTuple):
     clamp: bool  # True: no tensile force, Pn = max(0, …)
     vcam: float  # cam velocity in the force's ε' per unit dyc/dθ: ω (chain rule) or 1
     dc_force: bool  # True: the duty cycle counts the time with Pn = 0 (ε ≤ 0 or SLACK)
+    cam: tuple  # the cam (campar.core.cam)
+    contact: tuple  # the contact law (campar.core.contact)
 
 
 @entry
 def make_params(omega, zeta, f0, mu_kn, mu_cn, law):
-    """Pack the physical parameters (μkn, μcn ∈ (0, 1)) into ModelParams.
-
-    ``law``: LAW_* bits (``law_flags``); a bool is the clamp bit alone.
-    """
-    bits = int(law)
+    """Pack the physical parameters (μkn, μcn ∈ (0, 1)) and the job's ``law`` into
+    ModelParams. ``law``: a Law (``kernel_law``, a job's ``law()``), or LAW_* bits alone
+    (an integer; a bool is the clamp bit alone) for the paper's cam and contact law."""
+    bits, the_cam, the_contact = law_parts(law)
     k = mu_kn / (1.0 - mu_kn)
     c = 2.0 * zeta * mu_cn / (1.0 - mu_cn)
     vcam = 1.0 if bits & LAW_CAM_LITERAL else omega
     return ModelParams(omega, zeta, f0, k, c, (bits & LAW_CLAMP) != 0, vcam,
-                       (bits & LAW_DC_FORCE) != 0)  # fmt: skip
+                       (bits & LAW_DC_FORCE) != 0, the_cam, the_contact)  # fmt: skip
+
+
+def law_parts(law):
+    """(bits, cam, contact) of a Law, or of LAW_* bits with the paper's laws (compiled
+    code only)."""
+    raise TypeError("campar.core.model.law_parts is for compiled code")
+
+
+@overload(law_parts, jit_options=OPTIONS)
+def _law_parts(law):
+    if isinstance(law, (types.Integer, types.Boolean)):
+        rise, fall, bounds = PAPER_CAM
+        r0, r1, r2, r3 = rise
+        f0_, f1, f2, f3 = fall
+        b0, b1, b2, b3, b4 = bounds
+        n = HERTZ.n
+
+        def paper(law):
+            the_cam = PhasedCam(Cosine(r0, r1, r2, r3), Cosine(f0_, f1, f2, f3),
+                                (b0, b1, b2, b3, b4))  # fmt: skip
+            return int(law), the_cam, HuntCrossleyHertz(n)
+
+        return paper
+
+    def parts(law):
+        return int(law.bits), law.cam, law.contact
+
+    return parts
 
 
 @hot
@@ -120,32 +180,23 @@ def phase_of(theta):
 
 
 @hot
-def cam(theta, phase):
-    """Cam lift yc(θ) and its first two θ-derivatives with the formula of ``phase``.
+def cam(theta, phase, law):
+    """Cam lift yc(θ) and its first two θ-derivatives with the formula of ``phase`` of the
+    cam ``law`` (p.cam; campar.core.cam).
 
     The formula is used as given even a rounding error outside the phase, so
     within a step the cam is a smooth function of time.
     """
-    if phase == RISE:
-        s3 = math.sin(3.0 * theta)
-        c3 = math.cos(3.0 * theta)
-        return 0.5 * (1.0 - c3), 1.5 * s3, 4.5 * c3
-    if phase == FALL:
-        u = 3.0 * (theta - math.pi)
-        s3 = math.sin(u)
-        c3 = math.cos(u)
-        return 0.5 * (1.0 + c3), -1.5 * s3, -4.5 * c3
-    if phase == FAR_DWELL:
-        return 1.0, 0.0, 0.0
-    return 0.0, 0.0, 0.0
+    return lift(law, theta, phase)
 
 
 @hot
 def contact_force(eps, deps, p):
-    """Hunt–Crossley force Pn for penetration ε and its rate ε' (docs/model.md, paper eq. 12)."""
+    """The contact law's force Pn for penetration ε and its rate ε' (docs/model.md, paper
+    eq. 12; campar.core.contact)."""
     if eps <= 0.0:
         return 0.0
-    force = p.k * eps * math.sqrt(eps) * (1.0 + p.c * deps)
+    force = contact.force(p.contact, p.k, damping(p.contact, p.c), eps, deps)
     if p.clamp and force < 0.0:
         return 0.0
     return force
@@ -155,7 +206,7 @@ def contact_force(eps, deps, p):
 def gap(t, y, p, phase):
     """Penetration ε = yc − y and the force law's ε' = ẏc − y' at time t (ẏc = p.vcam
     dyc/dθ: the time rate of ε by the chain rule, dyc/dθ with the literal cam velocity)."""
-    yc, dyc, _ = cam(p.omega * t, phase)
+    yc, dyc, _ = cam(p.omega * t, phase, p.cam)
     return yc - y[0], p.vcam * dyc - y[1]
 
 
@@ -171,7 +222,7 @@ def contact_mode(eps, deps, p):
     """The contact mode a state is in (used where no event history exists)."""
     if eps <= 0.0:
         return FREE
-    if p.clamp and 1.0 + p.c * deps <= 0.0:
+    if p.clamp and 1.0 + damping(p.contact, p.c) * deps <= 0.0:
         return SLACK
     return PUSH
 
@@ -184,16 +235,13 @@ def rhs(t, y, p, mode, dy):
     dfdy = 0.0
     dfdv = 0.0
     if mode[1] == PUSH:  # only a pushing contact needs the cam
-        yc, dyc, _ = cam(p.omega * t, mode[0])
+        yc, dyc, _ = cam(p.omega * t, mode[0], p.cam)
         eps = yc - y[0]
         deps = p.vcam * dyc - v
         if eps < 0.0:  # a stage point just past an event: extend by zero force
             eps = 0.0
-        s = math.sqrt(eps)
-        bracket = 1.0 + p.c * deps
-        acc += p.k * eps * s * bracket
-        dfdy = -1.5 * p.k * s * bracket
-        dfdv = -p.k * eps * s * p.c
+        force, dfdy, dfdv = pushing(p.contact, p.k, damping(p.contact, p.c), eps, deps)
+        acc += force
     dy[0] = v
     dy[1] = acc
     if y.shape[0] == N_STATE_VARIATIONAL:
@@ -216,7 +264,7 @@ def events(t, y, f, p, mode, g, dg):
     of the force's ε' (p.vcam dyc/dθ − y') is p.vcam ω d²yc/dθ² − y''. Returns the
     number of event functions.
     """
-    yc, dyc, d2yc = cam(p.omega * t, mode[0])
+    yc, dyc, d2yc = cam(p.omega * t, mode[0], p.cam)
     eps = yc - y[0]
     rate = p.omega * dyc - y[1]
     if mode[1] == FREE:
@@ -230,8 +278,9 @@ def events(t, y, f, p, mode, g, dg):
     deps = p.vcam * dyc - y[1]
     d2eps = p.vcam * p.omega * d2yc - f[1]
     sign = 1.0 if mode[1] == PUSH else -1.0
-    g[1] = sign * (1.0 + p.c * deps)
-    dg[1] = sign * p.c * d2eps
+    c = damping(p.contact, p.c)
+    g[1] = sign * (1.0 + c * deps)
+    dg[1] = sign * c * d2eps
     return 2
 
 
@@ -251,7 +300,7 @@ def impact_mode(deps, p):
     """Contact mode at an impact where the force law's ε' is ``deps`` (``gap``). ε rises
     there, so with the chain rule ε' ≥ 0 and the follower pushes; the literal cam
     velocity's ε' can be below −1/c, and the clamp then holds Pn = 0 from the impact on."""
-    if p.clamp and 1.0 + p.c * deps <= 0.0:
+    if p.clamp and 1.0 + damping(p.contact, p.c) * deps <= 0.0:
         return SLACK
     return PUSH
 
@@ -269,7 +318,7 @@ def contact_kinematics(t, y, f, p, mode):
     Pn is the force of the mode's own field (zero unless pushing), so its rate
     is continuous inside a step.
     """
-    yc, dyc, d2yc = cam(p.omega * t, mode[0])
+    yc, dyc, d2yc = cam(p.omega * t, mode[0], p.cam)
     eps = yc - y[0]
     rate = p.omega * dyc - y[1]
     accel = p.omega * p.omega * d2yc - f[1]
@@ -277,8 +326,5 @@ def contact_kinematics(t, y, f, p, mode):
         return eps, rate, accel, 0.0, 0.0
     deps = p.vcam * dyc - y[1]  # the force law's ε'
     d2eps = p.vcam * p.omega * d2yc - f[1]
-    s = math.sqrt(eps)
-    bracket = 1.0 + p.c * deps
-    pn = p.k * eps * s * bracket
-    dpn = p.k * (1.5 * s * rate * bracket + eps * s * p.c * d2eps)
+    pn, dpn = force_and_rate(p.contact, p.k, damping(p.contact, p.c), eps, deps, rate, d2eps)
     return eps, rate, accel, pn, dpn

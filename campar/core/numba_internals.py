@@ -7,7 +7,9 @@ campar looks into a dispatcher's on-disk cache (``Dispatcher._cache``, numba's
   of the numerical core can be cleared (``campar.core.jitcache``);
 - whether the cache serves a signature yet (``load_overload``), so that a process can wait
   for the half of a cold compile another process is compiling
-  (``campar.core.split_compile``).
+  (``campar.core.split_compile``), and whether its index names one (``_index_key`` and
+  the cache file's ``_load_index``), so that a job whose laws are not cached yet splits
+  its cold compile.
 
 Both have kept their names and meaning across the numba versions pyproject.toml allows
 (``SUPPORTED``). A numba that changes them must not break a fresh install: then
@@ -49,6 +51,18 @@ def cache_serves(dispatcher, signature) -> bool | None:
     try:
         return cache.load_overload(signature, dispatcher.targetctx) is not None
     except (AttributeError, TypeError):  # a signature of its arguments it no longer takes
+        return None
+
+
+def cache_indexes(dispatcher, signature) -> bool | None:
+    """Whether numba's on-disk cache names ``signature`` of ``dispatcher`` in its index
+    (nothing is loaded: ``FunctionCache._index_key`` and its cache file's index); None
+    where this numba cannot be asked."""
+    cache = function_cache(dispatcher)
+    try:
+        key = cache._index_key(tuple(signature), dispatcher.targetctx.codegen())
+        return key in cache._cache_file._load_index()
+    except (AttributeError, TypeError):
         return None
 
 

@@ -13,6 +13,7 @@ import numpy as np
 from . import model
 from .analysis import REV_DETACH, add_step_stats, reset_revolution_stats
 from .codes import EVENT_LOOP, OK, STEP_LIMIT
+from .contact import note_impact
 from .integrator import SolverOptions, advance, dense_eval, prepare_dense
 from .jit import hot
 from .model import (
@@ -20,7 +21,6 @@ from .model import (
     N_PHASES,
     N_STATE,
     N_STATE_VARIATIONAL,
-    PHASE_BOUNDS,
     RISE,
     TWO_PI,
     cam,
@@ -68,7 +68,7 @@ def record_sample(rec, t, y0, y1, p, mode):
     i = rec.count[0]
     if i >= rec.samples.shape[0]:
         return
-    yc, dyc, _ = cam(p.omega * t, mode[0])
+    yc, dyc, _ = cam(p.omega * t, mode[0], p.cam)
     eps = yc - y0
     row = rec.samples[i]
     row[0] = rec.t0[0] + t
@@ -132,7 +132,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
         record_sample(rec, t, x[0], x[1], p, mode)
     for phase in range(N_PHASES):
         mode[0] = phase
-        t_end = PHASE_BOUNDS[phase + 1] / p.omega
+        t_end = p.cam.bounds[phase + 1] / p.omega
         model.rhs(t, x, p, mode, f)
         w.counts[2] += 1
         stuck = 0
@@ -172,6 +172,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                     record_event(rec, t, x, contact, which)
                 if contact == FREE:
                     _, deps = gap(t, x, p, mode[0])
+                    note_impact(p.contact, deps)
                     mode[1] = impact_mode(deps, p)
                 else:
                     mode[1] = mode_after_event(contact, which)

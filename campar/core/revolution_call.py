@@ -28,7 +28,7 @@ from numba import typeof, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from .model import make_params
+from .model import PAPER_LAW, kernel_law, make_params
 from .revolution import run_revolution, scale_solver_options
 
 VECTOR = types.Array(types.float64, 1, "C")  # the state, its derivative, a statistics row
@@ -40,13 +40,14 @@ def fingerprint(args) -> int:
     return zlib.crc32(repr(tuple(args)).encode())
 
 
-def revolution_args(solver, cs, work, recorder=types.none) -> tuple:
+def revolution_args(solver, cs, work, recorder=types.none, law=PAPER_LAW) -> tuple:
     """run_revolution's argument types as the chain (kernel.step_revolution) and the orbit
-    tracer call it, with the step buffers ``work`` and a recorder of type ``recorder``
-    (the chain's: none): the cell's parameters and options are the types make_params and
-    scale_solver_options return for float64 parameters and the int64 law."""
+    tracer call it, with the step buffers ``work``, a recorder of type ``recorder`` (the
+    chain's: none) and the job's ``law`` (model.kernel_law): the cell's parameters and
+    options are the types make_params and scale_solver_options return for float64
+    parameters and that law."""
     rk4_steps = typeof(cs)[cs._fields.index("rk4_steps")]
-    params = _return_type(make_params, (types.float64,) * 5 + (types.int64,))
+    params = _return_type(make_params, (types.float64,) * 5 + (typeof(kernel_law(law)),))
     options = _return_type(scale_solver_options, (typeof(solver), types.float64, rk4_steps))
     return (VECTOR, VECTOR, params, options, typeof(work), MODE, VECTOR, types.boolean,
             types.int64, recorder)  # fmt: skip
@@ -58,7 +59,7 @@ def _return_type(dispatcher, args: tuple) -> types.Type:
     return dispatcher.overloads[args].signature.return_type
 
 
-_LINKS: dict = {}  # (solver options' type, recorder type) -> (address, fingerprint)
+_LINKS: dict = {}  # (solver options' type, recorder type, law type) -> (address, fingerprint)
 
 
 def _link(args: tuple) -> tuple[int, int]:
@@ -70,15 +71,16 @@ def _link(args: tuple) -> tuple[int, int]:
     return address, fingerprint(args)
 
 
-def revolution_link(solver, cs, work, recorder=types.none) -> np.ndarray:
+def revolution_link(solver, cs, work, recorder=types.none, law=PAPER_LAW) -> np.ndarray:
     """int64 [address, fingerprint] of run_revolution compiled (or loaded) for the call
-    ``revolution_args`` describes: what ``call_revolution`` takes. Kept by the solver
-    options' type, the one argument type that differs between jobs (kernel.chain_loaded):
-    a chain looks its link up in ~20 µs instead of typing every argument (~160 µs), and
-    the fingerprint every call checks would catch any other argument type changing."""
-    key = (typeof(solver), recorder)
+    ``revolution_args`` describes: what ``call_revolution`` takes. Kept by the types of the
+    solver options and the law, the argument types that differ between jobs
+    (kernel.chain_loaded): a chain looks its link up in tens of µs instead of typing every
+    argument (~160 µs), and the fingerprint every call checks would catch any other
+    argument type changing."""
+    key = (typeof(solver), recorder, typeof(kernel_law(law)))
     if key not in _LINKS:
-        _LINKS[key] = _link(revolution_args(solver, cs, work, recorder))
+        _LINKS[key] = _link(revolution_args(solver, cs, work, recorder, law))
     return np.array(_LINKS[key], dtype=np.int64)
 
 

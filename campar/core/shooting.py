@@ -31,8 +31,16 @@ from .analysis import (
 from .codes import NONFINITE, OK
 from .entry_steps import forget
 from .integrator import SolverOptions, initial_step, make_work, restart_control
-from .kernel import law_bits
-from .model import MAX_EVENTS, N_STATE_VARIATIONAL, RISE, contact_mode, gap, make_params
+from .model import (
+    MAX_EVENTS,
+    N_STATE_VARIATIONAL,
+    RISE,
+    contact_mode,
+    gap,
+    kernel_law,
+    make_params,
+    start_chain,
+)
 from .revolution import scale_solver_options
 from .revolution_call import call_revolution, revolution_link
 
@@ -54,19 +62,20 @@ N_SHOT = 9
 class Shooter:
     """Pⁿ(x; parameters) and DPⁿ for one force law and one set of solver options.
 
-    ``law``: model.LAW_* bits; ``solver``: integrator.SolverOptions (the kernel scales its
+    ``law``: the job's model.Law (or LAW_* bits: the paper's laws, ``model.kernel_law``);
+    ``solver``: integrator.SolverOptions (the kernel scales its
     step floor and event tolerance to each ω); ``cs``: kernel.CellSettings (its
     ``rk4_steps`` and ``max_steps``, the step budget of one revolution). Buffers are
     allocated once; a Shooter is not thread-safe.
     """
 
     def __init__(self, law, solver, cs):
-        self.law = law_bits(law)
+        self.law = kernel_law(law)
         self.solver = solver
         self.rk4_steps = np.int64(cs.rk4_steps)
         self.max_steps = np.int64(cs.max_steps)
         self.work = make_work(N_STATE_VARIATIONAL, MAX_EVENTS, 0.0)
-        self.link = revolution_link(solver, cs, self.work)
+        self.link = revolution_link(solver, cs, self.work, law=self.law)
         self.x = np.zeros(N_STATE_VARIATIONAL)
         self.x2 = np.zeros(2)
         self.f = np.zeros(N_STATE_VARIATIONAL)
@@ -88,6 +97,7 @@ class Shooter:
         x = self.x if jacobian else self.x2
         x[0] = x0[0]
         x[1] = x0[1]
+        start_chain(self.law)  # every shot from the same memory of impacts
         status = shoot_compiled(
             np.asarray(par, dtype=np.float64), self.law, np.int64(n), self.solver,
             self.rk4_steps, self.max_steps, self.link, x, self.f, self.work, self.mode,

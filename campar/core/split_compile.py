@@ -20,7 +20,9 @@ Forking is safe only in a process with one thread and without MPI (``campar poin
 share a cache split the same way without a fork (``share_with_ranks``): ranks of even
 index there compile the chain first, those of odd index the revolution, and each then
 waits for the other half to reach the cache and loads it. With a warm cache nothing is
-forked and nobody waits.
+forked and nobody waits. The cache is cold for a job when it lacks the revolution that
+job's laws need (``numba_internals.cache_indexes``): a job of another cam or contact law
+splits its own cold compile even where the paper's kernel is cached.
 """
 
 import os
@@ -33,6 +35,7 @@ from numba import typeof, types
 
 from . import jitcache, numba_internals
 from .kernel import chain_compiled, make_chain_work
+from .model import PAPER_LAW
 from .revolution import make_trace, run_revolution
 from .revolution_call import revolution_args
 
@@ -40,14 +43,13 @@ HELPER_SECONDS = 300.0  # a helper takes ~5 s here; one still running after this
 POLL_SECONDS = 0.05  # between looks into the cache for another rank's half
 
 
-def cache_is_cold() -> bool:
-    """No compiled chain where numba will look for it (after jitcache dropped stale entries):
-    under NUMBA_CACHE_DIR, a chain cached beside the sources does not count. False where
-    numba's cache cannot be asked (``numba_internals``): nothing is split then."""
-    located = jitcache.located_cache_dir()
-    if located is None or not numba_internals.split_available(run_revolution):
+def cold_for(dispatcher, signatures) -> bool:
+    """numba's cache lacks ``dispatcher`` for one of ``signatures`` (its index does not name
+    it); False where the cache cannot be asked (``numba_internals``): nothing is split then."""
+    if not numba_internals.split_available(dispatcher):
         return False
-    return not any(located.glob("kernel.chain_compiled-*.nbi"))
+    found = [numba_internals.cache_indexes(dispatcher, s) for s in signatures]
+    return None not in found and not all(found)
 
 
 def can_fork() -> bool:
@@ -88,17 +90,20 @@ class Helper:
             self.exited = True
 
 
-def start_helper(solver, cs, trace: bool = False) -> Helper | None:
-    """Fork the helper that compiles the revolution into the cache, then with ``trace``
-    its variant with a recorder (the orbit tracer's); None (nothing forked) when the cache
-    is warm or forking is unsafe. The caller compiles the chain (and the tracer) next, then
-    links them to the revolution: it waits there for the helper's cache entries."""
+def start_helper(solver, cs, trace: bool = False, law=PAPER_LAW) -> Helper | None:
+    """Fork the helper that compiles the revolution for ``law`` (model.Law) into the cache,
+    then with ``trace`` its variant with a recorder (the orbit tracer's); None (nothing
+    forked) when the cache holds them or forking is unsafe. The caller compiles the chain
+    (and the tracer) next, then links them to the revolution: it waits there for the
+    helper's cache entries."""
     jitcache.ensure_fresh_cache()
-    if not (can_fork() and cache_is_cold()):
+    if not can_fork():
         return None
     work = make_chain_work(cs).w6
     recorders = [types.none, typeof(make_trace(0, 0, 1))] if trace else [types.none]
-    signatures = [revolution_args(solver, cs, work, recorder) for recorder in recorders]
+    signatures = [revolution_args(solver, cs, work, recorder, law) for recorder in recorders]
+    if not cold_for(run_revolution, signatures):
+        return None
     pid = os.fork()
     if pid == 0:  # the helper: compile, then leave without running the parent's exit code
         status = 1
@@ -132,7 +137,7 @@ def reap(helper: Helper | None) -> None:
         helper.wait()
 
 
-def share_with_ranks(share, solver, cs, chain_signature) -> None:
+def share_with_ranks(share, solver, cs, chain_signature, law=PAPER_LAW) -> None:
     """Split a cold compile with the other ranks of this node that share the cache.
 
     ``share``: (this rank's index, how many) among them (``wire.cache_sharers``), or None.
@@ -140,10 +145,10 @@ def share_with_ranks(share, solver, cs, chain_signature) -> None:
     even index return at once and wait for the revolution where they link the chain to it
     (``CompiledCallersOnly.awaiting``). The caller compiles the chain next either way:
     compiled here, or loaded from the cache. Nothing is split for one rank, or when the
-    cache holds a chain already."""
-    if share is None or share[1] < 2 or not cache_is_cold():
+    cache holds this chain already."""
+    if share is None or share[1] < 2 or not cold_for(chain_compiled, [chain_signature]):
         return
-    revolution = revolution_args(solver, cs, make_chain_work(cs).w6)
+    revolution = revolution_args(solver, cs, make_chain_work(cs).w6, law=law)
     if share[0] % 2 == 0:
         await_revolutions([revolution])
         return

@@ -12,8 +12,17 @@ from . import model
 from .analysis import N_REV_STATS
 from .codes import OK
 from .integrator import CTRL_H, initial_step, make_work
-from .kernel import law_bits
-from .model import MAX_EVENTS, N_STATE, RISE, contact_mode, gap, make_params
+from .model import (
+    MAX_EVENTS,
+    N_STATE,
+    PAPER_LAW,
+    RISE,
+    contact_mode,
+    gap,
+    kernel_law,
+    make_params,
+    start_chain,
+)
 from .revolution import make_trace, scale_solver_options
 from .revolution_call import call_revolution, revolution_link
 
@@ -28,7 +37,8 @@ def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions,
     from a cell's final state and trace its period.
     """
     args = trace_arguments(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions, rec)
-    return trace_compiled(*args, tracer_link(solver, cs, rec))
+    start_chain(args[5])
+    return trace_compiled(*args, tracer_link(solver, cs, rec, args[5]))
 
 
 def trace_arguments(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions, rec):
@@ -37,13 +47,13 @@ def trace_arguments(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revoluti
     buffers = (make_work(N_STATE, MAX_EVENTS, 0.0), np.zeros(N_STATE),
                np.zeros(2, dtype=np.int64), np.zeros(N_REV_STATS))  # fmt: skip
     parameters = (float(omega), float(zeta), float(f0), float(mu_kn), float(mu_cn))
-    return (*parameters, law_bits(law), np.array(x0, dtype=np.float64), solver, cs,
+    return (*parameters, kernel_law(law), np.array(x0, dtype=np.float64), solver, cs,
             np.int64(revolutions), rec, *buffers)  # fmt: skip
 
 
-def tracer_link(solver, cs, rec) -> np.ndarray:
+def tracer_link(solver, cs, rec, law=PAPER_LAW) -> np.ndarray:
     """The link to the revolution that records into a recorder of rec's type."""
-    return revolution_link(solver, cs, make_work(N_STATE, MAX_EVENTS, 0.0), typeof(rec))
+    return revolution_link(solver, cs, make_work(N_STATE, MAX_EVENTS, 0.0), typeof(rec), law)
 
 
 def compile_tracer(law, solver, cs) -> None:
@@ -53,7 +63,7 @@ def compile_tracer(law, solver, cs) -> None:
     rec = make_trace(0, 0, 1)
     args = trace_arguments(1.0, 0.2, 0.5, 0.8, 0.8, law, np.zeros(N_STATE), solver, cs, 1, rec)
     trace_compiled.compile((*(typeof(a) for a in args), LINK))
-    tracer_link(solver, cs, rec)
+    tracer_link(solver, cs, rec, law)
 
 
 @njit(cache=True, _nrt=False)

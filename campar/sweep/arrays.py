@@ -19,6 +19,7 @@ OUTPUT_ARRAYS = {
     "sections": ("sections",),
     "multipliers": ("multipliers",),
     "lyapunov": ("lyapunov",),
+    "separation": ("separation_omega", "separation_eps_max", "separation_pn_max"),
 }
 # Arrays of a job's ``attractors`` census (campar.sweep.multistable), only with that key.
 CENSUS_ARRAYS = (
@@ -41,6 +42,9 @@ ARRAY_SPECS = {
     "revolutions": (np.int32, ()),
     "steps": (np.int64, ()),
     "lyapunov": (np.float64, ()),
+    "separation_omega": (np.float64, ()),
+    "separation_eps_max": (np.float64, ()),
+    "separation_pn_max": (np.float64, ()),
     "multipliers": (np.float64, (2, 2)),
     "sections": (np.float64, ("S", 2)),
     "n_attractors": (np.int16, ()),
@@ -106,6 +110,22 @@ ARRAY_DOCS = {
     "lyapunov": (
         "largest Lyapunov exponent", "1",
         "per unit dimensionless time t (t in units of 1/ωn); of the cycle where periodic",
+    ),
+    "separation_omega": (
+        "separation speed", "1",
+        "of the cell's row, the same in every cell of it: the lowest ω at which the follower "
+        "detaches (p > 0) along the row's chain, located between cells to 1e-6 by bisection "
+        "(campar.sweep.separation); NaN where the row's lowest cell detaches or none does",
+    ),
+    "separation_eps_max": (
+        "largest intrusion below the separation speed", "1",
+        "of the cell's row: max ε over its contact cells up to the separation speed (grid and "
+        "bisection), in units of the stroke h",
+    ),
+    "separation_pn_max": (
+        "largest contact force below the separation speed", "1",
+        "of the cell's row: max Pn over its contact cells up to the separation speed (grid and "
+        "bisection), in units of K1·h",
     ),
     "multipliers": (
         "Floquet multipliers", "1",

@@ -16,12 +16,23 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import Field, ValidationError, field_validator, model_validator
 
 from ..errors import JobError
-from .job_file import check_store_path, format_validation_error, parse_job_text, wants_number
+from .job_file import check_store_path, format_validation_error, parse_job_text
+from .laws import LAW_PARAMETERS, CamSettings, ContactSettings, check_law_axis
+from .settings import (  # noqa: F401 (their home for the schema's users)
+    MAX_COUNT,
+    MAX_POINTS,
+    MAX_START,
+    MAX_STEPS,
+    Axis,
+    Settings,
+    wants_number,
+)
 
 PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
+MAP_AXES = (*PARAMETERS, *LAW_PARAMETERS)
 # The axes of a basin job: the initial state (y, y') at θ = 0, y along the first
 # (columns), y' along the second (rows); its parameters are all fixed.
 BASIN_AXES = ("y0", "ydot0")
@@ -33,7 +44,7 @@ PAPER_VALUES = {"f0": 0.5, "mu_kn": 0.8, "mu_cn": 0.8, "zeta": 0.2}
 # ``direction`` dimension (its tiles: every row range down, then every one up).
 DIRECTIONS = ("down", "up")
 
-OUTPUT_NAMES = ("label", "dc", "eps", "pn", "sections", "multipliers", "lyapunov")
+OUTPUT_NAMES = ("label", "dc", "eps", "pn", "sections", "multipliers", "lyapunov", "separation")
 DEFAULT_OUTPUTS = ("label", "dc", "eps", "pn")
 
 
@@ -64,51 +75,6 @@ def check_parameter(name: str, value: float) -> float:
     return value
 
 
-class Settings(BaseModel):
-    # allow_inf_nan: no infinity or NaN in any number of a job (settings and axis ends alike)
-    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True,
-                              allow_inf_nan=False)  # fmt: skip
-
-    @field_validator("*", mode="before")
-    @classmethod
-    def booleans_are_not_numbers(cls, value, info):
-        """true/false or text ("4") where a number belongs is a mistake (pydantic reads both)."""
-        annotation = cls.model_fields[info.field_name].annotation
-        values = value.values() if isinstance(value, dict) else [value]
-        if any(isinstance(v, bool) for v in values) and wants_number(annotation):
-            raise ValueError("must be a number, not true or false")
-        if any(isinstance(v, str) for v in values) and wants_number(annotation, text=False):
-            raise ValueError("must be a number, not text (write it without quotes)")
-        return value
-
-
-# Integer bounds: far beyond any useful setting, and every product fits 64-bit integers.
-MAX_POINTS = 100_000  # per axis
-MAX_STEPS = 10**12  # integrator steps per cell: at ~1 µs a step, days for one cell
-MAX_COUNT = 1_000_000  # revolutions, jumps and other per-cell counts
-MAX_START = 1e3  # a basin's starts (lifts h, h per unit time): far outside every attractor
-
-
-class Axis(Settings):
-    """A grid axis: ``points`` values from ``from`` to ``to`` inclusive, evenly spaced."""
-
-    start: float = Field(alias="from")
-    stop: float = Field(alias="to")
-    points: Annotated[int, Field(ge=1, le=MAX_POINTS)]
-
-    @model_validator(mode="after")
-    def distinct_values(self):
-        if self.points > 1 and self.start == self.stop:
-            raise ValueError(
-                f"from = to = {self.start:g} with {self.points} points would compute "
-                f"{self.points} identical cells; give a range, or points: 1"
-            )
-        return self
-
-    def values(self) -> np.ndarray:
-        return np.linspace(self.start, self.stop, self.points)
-
-
 def cell_edges(centres) -> np.ndarray:
     """Edges (n+1) of grid cells with the given centres (n), in the same order: midpoints
     between neighbours, the outer edges half a spacing beyond the end centres (a single
@@ -131,18 +97,32 @@ class ModelSettings(Settings):
     cam_velocity: Literal["chain", "literal"] = "chain"
     """chain: the force's ε' uses ẏc = ω dyc/dθ, the chain rule (default); literal: ẏc =
     dyc/dθ, the paper's eq. 6 as printed (without the factor ω)."""
+    cam: CamSettings = CamSettings()
+    """The cam's motion laws and phase angles, or a table (docs/design.md)."""
+    contact: ContactSettings = ContactSettings()
+    """The contact force law (docs/design.md)."""
 
     @property
-    def law(self) -> int:
-        """The kernel's ``law`` bits of these settings (campar.core.model.law_flags)."""
+    def law_bits(self) -> int:
+        """The kernel's LAW_* bits of these settings (campar.core.model.law_flags)."""
         from ..core.model import law_flags  # here: numba only for those who compute
 
         return law_flags(self.tensile, self.duty_cycle, self.cam_velocity)
 
+    @property
+    def law(self):
+        """The kernel's ``law`` (campar.core.model.Law) of these settings: what make_params,
+        run_chain and trace_orbit take (``laws.kernel_law``)."""
+        from .laws import kernel_law
+
+        return kernel_law(self)
+
 
 # Model options whose default leaves a job's hash as it was before the option existed,
 # so stores computed then stay valid (``job_digest``).
-MODEL_OPTION_DEFAULTS = {"duty_cycle": "separation", "cam_velocity": "chain"}
+MODEL_OPTION_DEFAULTS = {"duty_cycle": "separation", "cam_velocity": "chain",
+                         "cam": CamSettings().model_dump(mode="json"),
+                         "contact": ContactSettings().model_dump(mode="json")}  # fmt: skip
 
 
 class InitialState(Settings):
@@ -343,10 +323,10 @@ class Job(Settings):
                         raise ValueError(f"{name}.{end}: a start is within ±{MAX_START:g}, "
                                          f"got {value:g}")  # fmt: skip
             return sweep
-        unknown = [k for k in keys if k not in PARAMETERS]
+        unknown = [k for k in keys if k not in MAP_AXES]
         if unknown:
             raise ValueError(
-                f"unknown parameter {unknown[0]!r}; allowed: {', '.join(PARAMETERS)} "
+                f"unknown parameter {unknown[0]!r}; allowed: {', '.join(MAP_AXES)} "
                 f"(a map), or exactly {', '.join(BASIN_AXES)} (a basin)"
             )
         if len(keys) != 2 or keys[0] != "omega":
@@ -355,6 +335,8 @@ class Job(Settings):
                 f"parameter (a map), or {', '.join(BASIN_AXES)} (a basin), got {keys}"
             )
         for name, axis in sweep.items():
+            if name in LAW_PARAMETERS:
+                continue  # checked against the model's laws (law_axis_fits_the_model)
             for end, value in (("from", axis.start), ("to", axis.stop)):
                 try:
                     check_parameter(name, value)
@@ -418,6 +400,12 @@ class Job(Settings):
         return self
 
     @model_validator(mode="after")
+    def law_axis_fits_the_model(self):
+        if self.kind == "map":
+            check_law_axis(self.model, self.second, self.sweep[self.second])
+        return self
+
+    @model_validator(mode="after")
     def sweep_and_fixed_disjoint(self):
         both = set(self.sweep) & set(self.fixed)
         if both:
@@ -436,6 +424,7 @@ class Job(Settings):
             "chains": self.chains != DEFAULT_CHAINS,
             "initial": self.initial != DEFAULT_INITIAL,
             "attractors": self.attractors is not None,
+            "separation": self.wants("separation"),  # a speed along a map's ω rows
         }
         for key in (key for key, given in unused.items() if given):
             raise ValueError(
@@ -485,6 +474,12 @@ class Job(Settings):
     def parameter(self, name: str) -> float:
         """Value of a parameter that is not swept."""
         return self.fixed[name]
+
+    def law(self, row: int = 0):
+        """The kernel's Law (core.model.Law) of chain ``row`` (``laws.row_law``)."""
+        from .laws import row_law
+
+        return row_law(self.model, self.second, self.second_values, row)
 
     @property
     def directions(self) -> tuple[str, ...]:

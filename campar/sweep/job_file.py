@@ -76,19 +76,6 @@ def reprlib_repr(value) -> str:
     return shown.repr(value)
 
 
-def wants_number(annotation, text: bool = True) -> bool:
-    """A field typed int or float (inside Annotated, Optional or a dict's values); with
-    ``text`` False, only one that takes no text either (``tiles.rows`` takes auto)."""
-    if annotation in (int, float):
-        return True
-    args = typing.get_args(annotation)
-    if typing.get_origin(annotation) is dict:
-        return wants_number(args[1], text)
-    if not text and str in args:
-        return False
-    return any(wants_number(a, text) for a in args if a is not bool)
-
-
 def check_store_path(path) -> str:
     """``path`` as text if it can name a store; ValueError saying why not (empty, a NUL byte,
     a path that ends in no name: /, ., ..)."""

@@ -30,25 +30,29 @@ CENSUS_BITS = OUT_STATS | OUT_SECTIONS | OUT_MULTIPLIERS
 NO_ATTRACTOR = -1  # n, p, kind of the slots beyond a cell's attractors
 
 
-def run_starts(job: Job, cell: dict[str, np.ndarray], starts, n_sections: int) -> CellOutputs:
+def run_starts(
+    job: Job, cell: dict[str, np.ndarray], starts, n_sections: int, law=None
+) -> CellOutputs:
     """The record of each start (y, y') at one parameter cell (``cell``: one-element
     arrays), each run as a chain of one cell — a fresh start, as a point is — with the
     settings of ``campar point --attractors`` (chaos called at the end of the budget, the
-    census's outputs, ``n_sections`` σn points); the records stacked, one per start."""
+    census's outputs, ``n_sections`` σn points); the records stacked, one per start.
+    ``law``: the cell's (job.law of its row; default the job's first row's)."""
     solver = solver_options(job)
     settings = cell_settings(job)._replace(chaos_after=CHAOS_AFTER, output_bits=CENSUS_BITS)
     records = allocate_outputs(len(starts), CENSUS_BITS, n_sections)
+    law = job.law() if law is None else law
     for i, x0 in enumerate(starts):
         rec = allocate_outputs(1, CENSUS_BITS, n_sections)
         run_chain(cell["omega"], cell["zeta"], cell["f0"], cell["mu_kn"], cell["mu_cn"],
-                  job.model.law, np.array(x0, float), solver, settings, rec)  # fmt: skip
+                  law, np.array(x0, float), solver, settings, rec)  # fmt: skip
         for mine, one in zip(records, rec, strict=True):
             if len(one):  # outputs not asked for have no cells
                 mine[i] = one[0]
     return records
 
 
-def census_row(job: Job, par: dict[str, np.ndarray], chain_state: np.ndarray) -> dict:
+def census_row(job: Job, par: dict[str, np.ndarray], chain_state: np.ndarray, law=None) -> dict:
     """The census arrays of one chain, cells in the order the chain ran (``par``, as
     ``plan.chain_parameters`` gives it); ``chain_state`` (cells, 2): the chain's final
     state of each cell (NaN where it failed: then no chain record)."""
@@ -68,7 +72,7 @@ def census_row(job: Job, par: dict[str, np.ndarray], chain_state: np.ndarray) ->
         starts = census_starts(k, float(par["omega"][i]))
         if np.all(np.isfinite(chain_state[i])):
             starts = np.vstack([starts, chain_state[i]])
-        rec = run_starts(job, cell, starts, CLOUD_POINTS)
+        rec = run_starts(job, cell, starts, CLOUD_POINTS, law)
         kinds, ns, ps = rec.kind.astype(np.int64), rec.n, rec.p
         groups, basin = group_cells(kinds, ns, rec.sections, tol, counted=k)
         out["n_attractors"][i] = len(groups)

@@ -31,12 +31,13 @@ from ..core.revolution import make_trace
 from ..core.tracer import compile_tracer, trace_orbit
 from .arrays import array_names, array_spec
 from .job import Job
+from .laws import LAW_PARAMETERS
 from .plan import Tile, chain_order, chain_parameters, first_column_parameters
 
 
 def output_bits(job: Job) -> int:
     bits = 0
-    if job.wants("dc") or job.wants("eps") or job.wants("pn"):
+    if any(job.wants(name) for name in ("dc", "eps", "pn", "separation")):
         bits |= OUT_STATS
     if job.wants("sections"):
         bits |= OUT_SECTIONS
@@ -144,15 +145,16 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     settings = cell_settings(job)
     starts = chain_starts(job)
     order = chain_order(job)
-    law = job.model.law  # force law and its options, as the kernel's LAW_* bits
     for r, row in enumerate(range(tile.row_start, tile.row_stop)):
         par = chain_parameters(job, row)
         out = allocate_outputs(n_omega, settings.output_bits, job.n_sections)
         run_chain(
             par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-            law, starts[row], solver, settings, out,
+            job.law(row), starts[row], solver, settings, out,
         )  # fmt: skip
-        extra = census_of(job, par, out.state)
+        extra = census_of(job, par, out.state, job.law(row))
+        if job.wants("separation"):
+            extra.update(separation_of(job, par, out, job.law(row), solver, settings))
         for name in names:
             result[name][r][order] = extra[name] if name in extra else getattr(out, name)
     return result
@@ -181,28 +183,41 @@ def compile_kernel(job: Job, share=None, trace: bool = False) -> None:
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
     solver = solver_options(job)
-    if chain_loaded(solver):
+    law = job.law()  # every row's law has one type: one kernel serves the job
+    if chain_loaded(solver, law):
         return
     settings = cell_settings(job)
     out = allocate_outputs(0, settings.output_bits, job.n_sections)
     x_init = np.array([job.initial.y, job.initial.v])
     with collector_paused():
-        helper = split_compile.start_helper(solver, settings, trace)
-        signature = chain_signature(job.model.law, x_init, solver, settings, out)
-        split_compile.share_with_ranks(share, solver, settings, signature)
-        compile_chain(signature, solver, settings)
+        helper = split_compile.start_helper(solver, settings, trace, law)
+        signature = chain_signature(law, x_init, solver, settings, out)
+        split_compile.share_with_ranks(share, solver, settings, signature, law)
+        compile_chain(signature, solver, settings, law)
         if trace:
-            compile_tracer(job.model.law, solver, settings)
+            compile_tracer(law, solver, settings)
         split_compile.reap(helper)
 
 
-def census_of(job: Job, par: dict, state: np.ndarray) -> dict[str, np.ndarray]:
+def census_of(job: Job, par: dict, state: np.ndarray, law) -> dict[str, np.ndarray]:
     """The ``attractors`` census arrays of a chain (``multistable.census_row``); {} if off."""
     if job.attractors is None:
         return {}
     from .multistable import census_row  # it builds on this module's settings and buffers
 
-    return census_row(job, par, state)
+    return census_row(job, par, state, law)
+
+
+def separation_of(job: Job, par: dict, out: CellOutputs, law, solver, settings) -> dict:
+    """The ``separation`` arrays of a chain: its row's values in every cell (one chunk a
+    tile, as every per-cell array)."""
+    from .separation import SEPARATION_ARRAYS, separation_row
+
+    def allocate(n):
+        return allocate_outputs(n, settings.output_bits, job.n_sections)
+
+    values = separation_row(job, par, out, law, solver, settings, allocate)
+    return {name: np.full(len(out.n), v) for name, v in zip(SEPARATION_ARRAYS, values, strict=True)}
 
 
 # Seeds of ``chains.start: continue`` by job digest: every rank computes the same first
@@ -216,6 +231,9 @@ def chain_starts(job: Job) -> np.ndarray:
     rest: the job's initial state for every row. continue: the final state of the
     row's first cell computed by the chain along the second axis (from the job's
     initial state at its first value), or the initial state where that cell failed.
+    Where the second axis is a law parameter (job.LAW_PARAMETERS), each row has a law of
+    its own: that chain is a run of one-cell chains, each from the one before's final
+    state (or the initial state after a failure).
     """
     n_rows, _ = job.shape
     x_init = np.array([job.initial.y, job.initial.v])
@@ -226,10 +244,21 @@ def chain_starts(job: Job) -> np.ndarray:
         settings = cell_settings(job)._replace(output_bits=0)  # states only
         par = first_column_parameters(job)
         out = allocate_outputs(n_rows, 0, job.n_sections)
-        run_chain(
-            par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-            job.model.law, x_init, solver_options(job), settings, out,
-        )  # fmt: skip
+        if job.second in LAW_PARAMETERS:
+            state = x_init
+            for row in range(n_rows):
+                cell = {name: values[row : row + 1] for name, values in par.items()}
+                one = allocate_outputs(1, 0, job.n_sections)
+                run_chain(cell["omega"], cell["zeta"], cell["f0"], cell["mu_kn"],
+                          cell["mu_cn"], job.law(row), state, solver_options(job), settings,
+                          one)  # fmt: skip
+                out.state[row] = one.state[0]
+                state = one.state[0] if np.all(np.isfinite(one.state[0])) else x_init
+        else:
+            run_chain(
+                par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
+                job.law(), x_init, solver_options(job), settings, out,
+            )  # fmt: skip
         ok = np.all(np.isfinite(out.state), axis=1)[:, None]
         _FIRST_COLUMN_STARTS[key] = np.where(ok, out.state, x_init)
     return _FIRST_COLUMN_STARTS[key]
@@ -258,7 +287,7 @@ def warm_up() -> float:
     par = chain_parameters(job, 0)
     trace_orbit(
         par["omega"][0], par["zeta"][0], par["f0"][0], par["mu_kn"][0], par["mu_cn"][0],
-        job.model.law, np.zeros(N_STATE), solver_options(job), cell_settings(job), 1,
+        job.law(), np.zeros(N_STATE), solver_options(job), cell_settings(job), 1,
         make_trace(16, 16, 2),
     )  # fmt: skip
     return time.perf_counter() - start

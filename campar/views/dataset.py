@@ -14,6 +14,10 @@ h5netcdf engine for HDF5) and both backends give the same Dataset, with:
   the job's ``classify.chatter_p``;
 - text as numpy ``str`` arrays and flag attributes as arrays of their
   variable's type, whichever backend.
+- ``separation_speed``, ``contact_eps_max``, ``contact_pn_max`` (second), where the job
+  asked for the ``separation`` output: each row's separation speed and the largest
+  intrusion and contact force below it (campar.sweep.separation), stored in every cell
+  of the row and given here once a row;
 - ``attractor_label`` (second, omega, attractor), where the job asked for a census of
   attractors (``attractors``): the n-p label of each stored attractor, as ``label``.
 
@@ -62,6 +66,12 @@ from .basins import basin_variables
 from .cycles import hysteresis_cells
 
 NOT_COMPUTED = -1  # the integer arrays' fill value
+# Per-row variables (the second axis alone) of the ``separation`` output's arrays.
+SEPARATION_ROWS = {
+    "separation_omega": "separation_speed",
+    "separation_eps_max": "contact_eps_max",
+    "separation_pn_max": "contact_pn_max",
+}
 TYPED_ATTRS = ("_FillValue", "flag_values", "flag_masks")  # CF: the variable's own type
 
 
@@ -150,6 +160,10 @@ def open(path: str | Path) -> xr.Dataset:
         )
     if "direction" in ds.dims:
         ds["hysteresis"] = hysteresis(ds, job)
+    for name in SEPARATION_ROWS:  # the row's value, the same in each of its cells
+        if name in ds:
+            row = ds[name].isel(omega=0, drop=True)
+            ds[SEPARATION_ROWS[name]] = row.assign_attrs(ds[name].attrs)
     if job.kind == "basin":  # which attractor each start reached
         ds = ds.assign(basin_variables(ds, job))
     return ds

@@ -351,7 +351,7 @@ def trace_steady(job: Job, parameters: dict, state, revolutions: int,
     rec = make_trace(max_samples, 64 * revolutions + 64, SAMPLES_PER_STEP)
     status, _, _ = trace_orbit(
         par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-        job.model.law, np.array(state, dtype=float), solver_options(job),
+        job.law(), np.array(state, dtype=float), solver_options(job),
         cell_settings(job), revolutions, rec,
     )  # fmt: skip
     if status != 0:

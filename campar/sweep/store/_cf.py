@@ -33,6 +33,16 @@ PARAMETER_DOCS = {
         "initial displacement",
         "y at θ = 0, where the cell's run starts, in units of the stroke h (basin jobs)",
     ),
+    "phi1": ("cam rise angle", "Φ1 in radians; the near dwell Φ4 takes up the difference"),
+    "phi2": ("cam far-dwell angle", "Φ2 in radians; the near dwell Φ4 takes up the difference"),
+    "phi3": ("cam fall angle", "Φ3 in radians; the near dwell Φ4 takes up the difference"),
+    "phi4": ("cam near-dwell angle", "Φ4 in radians; the far dwell Φ2 takes up the difference"),
+    "n": ("contact force exponent", "n in Pn = k ε^n (1 + c ε'); 1.5: Hertz point contact"),
+    "restitution": (
+        "coefficient of restitution",
+        "e of the contact law (Lankarani–Nikravesh, Flores et al.): damping c from e and the "
+        "impact velocity",
+    ),
     "ydot0": (
         "initial velocity",
         "dy/dt at θ = 0, where the cell's run starts, t in units of 1/ωn (basin jobs)",
@@ -170,6 +180,7 @@ def global_attrs(job: Job, created: str) -> dict:
         "model": "cam–follower impact oscillator: flat-faced follower on a cosine-acceleration "
         "cam, one degree of freedom, nonlinear (Hunt–Crossley) contact",
         "force_law": FORCE_LAWS[job.model.tensile],
+        **law_attrs(job),
         "tensile": job.model.tensile,
         "duty_cycle": job.model.duty_cycle,
         "duty_cycle_definition": DUTY_CYCLES[job.model.duty_cycle],
@@ -179,6 +190,23 @@ def global_attrs(job: Job, created: str) -> dict:
         "campar_version": __version__,
         "date_created": created,
     }
+
+
+def law_attrs(job: Job) -> dict:
+    """The cam and contact laws where they are not the paper's (its stores' attributes
+    name them in ``model`` and ``force_law``)."""
+    cam, contact = job.model.cam, job.model.contact
+    attrs = {}
+    if cam != type(cam)():
+        attrs["cam"] = (f"table {cam.table} (sha256 {cam.table_sha256}, joins {cam.table_joins})"
+                        if cam.table else f"rise {cam.rise}, fall {cam.fall}")  # fmt: skip
+        attrs["cam_angles"] = "phi1 … phi4 = " + ", ".join(f"{a:.12g}" for a in cam.angles)
+    if contact != type(contact)():
+        attrs["contact_law"] = f"{contact.law}, n = {contact.n:g}" + (
+            f", restitution {contact.restitution}, impact floor {contact.impact_floor}"
+            if contact.law != "hunt-crossley" else ""
+        )  # fmt: skip
+    return attrs
 
 
 def chain_attrs(job: Job) -> dict:

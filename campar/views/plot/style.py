@@ -51,6 +51,12 @@ SYMBOLS = {
     "zeta": r"$\zeta$",
     "y0": r"$y_0$",
     "ydot0": r"$\dot y_0$",
+    "phi1": r"$\Phi_1$",
+    "phi2": r"$\Phi_2$",
+    "phi3": r"$\Phi_3$",
+    "phi4": r"$\Phi_4$",
+    "n": r"$n$",
+    "restitution": r"$e$",
 }
 MEANINGS = {
     "omega": "cam speed",
@@ -60,6 +66,12 @@ MEANINGS = {
     "zeta": "damping ratio",
     "y0": "initial displacement",
     "ydot0": "initial velocity",
+    "phi1": "rise angle",
+    "phi2": "far-dwell angle",
+    "phi3": "fall angle",
+    "phi4": "near-dwell angle",
+    "n": "contact exponent",
+    "restitution": "restitution",
 }
 
 
@@ -73,6 +85,9 @@ UNITS = {
     "zeta": "dimensionless",
     "y0": "units of stroke $h$, at θ = 0",
     "ydot0": r"units of $h\,\omega_n$, at θ = 0",
+    **{name: "radians" for name in ("phi1", "phi2", "phi3", "phi4")},
+    "n": "dimensionless",
+    "restitution": "dimensionless",
 }
 # Axis titles of the orbit quantities: y, yc, ε in strokes h, ẏ in h·ωn, t in 1/ωn, Pn in K1·h.
 Y_LABEL = r"displacement $y$ (units of stroke $h$)"
