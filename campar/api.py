@@ -97,6 +97,8 @@ def run(
     from .sweep.runner import run_job
 
     job = job_of(job, settings)  # before anything touches the disk
+    if job.kind == "curves":
+        from .continuation import tasks  # noqa: F401 (registers a curves job's tile function)
     path = job.store if store is None else store  # an empty --store is refused, not ignored
     run_job(job, path, overwrite=overwrite, grace=grace, max_store=max_store,
             max_memory=max_memory)  # fmt: skip

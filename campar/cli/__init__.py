@@ -35,6 +35,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 from .. import __version__  # noqa: E402
 from ..errors import CamparError, Interrupted, JobError  # noqa: E402
 from . import continuation, line, maps, paper, plot, point, tools  # noqa: E402
+from .options import launched_rank  # noqa: E402
 
 # The subcommands, in the order ``campar --help`` lists them.
 SUBCOMMANDS = [
@@ -48,6 +49,7 @@ SUBCOMMANDS = [
     tools.add_bench,
     line.add_line,
     continuation.add_continue,
+    continuation.add_curves,
     paper.add_gallery,
     paper.add_report,
 ]
@@ -148,9 +150,5 @@ def main(argv=None) -> int:
 def repeated_by_other_rank(exc: CamparError) -> bool:
     """Under mpirun, an error every rank meets alike (the job, a signal before the start) or
     one the master reports: printed by rank 0 only."""
-    rank = next((os.environ[v] for v in MPI_RANK_ENV if v in os.environ), "0")
     alike = isinstance(exc, (JobError, Interrupted)) or getattr(exc, "rank", 0)
-    return rank.isdigit() and int(rank) > 0 and bool(alike)
-
-
-MPI_RANK_ENV = ("PMI_RANK", "OMPI_COMM_WORLD_RANK", "PMIX_RANK")
+    return launched_rank() > 0 and bool(alike)

@@ -3,7 +3,7 @@
 import argparse
 
 from ..errors import JobError
-from .options import PARAMETER_HELP, add_model_options, flag_of, model_options
+from .options import PARAMETER_HELP, add_model_options, flag_of, launched_rank, model_options
 
 CONTINUATION_PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 HELP = {"omega": "cam speed / natural frequency", **PARAMETER_HELP}
@@ -142,3 +142,64 @@ def draw(args, result, parameter, span, fixed) -> None:
         plot_bifurcation_curves(result.curves, window=window).savefig(
             path.with_name(f"{path.stem}-curves{path.suffix}"), dpi=200
         )
+
+
+def add_curves(sub):
+    from ..continuation.mapscale import SEED_TYPES
+    from .maps import RUN_EPILOG, seconds
+
+    p = sub.add_parser(
+        "curves",
+        help="continue a map's PD, SN and G curves, seeded from its typed edges (resumes; "
+        "MPI under mpirun)",
+        description="Seed bifurcation curves from a map store's typed edges (campar plot "
+        "--bifurcations), group the seeds by curve and continue each group's curves across "
+        "the map's window as a task of a curves job: run, checksummed, committed and "
+        "resumed as a map's tiles are, serially or under mpirun. The curves go into a store "
+        "beside the map (MAP-curves.zarr); campar plot MAP --curves draws them.",
+        epilog=RUN_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+    )  # fmt: skip
+    p.add_argument("map", help="a map store of campar run (with the multipliers output)")
+    p.add_argument("--types", default=",".join(SEED_TYPES),
+                   help=f"curve types to seed ({','.join(SEED_TYPES)})")  # fmt: skip
+    p.add_argument("--points", type=int, default=400, help="points of a curve at most (400)")
+    p.add_argument("--store", metavar="PATH", help="the curves' store (MAP-curves.zarr)")
+    p.add_argument("--overwrite", action="store_true", help="replace a store of another job")
+    p.add_argument("--grace", type=seconds, default=30.0, metavar="SECONDS",
+                   help="after a signal, wait so long for tasks in flight (30)")  # fmt: skip
+    p.add_argument("--json", action="store_true", help="print the curves as one JSON object")
+    p.set_defaults(handler=run_curves)
+
+
+def run_curves(args) -> int:
+    import json
+
+    from ..api import run
+    from ..continuation.mapscale import SEED_TYPES
+    from ..sweep.runner import setup_logging
+    from ..sweep.signals import finished
+    from ..views.map_curves import curves_job, read_curves
+
+    types = tuple(t.strip().upper() for t in args.types.split(",") if t.strip())
+    unknown = [t for t in types if t not in SEED_TYPES]
+    if unknown or not types:
+        raise JobError(f"--types: {', '.join(unknown) or 'none given'}; one or more of "
+                       f"{', '.join(SEED_TYPES)}")  # fmt: skip
+    if not 2 <= args.points <= 100_000:
+        raise JobError(f"--points must be from 2 to 100000, got {args.points}")
+    job = curves_job(args.map, types, points=args.points, store=args.store)
+    setup_logging()
+    path = run(job, overwrite=args.overwrite, grace=args.grace)
+    finished()
+    if launched_rank() > 0:  # every rank ran the job; rank 0 reports it
+        return 0
+    curves = read_curves(path)
+    if args.json:
+        print(json.dumps({"store": str(path), "curves": [c.to_dict() for c in curves]}))
+    else:
+        counts = {}
+        for c in curves:
+            counts[f"{c.type} of {c.n}-cycles"] = counts.get(f"{c.type} of {c.n}-cycles", 0) + 1
+        found = ", ".join(f"{v} {k}" for k, v in sorted(counts.items())) or "none"
+        print(f"{path}: {len(job.curves.tasks)} tasks, {len(curves)} curves ({found})")
+    return 0

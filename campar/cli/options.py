@@ -119,3 +119,15 @@ def model_flags() -> dict[str, str]:
 
     flags = {f"model.{name}": flag_of(name) for name in option_fields()}
     return {**flags, "transient.mode": "--transient", "transient.max_revolutions": "--revolutions"}
+
+
+MPI_RANK_ENV = ("PMI_RANK", "OMPI_COMM_WORLD_RANK", "PMIX_RANK")
+
+
+def launched_rank() -> int:
+    """This process's rank as an MPI launcher set it (0 without one): what only rank 0
+    prints, every rank computes alike."""
+    import os
+
+    rank = next((os.environ[v] for v in MPI_RANK_ENV if v in os.environ), "0")
+    return int(rank) if rank.isdigit() else 0

@@ -32,6 +32,8 @@ def add_plot(sub):
     p.add_argument("--bifurcations", action="store_true",
                    help="overlay every boundary between labels as a cell edge typed PD, SN, "
                    "NS, G, chaos or jump (from the stored multipliers and ε extremes)")  # fmt: skip
+    p.add_argument("--curves", action="store_true", help="overlay the continued bifurcation "
+                   "curves campar curves stored beside the map (STORE-curves.zarr)")  # fmt: skip
     p.add_argument("--trace", action="store_true", help="with --bifurcations: tell grazing "
                    "from the orbits traced from the stored states (loads the kernel)")  # fmt: skip
     p.add_argument("--json", action="store_true", help="with --bifurcations: print one "
@@ -60,10 +62,16 @@ def run_plot(args) -> int:
             figure_file(args.output)  # before typing the boundaries
         found = store_boundaries(store, omega=args.omega, second=args.second,
                                  trace=args.trace, direction=args.direction)  # fmt: skip
+    continued = None
+    if args.curves:
+        from ..views.map_curves import read_curves
+
+        continued = read_curves(store)
     path = None
     if not args.json or args.output:  # --json prints the curves; an image only if asked
         path = plot_store(store, args.what, args.output, omega=args.omega, second=args.second,
-                          curves=found, direction=args.direction)  # fmt: skip
+                          curves=found, direction=args.direction,
+                          continued=continued)  # fmt: skip
     if args.json:
         import json
 

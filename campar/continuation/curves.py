@@ -28,10 +28,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ContinuationError
+from ..sweep.curves_job import CURVE_TYPES as CURVE_CODES
 from .section_map import PARAMETER_ORDER, SectionMap, in_range, parameter_index
 from .special import NS, PD, SN, G, SpecialPoint, psi_ns, psi_pd, psi_sn
 
-CURVE_TYPES = (PD, SN, NS, G)
+CURVE_TYPES = CURVE_CODES  # the types a curve can have, in the order of their codes
 STATE_STEP = 1e-6  # central differences of ψ in (y, y')
 PARAMETER_STEP = 1e-6  # … and in a scaled parameter (a millionth of the window)
 CLOSE_TOL = 0.2  # a curve back within this many steps of its first point is closed

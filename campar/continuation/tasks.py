@@ -1,34 +1,23 @@
 """A map's curves as runner tasks: one task a group of seeds, its result fixed-size arrays.
 
-A curves job (``campar curves MAP``) is a grid of tasks × points: row t holds the curves
-task t found, one after the other, each at most ``points`` points long, in
-``CURVES_PER_TASK`` slots. A task continues the curve of its first seed that yields one,
-then of the first of its seeds that curve does not pass within a cell of, and so on, so a
-group of seeds that stands for several curves yields all of them. The arrays are those of
-``CURVE_ARRAYS``; empty points hold the fill values (−1, NaN). ``run_curves_tile`` is the
-runner's tile function for such a job: plain data in, arrays out, no MPI and no files.
+A curves job (``campar curves MAP``, campar.sweep.curves_job) is a grid of tasks ×
+points: row t holds the curves task t found, one after the other, each at most ``points``
+points long, in ``CURVES_PER_TASK`` slots. A task continues the curve of its first seed
+that yields one, then of the first of its seeds that curve does not pass within a cell
+of, and so on, so a group of seeds that stands for several curves yields all of them.
+The arrays are those of ``CURVE_ARRAYS``; empty points hold the fill values (−1, NaN).
+``run_curves_tile`` is the runner's tile function for such a job, registered with
+campar.sweep.curves_job when this module is imported: plain data in, arrays out, no MPI
+and no files.
 """
 
 import numpy as np
 
 from ..errors import ContinuationError
+from ..sweep.curves_job import CURVE_ARRAYS, CURVES_PER_TASK, FOUND, NONE_FOUND, register
 from .curves import CURVE_TYPES, BifurcationCurve, CurveSettings
 from .mapscale import Seed, curve_from_seed, distances_to, in_plane
 from .section_map import SectionMap
-
-CURVES_PER_TASK = 3
-# dtype and trailing shape of each per-point array (the store's table, sweep.arrays)
-CURVE_ARRAYS = {
-    "curve_index": (np.int8, ()),  # which curve of the task (−1: no point here)
-    "curve_type": (np.int8, ()),  # CURVE_TYPES index
-    "curve_n": (np.int32, ()),
-    "curve_p": (np.int32, ()),
-    "curve_values": (np.float64, (2,)),  # the plane's (ω, second) at the point
-    "curve_state": (np.float64, (2,)),
-    "curve_multipliers": (np.float64, (2, 2)),
-    "curve_status": (np.int8, ()),  # 0: a curve; 1: the task found none (all its seeds failed)
-}
-FOUND, NONE_FOUND = 0, 1
 
 
 def empty_row(points: int) -> dict[str, np.ndarray]:
@@ -121,3 +110,25 @@ def curves_of_rows(arrays: dict, plane: tuple[str, str]) -> list[dict]:
                 "task": t,
             })  # fmt: skip
     return found
+
+
+def run_curves_tile(job, tile) -> dict[str, np.ndarray]:
+    """The runner's tile of a curves job: its rows' tasks, as ``curve_rows``."""
+    tasks = [[Seed(**seed.model_dump()) for seed in job.curves.tasks[row]]
+             for row in range(tile.row_start, tile.row_stop)]  # fmt: skip
+    return curve_rows(tasks, job.curves.points, SectionMap(curve_model(job)))
+
+
+def compile_curves(job) -> None:
+    """Compile (or load) the shooting for the job's force law: what a lane does first."""
+    SectionMap(curve_model(job))
+
+
+def curve_model(job) -> dict:
+    """The options of the job's force law, as a SectionMap takes them."""
+    model = job.model
+    return {"tensile": model.tensile, "duty_cycle": model.duty_cycle,
+            "cam_velocity": model.cam_velocity}  # fmt: skip
+
+
+register(run_curves_tile, compile_curves)

@@ -8,6 +8,7 @@ K1·h; the cam angle is θ = ω t.
 
 import numpy as np
 
+from .curves_job import CURVE_ARRAY_DOCS, CURVE_ARRAYS, CURVE_TAIL_DIMS
 from .job import Job
 
 # Arrays each job output brings into the store; "label" is always present.
@@ -61,6 +62,7 @@ TAIL_DIMS = {
     "sections": ("section_point", "component"),
     "multipliers": ("multiplier", "part"),
     **{name: ("attractor",) for name in CENSUS_ARRAYS[2:]},
+    **CURVE_TAIL_DIMS,
 }
 
 # Labels along the trailing dimensions that have names rather than indices.
@@ -165,10 +167,13 @@ ARRAY_DOCS = {
         "NaN where the cell has fewer attractors",
     ),
 }  # fmt: skip
+ARRAY_DOCS.update(CURVE_ARRAY_DOCS)
 
 
 def array_names(job: Job) -> list[str]:
     """Names of the per-cell arrays a job stores, in a fixed order."""
+    if job.kind == "curves":
+        return list(CURVE_ARRAYS)
     wanted = {name for output in job.outputs for name in OUTPUT_ARRAYS[output]}
     if job.attractors is not None:  # the census: a job key, not an output
         wanted.update(CENSUS_ARRAYS)
@@ -177,6 +182,6 @@ def array_names(job: Job) -> list[str]:
 
 def array_spec(job: Job, name: str) -> tuple[np.dtype, tuple[int, ...]]:
     """dtype and per-cell trailing shape of array ``name`` for this job."""
-    dtype, tail = ARRAY_SPECS[name]
+    dtype, tail = CURVE_ARRAYS[name] if name in CURVE_ARRAYS else ARRAY_SPECS[name]
     sizes = {"S": job.n_sections, "A": job.attractors.cap if job.attractors else 0}
     return np.dtype(dtype), tuple(sizes.get(d, d) for d in tail)

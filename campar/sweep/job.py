@@ -19,6 +19,7 @@ import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from ..errors import JobError
+from .curves_job import CURVE_AXES, CurvesSettings, check_curves_axes, check_curves_job
 from .job_file import check_store_path, format_validation_error, parse_job_text
 from .laws import LAW_PARAMETERS, CamSettings, ContactSettings, check_law_axis
 from .settings import (  # noqa: F401 (their home for the schema's users)
@@ -28,6 +29,7 @@ from .settings import (  # noqa: F401 (their home for the schema's users)
     MAX_STEPS,
     Axis,
     Settings,
+    check_parameter,
     wants_number,
 )
 
@@ -58,21 +60,6 @@ def with_paper_values(parameters: dict[str, float]) -> dict[str, float]:
             f"{', '.join(PAPER_VALUES)}"
         )
     return {name: parameters.get(name, value) for name, value in PAPER_VALUES.items()}
-
-
-def check_parameter(name: str, value: float) -> float:
-    """Raise ValueError with the allowed range when a model parameter is out of range."""
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number, got {value}")
-    if name == "omega" and not value > 0.0:
-        raise ValueError(f"omega must be > 0, got {value}")
-    if name in ("mu_kn", "mu_cn") and not 0.0 < value < 1.0:
-        raise ValueError(f"{name} must be in (0, 1), got {value}")
-    if name == "zeta" and not value >= 0.0:
-        raise ValueError(f"zeta must be ≥ 0, got {value}")
-    if name == "f0" and not value >= 0.0:
-        raise ValueError(f"f0 must be ≥ 0, got {value}")
-    return value
 
 
 def cell_edges(centres) -> np.ndarray:
@@ -241,7 +228,7 @@ class AttractorSettings(Settings):
 
 
 # Job sections whose absence (None) leaves a job's hash as it was before they existed.
-OPTIONAL_SECTIONS = ("attractors",)
+OPTIONAL_SECTIONS = ("attractors", "curves")
 
 # Every default of a job, as the settings a job without that section gets: code that
 # builds jobs by keyword (points, lines, the CLI, benchmarks) reads its defaults here,
@@ -290,6 +277,8 @@ class Job(Settings):
     chains: ChainSettings = DEFAULT_CHAINS
     attractors: AttractorSettings | None = None
     """Coexisting attractors of every cell (None: off, the usual map alone)."""
+    curves: CurvesSettings | None = None
+    """A map's bifurcation curves as tasks (sweep point, task; ``campar curves``)."""
     store: str | None = None
     """Path of the result store; '.h5'/'.hdf5' selects HDF5, anything else Zarr."""
 
@@ -302,7 +291,8 @@ class Job(Settings):
     @classmethod
     def fill_fixed(cls, data):
         # The normalised job states every parameter: unswept, unfixed ones take the paper's value.
-        if isinstance(data, dict) and isinstance(data.get("sweep"), dict):
+        sweep = data.get("sweep") if isinstance(data, dict) else None
+        if isinstance(sweep, dict) and tuple(sweep) != CURVE_AXES:  # curves: the map's fixed
             fixed = data.get("fixed") or {}
             if isinstance(fixed, dict):
                 fixed = dict(fixed)
@@ -316,6 +306,8 @@ class Job(Settings):
     @classmethod
     def omega_and_one_more(cls, sweep: dict[str, Axis]) -> dict[str, Axis]:
         keys = list(sweep)
+        if tuple(keys) == CURVE_AXES:  # a curves job: tasks × points (curves_job)
+            return sweep
         if tuple(keys) == BASIN_AXES:  # a basin: initial states, finite (Settings) and bounded
             for name, axis in sweep.items():
                 for end, value in (("from", axis.start), ("to", axis.stop)):
@@ -413,8 +405,14 @@ class Job(Settings):
         return self
 
     @model_validator(mode="after")
+    def curves_and_their_axes(self):
+        check_curves_job(self)
+        check_curves_axes(self)
+        return self
+
+    @model_validator(mode="after")
     def basin_fixes_every_parameter(self):
-        if self.kind == "map":
+        if self.kind != "basin":
             return self
         if "omega" not in self.fixed:
             raise ValueError("a basin job (sweep y0, ydot0) fixes omega: fixed: {omega: …}")
@@ -437,7 +435,10 @@ class Job(Settings):
     @property
     def kind(self) -> str:
         """ "map": chains along ω over a parameter plane; "basin": one parameter point,
-        every cell a start (y0, ydot0) of its own (``campar.sweep.basin``)."""
+        every cell a start (y0, ydot0) of its own (``campar.sweep.basin``); "curves": a map's
+        bifurcation curves, tasks × points (``campar.sweep.curves_job``)."""
+        if tuple(self.sweep) == CURVE_AXES:
+            return "curves"
         return "basin" if tuple(self.sweep) == BASIN_AXES else "map"
 
     @property
@@ -459,7 +460,7 @@ class Job(Settings):
     def omega(self) -> np.ndarray:
         """The ω axis of a map job (a basin's ω is ``parameter("omega")``)."""
         if self.kind != "map":
-            raise ValueError(f"job {self.name} is a basin at omega = {self.fixed['omega']:g}")
+            raise ValueError(f"job {self.name} is a {self.kind} job, without an ω axis")
         return self.first_values
 
     @property

@@ -23,6 +23,7 @@ import numpy as np
 from .. import __version__
 from ..core.codes import KIND_NAMES, Kind, cell_label, status_message
 from .attractor_sets import attractor_sets
+from .curves_job import CURVE_TYPES
 from .job import DIRECTIONS
 from .store import read_store, verify_store
 
@@ -143,6 +144,17 @@ class Tally:
         """One verified tile (``_integrity.TileCheck``)."""
         a = check.arrays
         labels = self.labels.setdefault(check.tile.direction, Counter())
+        if "curve_status" in a:  # a curves job: its tasks and the curves they found
+            self.cells += a["curve_status"].size
+            for t in range(a["curve_index"].shape[0]):
+                found = a["curve_index"][t] >= 0
+                for k in sorted(set(a["curve_index"][t][found].tolist())):
+                    at = a["curve_index"][t] == k
+                    kind = CURVE_TYPES[int(a["curve_type"][t][at][0])]
+                    labels[f"{kind} of {int(a['curve_n'][t][at][0])}-cycles"] += 1
+                if not found.any():
+                    labels["tasks without a curve"] += 1
+            return
         status, kind = a["status"], a["kind"]
         self.cells += status.size
         self.failed.update(dict(_counts(status[status != 0])))

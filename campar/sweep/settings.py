@@ -2,6 +2,7 @@
 YAML's true/false or text where a number belongs; the bounds of every integer and the
 grid axis (campar.sweep.job, campar.sweep.laws)."""
 
+import math
 import typing
 from typing import Annotated
 
@@ -65,3 +66,18 @@ class Axis(Settings):
 
     def values(self) -> np.ndarray:
         return np.linspace(self.start, self.stop, self.points)
+
+
+def check_parameter(name: str, value: float) -> float:
+    """Raise ValueError with the allowed range when a model parameter is out of range."""
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value}")
+    if name == "omega" and not value > 0.0:
+        raise ValueError(f"omega must be > 0, got {value}")
+    if name in ("mu_kn", "mu_cn") and not 0.0 < value < 1.0:
+        raise ValueError(f"{name} must be in (0, 1), got {value}")
+    if name == "zeta" and not value >= 0.0:
+        raise ValueError(f"zeta must be ≥ 0, got {value}")
+    if name == "f0" and not value >= 0.0:
+        raise ValueError(f"f0 must be ≥ 0, got {value}")
+    return value

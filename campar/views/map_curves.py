@@ -231,3 +231,80 @@ def compute_map_curves(path, types=SEED_TYPES, *, rounds: int = 3,
         curves = [curves[i] for i in merge_curves(curves, plane, spacing)]
         pending = [s for s in raw if s.cell not in tried and not covered(s, curves, plane, spacing)]
     return MapCurves(curves, len(raw), n_tasks, done_rounds, failures, time.perf_counter() - began)
+
+
+def curves_store_path(map_path) -> str:
+    """Where ``campar curves`` keeps a map's curves: beside it, ``-curves`` before the
+    suffix (results/mu_kn.zarr → results/mu_kn-curves.zarr)."""
+    from pathlib import Path
+
+    path = Path(map_path)
+    return str(path.with_name(f"{path.stem}-curves{path.suffix}"))
+
+
+def curves_job(map_path, types=SEED_TYPES, *, points: int = 400, store=None):
+    """The curves job of a map store: its seeds grouped into tasks (``store_seeds``), as a
+    validated Job (campar.sweep.curves_job) that ``campar.run`` runs."""
+    from ..errors import JobError
+    from ..sweep.curves_job import curves_job_data
+    from ..sweep.job import Job
+    from ..sweep.store import read_store
+
+    with read_store(map_path) as reader:
+        map_job = reader.job
+    if map_job.kind != "map":
+        raise JobError(f"{map_path} is a {map_job.kind} store: curves are seeded from a map")
+    tasks = store_seeds(map_path, types)
+    if not tasks:
+        raise JobError(f"{map_path}: no typed edge of {', '.join(types)} to seed a curve from "
+                       "(the map needs the multipliers output for PD and SN)")  # fmt: skip
+    data = curves_job_data(map_job, str(map_path), [[s.to_dict() for s in t] for t in tasks],
+                           types=types, points=points,
+                           store=str(store or curves_store_path(map_path)))  # fmt: skip
+    return Job.from_dict(data, source=f"curves of {map_path}")
+
+
+def read_curves(path, *, merge: bool = True) -> list:
+    """The curves of a curves store (``campar curves``), or of the map store beside which
+    ``campar curves`` put them: the curves (``BifurcationCurve``) in the map's plane, of the
+    committed tasks whose checksums hold, each curve once (``merge_curves``) unless
+    ``merge`` is False."""
+    from pathlib import Path
+
+    from ..continuation.curves import BifurcationCurve
+    from ..continuation.mapscale import merge_curves
+    from ..continuation.tasks import curves_of_rows
+    from ..sweep.store import read_store, verify_store
+
+    target = Path(path)
+    with read_store(target) as reader:
+        if reader.job.kind == "map":
+            target = Path(curves_store_path(path))
+    rows: dict[int, dict] = {}
+    with read_store(target) as reader:
+        job = reader.job
+        if job.kind != "curves":
+            raise ValueError(f"{target} holds no curves")
+
+        def take(check):  # a committed task whose checksum holds
+            rows[check.tile.row_start] = {k: v for k, v in check.arrays.items()
+                                          if k.startswith("curve_")}  # fmt: skip
+
+        verify_store(reader, take)
+    if not rows:
+        return []
+    arrays = {name: np.concatenate([rows[r][name] for r in sorted(rows)])
+              for name in rows[min(rows)]}  # fmt: skip
+    plane = tuple(job.curves.plane)
+    found = [
+        BifurcationCurve(type=c["type"], n=c["n"], first=plane[0], second=plane[1],
+                         parameters=dict(job.fixed), model=job.model.model_dump(mode="json"),
+                         values=c["values"], states=c["states"], multipliers=c["multipliers"],
+                         p=c["p"], end="stored",
+                         extra={"task": sorted(rows)[c["task"]]})
+        for c in curves_of_rows(arrays, plane)
+    ]  # fmt: skip
+    if not merge:
+        return found
+    spacing = job.curves.tasks[0][0].spacing
+    return [found[i] for i in merge_curves(found, plane, spacing)]

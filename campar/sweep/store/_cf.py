@@ -143,6 +143,15 @@ def coordinate_attrs(job: Job, name: str) -> dict:
         "tile_direction": {"long_name": "sweep direction of the tile's chains"},
         "tile_row_start": {"long_name": "first chain of the tile", "comment": rows},
         "tile_row_stop": {"long_name": "one past the last chain of the tile", "comment": rows},
+        "point": {
+            "long_name": "point of the task's curves",
+            "comment": "curves_per_task slots of curves.points points, in curve order",
+        },
+        "task": {"long_name": "task", "comment": "a group of seeds from the map's typed edges"},
+        "plane_axis": {
+            "long_name": "axis of the map's plane",
+            "comment": "omega, then the map's second parameter (the curves job's curves.plane)",
+        },
     }[name]
 
 
@@ -170,8 +179,7 @@ def global_attrs(job: Job, created: str) -> dict:
     """The file's CF and campar attributes, besides campar's own (job, runs, …)."""
     return {
         "Conventions": CONVENTIONS,
-        "title": f"campar {job.kind} {job.name}: steady motions over ({job.first}, {job.second})"
-        + (f" at omega = {job.parameter('omega'):g}" if job.kind == "basin" else ""),
+        "title": title(job),
         "source": f"campar {__version__}: cam–follower impact oscillator, "
         f"{job.integrator.method} integrator (rtol {job.integrator.rtol:g}, "
         f"atol {job.integrator.atol:g}), {job.transient.mode} transient",
@@ -190,6 +198,15 @@ def global_attrs(job: Job, created: str) -> dict:
         "campar_version": __version__,
         "date_created": created,
     }
+
+
+def title(job: Job) -> str:
+    if job.kind == "curves":
+        return (f"campar curves {job.name}: bifurcation curves in the "
+                f"({', '.join(job.curves.plane)}) plane of {job.curves.map}")  # fmt: skip
+    return f"campar {job.kind} {job.name}: steady motions over ({job.first}, {job.second})" + (
+        f" at omega = {job.parameter('omega'):g}" if job.kind == "basin" else ""
+    )
 
 
 def law_attrs(job: Job) -> dict:
@@ -211,6 +228,13 @@ def law_attrs(job: Job) -> dict:
 
 def chain_attrs(job: Job) -> dict:
     """Where the runs start and which way they go: a map's chains, or a basin's cells."""
+    if job.kind == "curves":
+        return {
+            "chain_start": "seeds",
+            "chain_start_state": "each task from its seeds' "
+            "stored states on the map (curves.tasks)",
+            "sweep_direction": "none",
+        }
     if job.kind == "basin":
         return {
             "chain_start": "grid",

@@ -153,6 +153,7 @@ def coordinate_arrays(job: Job) -> list[ArraySchema]:
         "multiplier": np.arange(sizes.get("multiplier", 0), dtype=np.int32),
         "attractor": np.arange(1, sizes.get("attractor", 0) + 1, dtype=np.int32),
         "part": np.array(PARTS),
+        "plane_axis": np.array(job.curves.plane if job.curves else ("", "")),
         "direction": np.array(DIRECTIONS),
         "tile": np.arange(len(tiles), dtype=np.int32),
     }

@@ -171,6 +171,7 @@ def plot_map(
     vmin: float | None = None,
     vmax: float | None = None,
     curves=None,
+    continued=None,
 ):
     """Draw a map and return its Figure.
 
@@ -188,6 +189,8 @@ def plot_map(
     title: text above the map; None states the fixed parameters, "" none.
     log, vmin, vmax: colour scale of a quantity (log None: the quantity's default).
     curves: typed bifurcation edges to overlay (``campar.views.boundaries``; ``curves``).
+    continued: continued bifurcation curves to overlay (BifurcationCurve objects in this
+    map's plane, ``campar.views.map_curves.read_curves``).
     """
     if isinstance(grid, Job):
         grid = MapGrid.from_job(grid)
@@ -197,7 +200,8 @@ def plot_map(
         raise PlotError(f"a {what} map needs the arrays {', '.join(missing)}")
     keep = {name: arrays[name] for name in (*needed, "computed", "compared") if name in arrays}
     grid, arrays = select_cells(grid, keep, omega, second)
-    height = 3.4 if curves is None else 4.9  # room for the curves' legend under the map
+    # room for the curves' legend under the map
+    height = 3.4 if curves is None and continued is None else 4.9
     with figure_style():
         xe, ye = cell_edges(grid.omega), cell_edges(grid.second)
         gaps_legend = False  # a one-line legend of the gaps above a quantity map
@@ -236,6 +240,10 @@ def plot_map(
             from .curves import draw_curves
 
             draw_curves(ax, curves, legend=legend)
+        if continued is not None:
+            from .branches import draw_bifurcation_curves
+
+            draw_bifurcation_curves(ax, continued, legend=legend)
         ax.set_xlim(xe.min(), xe.max())
         ax.set_ylim(ye.min(), ye.max())
         ax.set_xlabel(axis_label("omega"))

@@ -34,7 +34,14 @@ class StoredMap:
 
 
 def plot_store(
-    path, what: str = "labels", output=None, omega=None, second=None, curves=None, direction=None
+    path,
+    what: str = "labels",
+    output=None,
+    omega=None,
+    second=None,
+    curves=None,
+    direction=None,
+    continued=None,
 ) -> Path:
     """Draw a map of a result store into an image file; returns the file's path.
 
@@ -45,7 +52,8 @@ def plot_store(
     in the current directory; it is checked before the store's arrays are read (its
     job is read first: a basin store draws its basin, ``basin_view``). ``curves``: typed
     bifurcation edges to overlay (``campar.views.boundaries.store_boundaries``),
-    computed on the full grid.
+    computed on the full grid. ``continued``: continued curves to overlay
+    (``campar.views.map_curves.read_curves``).
     """
     from ...sweep.store import read_store
     from ..output import figure_file
@@ -56,7 +64,8 @@ def plot_store(
         return basin_view(path, what, output, basin, zoomed=(omega, second, curves, direction))
     output = figure_file(output or f"{Path(path).stem}-{what}.png")
     drawn = read_map(path, what, omega=omega, second=second, direction=direction)
-    figure = plot_map(drawn.grid, drawn.arrays, what, title=drawn.title, curves=curves)
+    figure = plot_map(drawn.grid, drawn.arrays, what, title=drawn.title, curves=curves,
+                      continued=continued)  # fmt: skip
     return save_figure(figure, output)
 
 
