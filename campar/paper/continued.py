@@ -25,7 +25,7 @@ CENSUS_STARTS = 8
 NS_WINDOW = (3.1, 3.3)  # where the paper places its Hopf point (ω = 3.208583)
 
 
-def structure_command(law: str) -> str:
+def structure_command(ev: Evidence, law: str) -> str:
     return (f"campar continue --omega 6:2 --mu-kn {setups.FIG6_MU_KN:g} --switch "
             f"{SWITCH_DEPTH} -o branches.png --line {STRUCTURE_POINTS}{law} (the branch of "
             "the attractor at ω = 6; --omega 4.4:2 and 4.4:6 for the 1-1 branch)")  # fmt: skip
@@ -96,14 +96,18 @@ TONGUE_PLANES = ("mu_kn", "mu_cn")
 BOUNDED_SHARE = 0.8  # of a tongue's boundary on PD and G curves for N2 to hold
 
 
-def map_curves(ev: Evidence, plane: str):
-    """The PD, SN and G curves of a plane's map (kept per evidence)."""
+def map_curves(ev: Evidence, plane: str) -> list:
+    """The PD, SN and G curves of a plane's map (``campar curves`` beside its store; kept
+    per evidence)."""
 
     def compute():
-        from ..views.map_curves import compute_map_curves
+        from ..sweep.runner import run_job
+        from ..views.map_curves import curves_job, read_curves
 
         job = ev.job(setups.plane_job(plane, ev.size, ev.tensile))
-        return compute_map_curves(setups.run_plane(job, ev.stores))
+        store = setups.run_plane(job, ev.stores)
+        run_job(curves_job(store))
+        return read_curves(store)
 
     return ev._keep(("map_curves", plane), compute)
 
@@ -131,10 +135,9 @@ def tongue_boundaries(ev: Evidence, plane: str, label: str) -> dict[str, float]:
     if not centres:
         return {}
     centres = np.array(centres) / spacing
-    found = map_curves(ev, plane)
     nearest = np.full(len(centres), np.inf)
     names = np.full(len(centres), "none", dtype=object)
-    for curve in found.curves:
+    for curve in map_curves(ev, plane):
         d = distances_to(centres, in_plane(curve, ("omega", grid.name)) / spacing)
         better = (d < nearest) & (d <= 1.5)
         nearest[better] = d[better]
@@ -164,7 +167,7 @@ def tongue_claim(ev: Evidence) -> Verdict:
                    "continued curve of that type and period)", all(holds))  # fmt: skip
 
 
-def tongue_command(law: str) -> str:
+def tongue_command(ev: Evidence, law: str) -> str:
     return ("campar run jobs/mu_kn.yaml and jobs/mu_cn.yaml" + (" (allow: model.tensile: "
             "allow in a copy)" if law else "") + ", then campar curves results/mu_kn.zarr "
             "and results/mu_cn.zarr; campar plot results/mu_kn.zarr --curves")  # fmt: skip

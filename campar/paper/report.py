@@ -197,10 +197,6 @@ def _claims() -> list[Claim]:
          "not encoded: a route is a sequence of typed transitions (G, SN, PD, period adding) "
          "along a path the paper does not give (its f0); `campar line --json` and `campar "
          "plot --bifurcations` type transitions, but no test matches them to the sequences"),
-        ("N2", "Figs. 2d,e, 4c", "tongue-shaped 'lingual' domains of subharmonic n-p between "
-         "n-p and (n+1)-(p+1), bounded by PD of n-p and G of (n+1)-(p+1)",
-         "not encoded: needs the geometry of map regions and of their typed boundaries; "
-         "campar has the boundaries (`campar plot --bifurcations`), no test of the shapes"),
         ("N3", "Fig. 2", "chattering 1-p̃ (p ≥ 7), with 1-0 embedded in its window along f0",
          "not encoded: M2 counts 1-p cells only; whether 1-0 sits inside a 1-p̃ window along "
          "f0 is a statement about the arrangement of regions, which no test reads"),
