@@ -178,7 +178,7 @@ def run_curves(args) -> int:
     from ..continuation.mapscale import SEED_TYPES
     from ..sweep.runner import setup_logging
     from ..sweep.signals import finished
-    from ..views.map_curves import curves_job, read_curves
+    from ..views.map_curves import curves_job, describe_curves, read_curves
 
     types = tuple(t.strip().upper() for t in args.types.split(",") if t.strip())
     unknown = [t for t in types if t not in SEED_TYPES]
@@ -197,9 +197,6 @@ def run_curves(args) -> int:
     if args.json:
         print(json.dumps({"store": str(path), "curves": [c.to_dict() for c in curves]}))
     else:
-        counts = {}
-        for c in curves:
-            counts[f"{c.type} of {c.n}-cycles"] = counts.get(f"{c.type} of {c.n}-cycles", 0) + 1
-        found = ", ".join(f"{v} {k}" for k, v in sorted(counts.items())) or "none"
-        print(f"{path}: {len(job.curves.tasks)} tasks, {len(curves)} curves ({found})")
+        print(f"{path}: {len(job.curves.tasks)} tasks, {len(curves)} curves "
+              f"({describe_curves(curves)})")  # fmt: skip
     return 0

@@ -101,13 +101,10 @@ def map_curves(ev: Evidence, plane: str) -> list:
     per evidence)."""
 
     def compute():
-        from ..sweep.runner import run_job
-        from ..views.map_curves import curves_job, read_curves
+        from ..views.map_curves import curves_beside
 
         job = ev.job(setups.plane_job(plane, ev.size, ev.tensile))
-        store = setups.run_plane(job, ev.stores)
-        run_job(curves_job(store))
-        return read_curves(store)
+        return curves_beside(setups.run_plane(job, ev.stores))
 
     return ev._keep(("map_curves", plane), compute)
 

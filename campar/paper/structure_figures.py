@@ -162,6 +162,7 @@ def counts_text(found) -> str:
 
 def draw_zooms(g, plane: str) -> None:
     from ..views.boundaries import store_boundaries
+    from ..views.map_curves import curves_beside, describe_curves
     from ..views.plot.maps import MapGrid
     from ..views.plot.zooms import Panel, plot_zoom_set
     from .gallery import MAP_FIGURES, PLANE_SYMBOLS
@@ -185,15 +186,17 @@ def draw_zooms(g, plane: str) -> None:
         zstore = compute(g, zjob)
         zparent, zarrays = store_labels(zstore)
         found = store_boundaries(zstore, omega=zoom.omega, trace=True)
+        continued = curves_beside(zstore)
         dw, ds = structure.spacing(zjob)
         panels.append(Panel(MapGrid.from_job(zparent), zarrays, found,
                             f"({zoom.key}) as the paper's {zoom.paper}: recomputed, "
                             f"Δω = {dw:.3g}, Δ{symbol} = {ds:.3g}", zoom.omega, zoom.second,
-                            zoom.key))  # fmt: skip
+                            zoom.key, continued=continued))  # fmt: skip
         texts.append(f"({zoom.key}) ω {zoom.omega[0]:g}–{zoom.omega[1]:g}, {symbol} "
                      f"{zoom.second[0]:g}–{zoom.second[1]:g}: {zoom.shows}; recomputed as "
-                     f"job {zjob.name}.yaml (Δω = {dw:.3g}, Δ{symbol} = {ds:.3g}); curves "
-                     f"{counts_text(found)}")  # fmt: skip
+                     f"job {zjob.name}.yaml (Δω = {dw:.3g}, Δ{symbol} = {ds:.3g}); typed "
+                     f"edges {counts_text(found)}; continued curves "
+                     f"{describe_curves(continued)}")  # fmt: skip
         recipes.append({"key": zoom.key, "paper": zoom.paper, "omega": list(zoom.omega),
                         "second": list(zoom.second), "job": f"{zjob.name}.yaml",
                         "store": str(zstore), "spacing": [dw, ds],
@@ -210,7 +213,8 @@ def draw_zooms(g, plane: str) -> None:
         f"own finer grid along the paper's path (its first column the chain along {symbol} "
         f"at ω = {parent.omega[0]:g} from the state the plane's path reaches at the window's "
         f"starting edge, its rows ω down from {parent.omega[0]:g} at the window's spacing), "
-        "drawn over its window only, its curves typed on its own cells: "
+        "drawn over its window only, its edges typed on its own cells and its PD, SN and G "
+        "curves continued from them (campar curves, lines): "
         + "; ".join(texts)
     )  # fmt: skip
     recipe = {"job": f"{job.name}.yaml", "store": str(store),

@@ -308,3 +308,28 @@ def read_curves(path, *, merge: bool = True) -> list:
         return found
     spacing = job.curves.tasks[0][0].spacing
     return [found[i] for i in merge_curves(found, plane, spacing)]
+
+
+def curves_beside(map_path, types=SEED_TYPES) -> list:
+    """The map's curves of ``types``: computed into the store beside it where not there
+    yet (``campar curves``, serial or under mpirun as the caller runs), then read back
+    (``read_curves``); [] where the map has no typed edge to seed from."""
+    from ..continuation import tasks  # noqa: F401 (registers a curves job's tile function)
+    from ..errors import JobError
+    from ..sweep.runner import run_job
+
+    try:
+        job = curves_job(map_path, types)
+    except JobError:
+        return []
+    run_job(job)
+    return read_curves(map_path)
+
+
+def describe_curves(curves) -> str:
+    """ "2 PD of 1-cycles, 1 SN of 3-cycles": how many curves of each type and period."""
+    counts: dict[str, int] = {}
+    for c in curves:
+        key = f"{c.type} of {c.n}-cycles"
+        counts[key] = counts.get(key, 0) + 1
+    return ", ".join(f"{v} {k}" for k, v in sorted(counts.items())) or "none"

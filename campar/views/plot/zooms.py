@@ -21,8 +21,8 @@ LEGEND_ROOM = 0.3  # width of the legend column, as a share of a map's
 
 @dataclass(frozen=True)
 class Panel:
-    """One map panel: the grid and arrays of its job, its typed curves (or None), its
-    heading, and the window it shows (None: the whole grid)."""
+    """One map panel: the grid and arrays of its job, its typed edges (or None), its
+    heading, the window it shows (None: the whole grid), and its continued curves."""
 
     grid: MapGrid
     arrays: dict
@@ -32,6 +32,7 @@ class Panel:
     second: tuple[float, float] | None = None
     key: str = ""  # the panel's letter, "c", "d", "e" ("": the main panel)
     windows: tuple = field(default_factory=tuple)  # (key, ω range, second range) to outline
+    continued: list | None = None  # continued bifurcation curves (campar curves) to overlay
 
 
 def outline(ax, key: str, omega, second) -> None:
@@ -59,7 +60,7 @@ def plot_zoom_set(main: Panel, zooms: list[Panel], *, title: str | None = None):
             figure.add_subplot(grid[k // 2, 2 * (k % 2) + 1]).set_axis_off()  # the room
             plot_map(panel.grid, panel.arrays, "labels", omega=panel.omega,
                      second=panel.second, ax=ax, title=panel.heading,
-                     curves=panel.curves)  # fmt: skip
+                     curves=panel.curves, continued=panel.continued)  # fmt: skip
             for key, omega, second in panel.windows:
                 outline(ax, key, omega, second)
         if title:
