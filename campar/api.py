@@ -97,7 +97,7 @@ def run(
     from .sweep.runner import run_job
 
     job = job_of(job, settings)  # before anything touches the disk
-    path = store or job.store
+    path = job.store if store is None else store  # an empty --store is refused, not ignored
     run_job(job, path, overwrite=overwrite, grace=grace, max_store=max_store,
             max_memory=max_memory)  # fmt: skip
     return Path(path)

@@ -33,6 +33,10 @@ class StoreDamaged(StoreError):
     exit_code = 65  # EX_DATAERR: the data is wrong
 
 
+class StoreDamageWarning(UserWarning):
+    """A store opened with damaged tiles: their cells read as not computed (``campar.open``)."""
+
+
 class StoreIOError(StoreError):
     """The operating system refused a read or write of the store (full disk, permissions)."""
 

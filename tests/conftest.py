@@ -249,3 +249,53 @@ def computed_store(tmp_path_factory, data: dict) -> tuple[Path, Job]:
     path = tmp_path_factory.mktemp(job.name) / f"{job.name}.zarr"
     runner.run_job(job, path)
     return path, job
+
+
+def guarded(pid: int) -> bool:
+    """campar's stop-signal handlers are installed in process ``pid`` (SIGUSR1 caught:
+    Python installs no handler of its own for it)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    mask = next(
+        (line.split()[1] for line in status.splitlines() if line.startswith("SigCgt:")), "0"
+    )
+    return bool(int(mask, 16) >> (signal.SIGUSR1 - 1) & 1)
+
+
+def campar_processes(root: int) -> list[int]:
+    """``root`` and its descendants that run campar: a run's ranks (mpirun's proxies start
+    them, each in a session of its own), or the serial run itself."""
+    children: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            parent = int(stat.read_text().rpartition(")")[2].split()[1])
+        except (OSError, IndexError, ValueError):
+            continue
+        children.setdefault(parent, []).append(int(stat.parent.name))
+    found, todo = [], [root]
+    while todo:
+        pid = todo.pop()
+        todo += children.get(pid, [])
+        try:
+            argv = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+        except OSError:
+            continue
+        if b"mpirun" not in argv[0] and any(b"campar.cli" in arg for arg in argv):
+            found.append(pid)
+    return found
+
+
+def wait_until_guarded(proc: subprocess.Popen, ranks: int, timeout: float = 120.0) -> float:
+    """Wait until ``ranks`` campar processes of ``proc`` (itself, or its ranks) have
+    installed campar's signal handlers (or ``proc`` ended); returns the seconds waited.
+    What a test that signals a run at start-up waits for, however slow the machine:
+    before it, Python's own start-up handles the signal (docs/stores.md)."""
+    start = time.monotonic()
+    while time.monotonic() - start < timeout and proc.poll() is None:
+        pids = campar_processes(proc.pid)
+        if len(pids) >= ranks and all(guarded(pid) for pid in pids):
+            break
+        time.sleep(0.002)
+    return time.monotonic() - start

@@ -42,7 +42,7 @@ def test_set_changes_the_job_as_an_edited_file_would(tmp_path, job_file):
 @pytest.mark.parametrize("setting, message", [
     ("sweep.omega.pointz=200",
      "--set: sweep.omega.pointz: unknown key; allowed here: from, to, points"),
-    ("sweep.omega.points=abc", "--set: sweep.omega.points: Input should be a valid integer"),
+    ("sweep.omega.points=abc", "--set: sweep.omega.points: must be a number, not text"),
     ("sweep.omega.points=0", "--set: sweep.omega.points: Input should be greater than or equal"),
     ("model.tensile=pull", "--set: model.tensile: Input should be 'clamp' or 'allow'"),
     ("modle.tensile=allow", "--set: modle: unknown key; allowed here: name, sweep"),

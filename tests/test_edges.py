@@ -147,8 +147,52 @@ def test_outputs_are_checked_before_anything_is_computed(tmp_path):
     (tmp_path / "file").write_text("")
     with pytest.raises(OutputError, match="cannot write"):
         writable_file(tmp_path / "file" / "below.png")  # a file where a folder must be
-    assert figure_file(tmp_path / "new" / "p.pdf").parent.is_dir()
-    assert not list((tmp_path / "new").iterdir())  # the probe is gone
+    with pytest.raises(OutputError, match="the folder .*new does not exist"):
+        figure_file(tmp_path / "new" / "p.pdf")  # never created: a typo makes no folders
+    assert not (tmp_path / "new").exists()
+    assert figure_file(tmp_path / "p.pdf") == tmp_path / "p.pdf"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]  # the probe is gone
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["plot", "STORE", "-o", "no/such/map.png"],
+        ["point", "--omega", "3", "--plot", "no/such/orbit.png"],
+        ["line", "--omega", "2:3", "--points", "3", "-o", "no/line.png"],
+        ["line", "--omega", "2:3", "--points", "3", "--npz", "no/line.npz"],
+        ["plot", "STORE", "-o", "file/map.png"],
+    ],
+    ids=["plot -o", "point --plot", "line -o", "line --npz", "a file as the folder"],
+)
+def test_an_output_in_a_missing_folder_is_one_line_and_creates_no_folder(
+    tmp_path, monkeypatch, capsys, args
+):
+    from damage import synthetic_store
+
+    from campar.cli import main
+
+    synthetic_store(tmp_path / "s.zarr")
+    (tmp_path / "file").write_text("")
+    monkeypatch.chdir(tmp_path)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    args = [str(tmp_path / "s.zarr") if a == "STORE" else a for a in args]
+    assert main(args) == OutputError.exit_code
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and ("does not exist" in err or "is a file, not a folder" in err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_a_store_below_a_file_is_named_as_such(tmp_path, capsys):
+    from campar.cli import main
+
+    (tmp_path / "plain.txt").write_text("")
+    job = tmp_path / "j.yaml"
+    job.write_text("name: x\nsweep: {omega: {from: 6, to: 1, points: 3}, "
+                   "mu_cn: {from: 0.9, to: 0.5, points: 2}}\n")  # fmt: skip
+    assert main(["run", str(job), "--store", str(tmp_path / "plain.txt" / "s.zarr")]) == 74
+    err = capsys.readouterr().err
+    assert "plain.txt is a file, not a folder" in err and "File exists" not in err
 
 
 def test_plot_and_point_refuse_a_bad_output_in_one_line(tmp_path, capsys):
@@ -334,3 +378,22 @@ def test_status_and_verify_memory_does_not_grow_with_the_grid(tmp_path):
     for command in ("status", "verify"):
         grown = peak_rss_mb(command, str(large)) - peak_rss_mb(command, str(small))
         assert grown < 40, f"campar {command}: {grown:.0f} MB more for 4× the cells"
+
+
+def test_an_hdf5_store_with_a_second_name_is_refused_untouched(tmp_path):
+    """A hard link is another name the lock does not know: a second run through it would
+    write the same file. Refused, the store left as it was."""
+    from damage import synthetic_store
+    from test_store import snapshot
+
+    from campar.errors import StoreError
+
+    path = tmp_path / "s.h5"
+    job = synthetic_store(path)
+    os.link(path, tmp_path / "other.h5")
+    before = snapshot(path)
+    with pytest.raises(StoreError, match="2 names \\(hard links\\)"):
+        open_store(tmp_path / "other.h5", job)
+    with pytest.raises(StoreError, match="hard links"):
+        open_store(path, job)
+    assert snapshot(path) == before

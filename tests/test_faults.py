@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import MPIRUN, assert_same_map, kill_tree, subprocess_env
+from conftest import MPIRUN, assert_same_map, kill_tree, subprocess_env, wait_until_guarded
 from damage import (
     DAMAGE,
     assert_synthetic,
@@ -41,7 +41,6 @@ from campar.sweep.store import _hdf5 as h5
 
 ROUNDS = int(os.environ.get("CAMPAR_FAULT_ROUNDS", "1"))
 BACKENDS = [".zarr", ".h5"]
-STARTUP = 0.2  # seconds before campar's first line runs, with margin (Python's start-up)
 BAD_WORDS = ("Traceback", "Segmentation", "BAD TERMINATION", "Exception ignored", "HDF5-DIAG")
 
 
@@ -198,16 +197,33 @@ def start_run(job_file: Path, mpi: bool) -> subprocess.Popen:
                             env=subprocess_env(), start_new_session=True)  # fmt: skip
 
 
-def interrupt_until_complete(job_file, job, mpi: bool, rng, how: str) -> dict:
+def timed_run(job_file: Path, mpi: bool) -> tuple[float, float]:
+    """(seconds until campar's handlers are in place, seconds of the whole run) of one
+    uninterrupted run, measured here: the windows of the interruptions scale with this
+    machine's speed, whatever its load."""
+    start = time.monotonic()
+    proc = start_run(job_file, mpi)
+    guarded_after = wait_until_guarded(proc, ranks=2 if mpi else 1)
+    _, err = proc.communicate(timeout=600)
+    assert proc.returncode == 0, err[-2000:]
+    return guarded_after, time.monotonic() - start
+
+
+def interrupt_until_complete(job_file, job, mpi: bool, rng, how: str, timing) -> dict:
     """Run the job again and again, each run killed (SIGKILL to every process) or signalled
     (SIGTERM/SIGINT/SIGUSR1 to the process group) at a random moment, until one completes;
-    then the map must equal the uninterrupted one, bit for bit."""
+    then the map must equal the uninterrupted one, bit for bit. ``timing``: ``timed_run``'s
+    measure of this job here; every moment is drawn within 1.2 times it, so each run has
+    its chance to commit tiles on a slow machine as on a fast one."""
+    guarded_after, whole = timing
     counts = {"runs": 0, "interrupted": 0}
     for _ in range(60):
         proc = start_run(job_file, mpi)
-        # Signals from the moment campar's first line runs (Python's own start-up, a few
-        # tens of ms, keeps the system's defaults: signals.py); kills from the first instant.
-        time.sleep(rng.uniform(0.0 if how == "kill" else STARTUP, 4.0 if mpi else 3.0))
+        if how == "kill":  # from the first instant
+            time.sleep(rng.uniform(0.0, 1.2 * whole))
+        else:  # from campar's first handler on: before it, Python's own start-up
+            wait_until_guarded(proc, ranks=2 if mpi else 1)
+            time.sleep(rng.uniform(0.0, 1.2 * (whole - guarded_after)))
         if proc.poll() is None:
             if how == "kill":
                 kill_tree(proc.pid)
@@ -244,10 +260,12 @@ def test_runs_interrupted_at_random_moments_resume_bitwise_identical(
         pytest.skip(f"no mpirun at {MPIRUN}")
     rng = np.random.default_rng([len(suffix), mpi, len(how)])
     total = {"runs": 0, "interrupted": 0, "campaigns": 0}
+    timing = timed_run(write_job(name="timed", slow=True, store=str(tmp_path / f"t{suffix}"))[0],
+                       mpi)  # fmt: skip
     for campaign in range(2 * ROUNDS):
         store = tmp_path / f"c{campaign}{suffix}"
         job_file, job = write_job(name=f"c{campaign}", slow=True, store=str(store))
-        counts = interrupt_until_complete(job_file, job, mpi, rng, how)
+        counts = interrupt_until_complete(job_file, job, mpi, rng, how, timing)
         total = {k: total[k] + counts.get(k, 1) for k in total}
     report(kind=how, backend=suffix, mpi=mpi, identical=total["campaigns"], **total)
 

@@ -134,3 +134,124 @@ def test_the_defaults_jobs_readme_states_are_the_job_models():
             continue
         checked += 1
     assert checked >= 25, checked
+
+
+# The job files an adversary tried (issue 31): each one line naming the key, exit 2, nothing
+# written anywhere. (case, file bytes, words the line must hold)
+ALIAS_BOMB = (
+    "outputs: [&a0 [x,x,x,x,x,x,x,x,x], "
+    + ", ".join(f"&a{i} [" + ",".join([f"*a{i - 1}"] * 9) + "]" for i in range(1, 9))
+    + "]\n"
+)
+HOSTILE = [
+    ("a billion rows a tile", f"name: x\n{GOOD_SWEEP}\ntiles: {{rows: 1000000000}}\n",
+     ["tiles.rows:", "100000"]),
+    ("31-digit rows", f"name: x\n{GOOD_SWEEP}\ntiles: {{rows: {'1' * 31}}}\n",
+     ["line 3", "31 digits"]),
+    ("5000-digit integer", f"name: x\n{GOOD_SWEEP}\nclassify: {{n_max: {'9' * 5000}}}\n",
+     ["5000 digits"]),
+    ("max_steps beyond 64 bits", f"name: x\n{GOOD_SWEEP}\n"
+     "integrator: {max_steps: 100000000000000000000}\n", ["integrator.max_steps:"]),
+    ("store /", f"name: x\n{GOOD_SWEEP}\nstore: /\n", ["store:", "names a folder"]),
+    ("store ''", f"name: x\n{GOOD_SWEEP}\nstore: ''\n", ["store: an empty path"]),
+    ("store ..", f"name: x\n{GOOD_SWEEP}\nstore: ..\n", ["store:", "names a folder"]),
+    ("store with NUL", f'name: x\n{GOOD_SWEEP}\nstore: "a\\0b.zarr"\n', ["store:", "NUL"]),
+    ("complex key", f"name: x\n{GOOD_SWEEP}\n? [1, 2]\n: 3\n", ["line 3", "a key must be a name"]),
+    ("alias bomb", f"name: x\n{GOOD_SWEEP}\n{ALIAS_BOMB}", ["aliases expand to over"]),
+    ("alias bomb as name", "name: " + ALIAS_BOMB.removeprefix("outputs: ") + GOOD_SWEEP + "\n",
+     ["aliases expand"]),
+    ("recursive alias", f"name: x\n{GOOD_SWEEP}\noutputs: &a [label, *a]\n",
+     ["contains itself"]),
+    ("basin from NaN", "name: x\nsweep: {y0: {from: .nan, to: 1, points: 3}, "
+     "ydot0: {from: -1, to: 1, points: 2}}\nfixed: {omega: 3}\n", ["sweep.y0.from:", "finite"]),
+    ("basin to infinity", "name: x\nsweep: {y0: {from: 0, to: .inf, points: 3}, "
+     "ydot0: {from: -1, to: 1, points: 2}}\nfixed: {omega: 3}\n", ["sweep.y0.to:", "finite"]),
+    ("basin out of range", "name: x\nsweep: {y0: {from: 0, to: 1, points: 3}, "
+     "ydot0: {from: -1.0e300, to: 1.0e300, points: 2}}\nfixed: {omega: 3}\n",
+     ["ydot0.from", "1000"]),
+    ("points as text", "name: x\nsweep: {omega: {from: 6, to: 1, points: '4'}, "
+     "mu_cn: {from: 0.9, to: 0.5, points: 3}}\n", ["sweep.omega.points:", "not text"]),
+    ("rtol as text", f"name: x\n{GOOD_SWEEP}\nintegrator: {{rtol: '1e-9'}}\n",
+     ["integrator.rtol:", "not text"]),
+    ("a fixed parameter as text", f"name: x\n{GOOD_SWEEP}\nfixed: {{zeta: '0.1'}}\n",
+     ["fixed:", "not text"]),
+    ("an empty axis", "name: x\nsweep: {omega: {}, mu_cn: {from: 0.9, to: 0.5, points: 3}}\n",
+     ["sweep.omega: required keys are missing: from, to, points"]),
+    ("YAML syntax", "name: x\nsweep: [\n", ["not valid YAML: line 4, column 1:"]),
+    ("infinite setting", f"name: x\n{GOOD_SWEEP}\ntransient: {{jump_cap: .inf}}\n",
+     ["transient.jump_cap:", "finite"]),
+]  # fmt: skip
+HOSTILE_BYTES = [
+    ("Latin-1", f"name: café\n{GOOD_SWEEP}\n".encode("latin-1"), ["not UTF-8", "0xe9"]),
+    ("binary", bytes(range(256)) * 4, ["not UTF-8"]),
+    ("NUL bytes", b"name: x\0\0\n", ["not valid YAML"]),
+    ("huge", b"name: x\n#" + b"x" * (2 << 20) + b"\n", ["bytes; a job file is at most"]),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "data,expected",
+    [(c[1].encode(), c[2]) for c in HOSTILE] + [c[1:] for c in HOSTILE_BYTES],
+    ids=[c[0] for c in HOSTILE + HOSTILE_BYTES],
+)
+def test_hostile_job_files_are_one_line_exit_2_and_write_nothing(
+    tmp_path, monkeypatch, capsys, data, expected
+):
+    import time
+
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)  # a store path of '' or . would land here
+    job = tmp_path / "bad.yaml"
+    job.write_bytes(data if b"store:" in data or not data.startswith(b"name") else
+                    data + b"store: out.zarr\n")  # fmt: skip
+    start = time.monotonic()
+    assert main(["run", str(job)]) == 2
+    assert time.monotonic() - start < 5
+    err = capsys.readouterr().err
+    assert err.startswith(f"campar run: job file {job}: ") and err.count("\n") == 1, err
+    for words in expected:
+        assert words in err, err
+    assert list(work.iterdir()) == [] and sorted(p.name for p in tmp_path.iterdir()) == [
+        "bad.yaml",
+        "work",
+    ]
+
+
+def test_yaml_12_floats_are_numbers_and_quoted_numbers_are_not(tmp_path):
+    path = tmp_path / "j.yaml"
+    path.write_text(f"name: x\n{GOOD_SWEEP}\nintegrator: {{rtol: 1e-9, atol: 1E-12}}\n")
+    job = load_job(path)
+    assert job.integrator.rtol == 1e-9 and job.integrator.atol == 1e-12
+
+
+def test_a_store_path_given_on_the_command_line_is_checked_too(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "job.yaml").write_text(f"name: x\n{GOOD_SWEEP}\nstore: x.zarr\n")
+    for bad, words in (("", "an empty path"), ("/", "names a folder"), ("a\0b", "NUL")):
+        assert main(["run", "job.yaml", "--store", bad]) == 2
+        err = capsys.readouterr().err
+        assert words in err and err.count("\n") == 1, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["job.yaml"]
+
+
+def test_the_memory_estimate_counts_a_tile_chunk_past_the_grid(tmp_path, capsys):
+    """rows far beyond the grid's rows: each chunk still spans them (zarr fills a whole
+    chunk in memory), so the estimate refuses what would exhaust memory."""
+    path = tmp_path / "j.yaml"
+    path.write_text(f"name: x\n{GOOD_SWEEP}\ntiles: {{rows: 100000}}\n"
+                    "outputs: [label, sections]\nclassify: {n_max: 256}\n"
+                    f"store: {tmp_path / 'x.zarr'}\n")  # fmt: skip
+    assert main(["run", str(path), "--max-memory", "1G"]) == 2
+    err = capsys.readouterr().err
+    assert "each rank would need" in err and err.count("\n") == 1, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["j.yaml"]
+
+
+@pytest.mark.parametrize("grace", ["nan", "-1", "inf", "soon"])
+def test_a_grace_that_is_no_duration_is_refused(tmp_path, capsys, grace):
+    (tmp_path / "job.yaml").write_text(f"name: x\n{GOOD_SWEEP}\nstore: {tmp_path / 'x.zarr'}\n")
+    with pytest.raises(SystemExit) as exit_:
+        main(["run", str(tmp_path / "job.yaml"), "--grace", grace])
+    assert exit_.value.code == 2 and "argument --grace" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["job.yaml"]

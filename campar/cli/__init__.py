@@ -10,12 +10,21 @@ share (the model's parameters and options), defined once.
 May import every layer of campar (it is the top one).
 """
 
-import argparse
-import difflib
-import gc
 import os
-import re
 import sys
+
+from ..sweep.signals import guard_program
+
+# The program (the ``campar`` script, or ``python -m campar.cli``), not a library importing
+# this package: from this first line on a stop signal is one line, never a traceback.
+MAIN_FILE = os.path.basename(getattr(sys.modules.get("__main__"), "__file__", None) or "")
+if MAIN_FILE == "campar" or sys.orig_argv[1:3] == ["-m", "campar.cli"]:
+    guard_program()
+
+import argparse  # noqa: E402
+import difflib  # noqa: E402
+import gc  # noqa: E402
+import re  # noqa: E402
 
 # Before numpy is imported: one OpenBLAS thread. campar's work runs on its own threads and
 # ranks, and BLAS only ever sees tiny matrices; numpy's and SciPy's OpenBLAS pools (SciPy

@@ -16,6 +16,19 @@ exit codes:
 """
 
 
+def seconds(text: str) -> float:
+    """A duration flag: a finite number ≥ 0 (argparse says what is wrong in one line)."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number of seconds ≥ 0, got {text}")
+    return value
+
+
 def add_run(sub):
     p = sub.add_parser(
         "run", help="compute a job's map into its store (resumes; MPI under mpirun)",
@@ -34,7 +47,7 @@ def add_run(sub):
                    help="with --dry-run: plan for N MPI ranks (1)")  # fmt: skip
     p.add_argument("--store", metavar="PATH", help="result store (default: the job's store:)")
     p.add_argument("--overwrite", action="store_true", help="replace a store of another job")
-    p.add_argument("--grace", type=float, default=30.0, metavar="SECONDS",
+    p.add_argument("--grace", type=seconds, default=30.0, metavar="SECONDS",
                    help="after a signal, wait so long for tiles in flight (30)")  # fmt: skip
     from ..sweep.budget import DEFAULT_MAX_MEMORY, DEFAULT_MAX_STORE, format_size, parse_size
 

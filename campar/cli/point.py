@@ -142,8 +142,8 @@ def format_cycle(orbit) -> str:
         f"{orbit.label} cycle ({stability}) at {par}",
         f"  section points: {points}",
         f"  Floquet multipliers: {mult}",
-        f"  residual |P^n(x) - x| {orbit.residual:.1e} after {orbit.iterations} Newton "
-        f"iterations; duty cycle {orbit.dc:.4f}, ε min {orbit.eps_min:.4f}, "
+        f"  |P^n(x) - x| ≤ 1e-10 after {orbit.iterations} Newton iterations (--json: "
+        f"its value); duty cycle {orbit.dc:.4f}, ε min {orbit.eps_min:.4f}, "
         f"ε max {orbit.eps_max:.4f}, Pn max {orbit.pn_max:.4f}",
     ])  # fmt: skip
 

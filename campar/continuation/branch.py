@@ -11,24 +11,28 @@ the parameter column of the last accepted point (a chord in that column only: on
 integration an iterate instead of three, still converging to newton_tol in 2–4).
 
 Step control: a step whose corrector fails, or whose tangent turns by more than
-``max_turn``, is retried with half the step; a step that converged in ≤ 2 iterates lets
-the next one grow by 1.5, up to ``max_step``. Between consecutive points the test
-functions of campar.continuation.special detect PD, SN, BP, NS and G points, which are
-then located on the branch.
+``max_turn``, is retried with half the step; a step that converged in ≤ 4 iterates lets
+the next one grow by 1.5, up to ``max_step``, one that took more than 5 shrinks it by 0.7
+(near grazing Pⁿ is only C¹ and Newton converges linearly: 4 iterates are normal there).
+A corrector that moves farther from its predictor than the step itself is refused too: on
+a strongly unstable branch (|μ| in the thousands) Newton's basin is narrow, and a long
+step lands on another branch. Between consecutive points the test functions of
+campar.continuation.special detect PD, SN, BP, NS and G points, which are then located on
+the branch.
 
 The branch ends where it leaves the parameter window, reaches ``max_points``, where the
 step falls below ``min_step`` (no point found ahead), where its parameter leaves the
-model's range, or where the orbit's minimal period drops (a doubled branch returning
-onto the branch it was born from).
+model's range, where a doubled branch returns onto the branch it was born from, or where
+it closes on itself (an isola between two folds).
 """
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..errors import ContinuationError
-from .orbit import PeriodicOrbit, orbit_at, section_points
+from .orbit import PeriodicOrbit, newton, orbit_at, section_points
 from .section_map import PARAMETER_ORDER, SectionMap, Shot, in_range, parameter_index
 from .special import (
     LOCATE_TOL,
@@ -39,6 +43,9 @@ from .special import (
     illinois,
     test_function,
 )
+
+GROW_ITERATIONS = 4  # a step whose corrector took at most this many iterates may grow
+CHORD_RATE = 0.01  # a corrector iterate must cut the residual this much, or the column is renewed
 
 
 @dataclass(frozen=True)
@@ -55,7 +62,7 @@ class BranchSettings:
     max_step: float = 0.05
     max_points: int = 5000
     max_turn: float = 0.5
-    max_newton: int = 6
+    max_newton: int = 8
 
 
 @dataclass
@@ -115,6 +122,7 @@ class Branch:
     switch_failures: list[str] = field(default_factory=list)
     shots: int = 0  # integrations of n revolutions it took
     returned: bool = False  # ended where it returned onto the branch of period n/2
+    closed: bool = False  # a closed loop, ended back at its first point
 
     @property
     def labels(self) -> list[str]:
@@ -171,6 +179,7 @@ class Continuation:
         self.lo, self.hi = sorted(window)
         self.settings = settings or BranchSettings()
         self.returned = False  # the last run ended on the branch of period n/2
+        self.closed = False  # the last run went round a closed loop
 
     # -- points ----------------------------------------------------------------------
     def parameters_at(self, lam: float) -> np.ndarray:
@@ -202,28 +211,35 @@ class Continuation:
                 column: np.ndarray) -> tuple[np.ndarray, Shot, int] | None:  # fmt: skip
         """Newton on Pⁿ(x; λ) − x = 0 with normal·(u − anchor) = 0, from ``guess``.
 
+        The parameter column starts as ``column`` (the last point's) and is recomputed at
+        the iterate whenever the residual fell by less than CHORD_RATE: near a strongly
+        unstable cycle (|μ| ≫ 1) a stale column makes the iteration crawl.
         Returns (u, shot at u, iterates) or None when it does not converge, leaves the
         model's parameter range or the integration fails.
         """
         tol = self.smap.precision.newton_tol
         u = guess.copy()
+        previous = math.inf
         for iteration in range(self.settings.max_newton + 1):
             if not in_range(self.name, u[2]):
                 return None
             try:
                 shot = self.smap.shoot(u[:2], self.parameters_at(u[2]), self.n)
+                size = np.max(np.abs(shot.residual))
+                if size <= tol:
+                    return u, shot, iteration
+                if iteration == self.settings.max_newton:
+                    return None
+                if size > CHORD_RATE * previous:
+                    column = self.column(u)
             except ContinuationError:
                 return None
-            residual = shot.residual
-            if np.max(np.abs(residual)) <= tol:
-                return u, shot, iteration
-            if iteration == self.settings.max_newton:
-                return None
+            previous = size
             system = np.zeros((3, 3))
             system[:2, :2] = shot.jacobian - np.eye(2)
             system[:2, 2] = column
             system[2] = normal
-            rhs = np.concatenate([-residual, [-np.dot(normal, u - anchor)]])
+            rhs = np.concatenate([-shot.residual, [-np.dot(normal, u - anchor)]])
             try:
                 step = np.linalg.solve(system, rhs)
             except np.linalg.LinAlgError:
@@ -248,6 +264,7 @@ class Continuation:
         special points and why it ended."""
         cfg = self.settings
         points = [start]
+        farthest = 0.0  # from the first point
         special: list[SpecialPoint] = []
         ds = min(cfg.step, cfg.max_step)
         end = f"reached {cfg.max_points} points (max_points)"
@@ -256,10 +273,13 @@ class Continuation:
             predicted = a.u + ds * a.tangent
             found = self.correct(predicted, a.tangent, predicted, a.column)
             b = None
-            if found is not None:
+            if found is not None and np.linalg.norm(found[0] - predicted) <= ds:
                 u, shot, iterations = found
-                b = self.point(u, shot, a.tangent, a.s + ds)
-                if np.dot(a.tangent, b.tangent) < math.cos(cfg.max_turn):
+                try:
+                    b = self.point(u, shot, a.tangent, a.s + ds)
+                except ContinuationError:  # the parameter column's integration failed
+                    b = None
+                if b is not None and np.dot(a.tangent, b.tangent) < math.cos(cfg.max_turn):
                     b = None  # turned too sharply: a step this long may jump branches
             if b is None:
                 ds *= 0.5
@@ -292,9 +312,17 @@ class Continuation:
                 end = f"left the window at {self.name}={edge:.10g}"
                 break
             points.append(b)
-            if iterations <= 2:
+            # a closed loop (an isola): back within a step of the first point, after having
+            # gone farther from it than four steps
+            distance = float(np.linalg.norm(b.u - start.u))
+            if farthest > 4.0 * ds and distance <= ds:
+                self.closed = True
+                end = "closed: the branch is a loop, back at its first point"
+                break
+            farthest = max(farthest, distance)
+            if iterations <= GROW_ITERATIONS:
                 ds = min(1.5 * ds, cfg.max_step)
-            elif iterations >= 4:
+            elif iterations > GROW_ITERATIONS + 1:
                 ds *= 0.7
         special.sort(key=lambda sp: sp.arclength)
         return points, special, end
@@ -309,27 +337,41 @@ class Continuation:
         return float(np.dot(half_difference(a), half_difference(b))) < 0.0
 
     def vertex(self, a: BranchPoint, b: BranchPoint) -> BranchPoint | None:
-        """The branch point between a and b where the halves' difference vanishes."""
-        reference = half_difference(a)
-        span = b.s - a.s
-        cache = {0.0: a, span: b}
+        """The PD point of the n/2-cycles where this branch, between a and b, meets them.
 
-        def sigma(s):
-            if s not in cache:
-                pt = self.along(a, s)
-                if pt is None:
-                    raise ContinuationError(f"no branch point at arclength {s} past {a.u}")
-                cache[s] = pt
-            return float(np.dot(half_difference(cache[s]), reference))
-
-        def small(s0, s1):
-            return abs(cache[s0].u[2] - cache[s1].u[2]) <= LOCATE_TOL and abs(s1 - s0) <= 1e-9
-
+        The arclength plane of a and b cuts the n/2-cycles as well as the doubled branch,
+        so the point is not sought on this branch: the n/2-cycle through a's state is
+        solved for and its branch continued across [a, b] widened fourfold, with the PD
+        point located there (to LOCATE_TOL). None when that fails.
+        """
+        half = Continuation(self.smap, self.par, self.name, self.n // 2, (self.lo, self.hi),
+                            self.settings)  # fmt: skip
+        lam_a, lam_b = sorted((a.u[2], b.u[2]))
+        width = 4.0 * max(lam_b - lam_a, 1e-4)
+        window = (lam_a - width, lam_b + width)
         try:
-            s = illinois(sigma, 0.0, span, sigma(0.0), sigma(span), small)
+            shot, _ = newton(self.smap, a.u[:2], self.parameters_at(a.u[2]), self.n // 2, 12)
+            orbit = orbit_at(self.smap, shot, self.parameters_at(a.u[2]), self.n // 2)
+            half.lo, half.hi = window
+            half.settings = replace(self.settings, step=width / 8, max_step=width / 8,
+                                    max_points=80)  # fmt: skip
+            start = half.first_point(orbit, 1.0 if b.u[2] > a.u[2] else -1.0)
+            _, special, _ = half.run(start)
+            if not any(sp.type == PD for sp in special):
+                start = half.first_point(orbit, -1.0 if b.u[2] > a.u[2] else 1.0)
+                _, special, _ = half.run(start)
         except ContinuationError:
             return None
-        return cache[s]
+        pds = [sp for sp in special if sp.type == PD]
+        if not pds:
+            return None
+        pd = min(pds, key=lambda sp: abs(sp.value - 0.5 * (lam_a + lam_b)))
+        u = np.array([*pd.state, pd.value])
+        try:
+            end = self.smap.shoot(u[:2], self.parameters_at(u[2]), self.n)
+        except ContinuationError:
+            return None
+        return self.point(u, end, a.tangent, b.s)
 
     def at_value(self, a: BranchPoint, value: float) -> BranchPoint | None:
         """The branch point at parameter ``value`` past a (corrected with λ fixed)."""
@@ -342,7 +384,10 @@ class Continuation:
         if found is None:
             return None
         u, shot, _ = found
-        return self.point(u, shot, a.tangent, a.s + ds)
+        try:
+            return self.point(u, shot, a.tangent, a.s + ds)
+        except ContinuationError:
+            return None
 
     # -- special points ---------------------------------------------------------------
     def along(self, a: BranchPoint, s: float) -> BranchPoint | None:
@@ -352,7 +397,10 @@ class Continuation:
         if found is None:
             return None
         u, shot, _ = found
-        return self.point(u, shot, a.tangent, a.s + s)
+        try:
+            return self.point(u, shot, a.tangent, a.s + s)
+        except ContinuationError:
+            return None
 
     def locate(self, a: BranchPoint, b: BranchPoint,
                kind: str) -> tuple[SpecialPoint, BranchPoint] | None:  # fmt: skip
@@ -475,6 +523,15 @@ def continue_branch(orbit: PeriodicOrbit, parameter: str, window: tuple[float, f
     Branch
         Its points, special points (PD, SN, BP, NS, G, located to 1e-10 in the
         parameter) and why it ended.
+
+    Examples
+    --------
+    >>> from campar.continuation.orbit import find_cycle
+    >>> from campar.continuation.branch import continue_branch
+    >>> orbit = find_cycle(1, (0.6, -0.6), omega=4.0, mu_kn=0.91)
+    >>> branch = continue_branch(orbit, "omega", (3.0, 4.0))
+    >>> [(sp.type, round(sp.value, 6)) for sp in branch.special], branch.end
+    ([('PD', 3.542608)], 'left the window at omega=3')
     """
     smap = section_map or SectionMap(orbit.model)
     par = np.array([orbit.parameters[name] for name in PARAMETER_ORDER])
@@ -521,6 +578,7 @@ def assemble(engine: Continuation, points: list[BranchPoint], special: list[Spec
         origin=origin,
         shots=shots,
         returned=engine.returned,
+        closed=engine.closed,
     )
 
 

@@ -319,6 +319,17 @@ def continue_curve(sp: SpecialPoint, second: str, window, *,
     -------
     BifurcationCurve
         Its points in order along the curve (through the seed).
+
+    Examples
+    --------
+    >>> from campar.continuation.orbit import find_cycle
+    >>> from campar.continuation.branch import continue_branch
+    >>> from campar.continuation.curves import continue_curve
+    >>> orbit = find_cycle(1, (0.6, -0.6), omega=4.0, mu_kn=0.91)
+    >>> pd = continue_branch(orbit, "omega", (3.0, 4.0)).special[0]
+    >>> curve = continue_curve(pd, "mu_kn", ((3.0, 4.0), (0.9, 0.92)))
+    >>> curve.type, curve.values[0].round(4).tolist(), curve.values[-1].round(4).tolist()
+    ('PD', [3.4248, 0.9], [3.6649, 0.92])
     """
     if sp.type not in CURVE_TYPES:
         raise ContinuationError(f"no curve of {sp.type} points; one of {', '.join(CURVE_TYPES)}")

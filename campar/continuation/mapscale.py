@@ -29,8 +29,8 @@ from .orbit import find_cycle
 from .section_map import SectionMap
 
 SEED_TYPES = ("PD", "SN", "G")  # the map types a curve is seeded from (the model has no NS)
-GROUP_CELLS = 3  # seed cells of one type and period this close (in cells) are one curve
-CANDIDATES = 4  # seeds of a group tried in turn
+GROUP_CELLS = 6  # seed cells of one type and period this close (in cells) are one task
+CANDIDATES = 8  # seeds of a group tried in turn (those a found curve passes near are skipped)
 SAME_CURVE_CELLS = 1.5  # a curve whose points all lie this close to another is that curve
 
 

@@ -109,6 +109,13 @@ def find_cycle(n: int, guess, *, section_map: SectionMap | None = None,
         Newton did not converge to ‖Pⁿ(x) − x‖∞ ≤ newton_tol from this guess.
     JobError
         A parameter is unknown or out of range.
+
+    Examples
+    --------
+    >>> from campar.continuation.orbit import find_cycle
+    >>> orbit = find_cycle(1, (0.54, -0.72), omega=3.54, mu_kn=0.91)
+    >>> orbit.label, orbit.stable, round(orbit.multipliers[0].real, 6)
+    ('1-1', False, -1.003854)
     """
     if n < 1:
         raise ContinuationError(f"the period must be ≥ 1 revolution, got {n}")

@@ -49,7 +49,7 @@ class Precision:
     method: str = "dop853"
     newton_tol: float = 1e-10
     max_newton: int = 8
-    fd_step: float = 1e-5
+    fd_step: float = 1e-7
 
 
 @dataclass(frozen=True)

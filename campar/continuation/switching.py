@@ -65,7 +65,8 @@ def continue_with_switching(orbit: PeriodicOrbit, parameter: str, window, depth:
                             direction: float | None = None,
                             section_map: SectionMap | None = None,
                             settings: BranchSettings | None = None,
-                            switched: list | None = None) -> Branch:  # fmt: skip
+                            switched: list | None = None,
+                            max_period: int = MAX_PERIOD) -> Branch:  # fmt: skip
     """The branch of ``orbit`` and, ``depth`` doublings deep, the branches born at its PD
     points (each a child of the branch it was switched from: ``Branch.children``).
 
@@ -73,7 +74,16 @@ def continue_with_switching(orbit: PeriodicOrbit, parameter: str, window, depth:
     ended (the far end of a period-doubling bubble), it is not switched again. Several
     calls share that record through ``switched`` (a list of (period, parameter value)).
     Where no doubled branch could be started, the reason is kept in the branch's
-    ``switch_failures``.
+    ``switch_failures``. No branch of period above ``max_period`` is switched onto.
+
+    Examples
+    --------
+    >>> from campar.continuation.orbit import find_cycle
+    >>> from campar.continuation.switching import continue_with_switching
+    >>> orbit = find_cycle(1, (0.6, -0.6), omega=4.0, mu_kn=0.91)
+    >>> root = continue_with_switching(orbit, "omega", (2.0, 4.0), 1)
+    >>> [(branch.n, branch.returned) for branch in root.walk()]
+    [(1, False), (2, True)]
     """
     smap = section_map or SectionMap(orbit.model)
     settings = settings or BranchSettings()
@@ -87,7 +97,7 @@ def continue_with_switching(orbit: PeriodicOrbit, parameter: str, window, depth:
         if left <= 0:
             continue
         for sp in branch.special:
-            if sp.type != PD or count >= MAX_BRANCHES or 2 * sp.n > MAX_PERIOD:
+            if sp.type != PD or count >= MAX_BRANCHES or 2 * sp.n > max_period:
                 continue
             if any(n == sp.n and abs(v - sp.value) < SAME_POINT for n, v in switched):
                 continue

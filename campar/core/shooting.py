@@ -29,7 +29,8 @@ from .analysis import (
     REV_TOUCH,
 )
 from .codes import NONFINITE, OK
-from .integrator import CTRL_H, SolverOptions, initial_step, make_work
+from .entry_steps import forget
+from .integrator import SolverOptions, initial_step, make_work, restart_control
 from .model import (
     MAX_EVENTS,
     N_STATE_VARIATIONAL,
@@ -133,7 +134,11 @@ def shoot_compiled(par, law, n, solver, rk4_steps, max_steps, link, x, f, w, mod
     eps, deps = gap(0.0, x, p, mode[0])  # not RISE: numba would compile a variant for the literal
     mode[1] = contact_mode(eps, deps, p)
     model.rhs(0.0, x, p, mode, f)
-    w.ctrl[CTRL_H] = initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol, 2, 0.1)
+    # a shot is a function of (x, parameters, n) alone: no step size, error history or
+    # remembered entry step of an earlier shot (difference quotients of Pⁿ stay smooth)
+    restart_control(w, initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol,
+                                    2, 0.1))  # fmt: skip
+    forget(w.h_memory)
     variational = x.shape[0] == N_STATE_VARIATIONAL
     m0, m1, m2, m3 = 1.0, 0.0, 0.0, 1.0
     detach = 0.0

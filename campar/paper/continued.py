@@ -7,7 +7,7 @@ diagrams. campar decides them on the cycles themselves, stable and unstable
 
 - the branch structure at μkn = 0.91 along ω from 6 down to 2 (``Evidence.structure``):
   every periodic attractor met on the paper's path and by a census of starts at nine
-  speeds, each continued both ways with branch switching five doublings deep;
+  speeds, each continued both ways with branch switching, up to cycles of 16 revolutions;
 - the PD and G curves of the (ω, μkn) and (ω, μcn) planes, seeded from the maps' typed
   edges (``Evidence.map_curves``).
 """
@@ -19,7 +19,8 @@ from .claims import Evidence, Verdict, fmt
 
 STRUCTURE_WINDOW = (2.0, 6.0)
 STRUCTURE_POINTS = 400  # the line's cells over the window (its seeds)
-SWITCH_DEPTH = 5
+SWITCH_DEPTH = 4
+MAX_PERIOD = 16  # the cascade's first four doublings: enough to see Feigenbaum's ratio
 CENSUS_STARTS = 8
 NS_WINDOW = (3.1, 3.3)  # where the paper places its Hopf point (ω = 3.208583)
 
@@ -38,7 +39,8 @@ def structure(ev: Evidence):
 
         model = {"tensile": ev.tensile, **ev.options}
         return line_structure(STRUCTURE_WINDOW, STRUCTURE_POINTS, {"mu_kn": setups.FIG6_MU_KN},
-                              switch=SWITCH_DEPTH, census=CENSUS_STARTS, model=model)  # fmt: skip
+                              switch=SWITCH_DEPTH, census=CENSUS_STARTS,
+                              max_period=MAX_PERIOD, model=model)  # fmt: skip
 
     return ev._keep(("structure", setups.FIG6_MU_KN), compute)
 

@@ -1,7 +1,8 @@
 """The sweep machinery: from a job file to a finished, resumable store of a map.
 
 - ``job``: the YAML schema, the paper's base values and every default, validation;
-  ``job_file``: a job file's YAML read strictly and pydantic's findings in one line each;
+  ``job_file``: a job file read with bounds (size, encoding, keys, aliases, numbers, store
+  paths), its problems in one line;
 - ``plan``: tiles and continuation chains of the grid, pending tiles;
 - ``arrays``: what each requested output stores (names, dtypes, shapes);
 - ``tile``: one tile through the kernel (``run_tile``) and the kernel settings

@@ -45,7 +45,9 @@ def estimate(job: Job) -> Estimate:
     n_second, n_omega = job.shape
     cells = n_second * n_omega * len(job.directions)
     n_tiles = -(-n_second // job.tiles.rows) * len(job.directions)
-    tile_bytes = min(job.tiles.rows, n_second) * n_omega * cell_bytes
+    # A tile's chunk spans tiles.rows chains even past the grid's last row, and a writer
+    # fills a whole chunk in memory: the chunk, not the tile's rows, is what a copy costs.
+    tile_bytes = job.tiles.rows * n_omega * cell_bytes
     rank = BASE_MEMORY + TILE_COPIES * tile_bytes + BYTES_PER_TILE * n_tiles
     return Estimate(cells, cell_bytes, cells * cell_bytes + 16 * n_tiles, rank)
 

@@ -16,13 +16,20 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
-import yaml
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from ..errors import JobError
-from .job_file import UniqueKeyLoader, format_validation_error
+from .job_file import check_store_path, format_validation_error, parse_job_text
 from .laws import LAW_PARAMETERS, CamSettings, ContactSettings, check_law_axis
-from .settings import Settings, wants_number  # noqa: F401 (their home for the schema's users)
+from .settings import (  # noqa: F401 (their home for the schema's users)
+    MAX_COUNT,
+    MAX_POINTS,
+    MAX_START,
+    MAX_STEPS,
+    Axis,
+    Settings,
+    wants_number,
+)
 
 PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 MAP_AXES = (*PARAMETERS, *LAW_PARAMETERS)
@@ -66,26 +73,6 @@ def check_parameter(name: str, value: float) -> float:
     if name == "f0" and not value >= 0.0:
         raise ValueError(f"f0 must be ≥ 0, got {value}")
     return value
-
-
-class Axis(Settings):
-    """A grid axis: ``points`` values from ``from`` to ``to`` inclusive, evenly spaced."""
-
-    start: float = Field(alias="from")
-    stop: float = Field(alias="to")
-    points: Annotated[int, Field(ge=1, le=100_000)]
-
-    @model_validator(mode="after")
-    def distinct_values(self):
-        if self.points > 1 and self.start == self.stop:
-            raise ValueError(
-                f"from = to = {self.start:g} with {self.points} points would compute "
-                f"{self.points} identical cells; give a range, or points: 1"
-            )
-        return self
-
-    def values(self) -> np.ndarray:
-        return np.linspace(self.start, self.stop, self.points)
 
 
 def cell_edges(centres) -> np.ndarray:
@@ -160,7 +147,7 @@ class IntegratorSettings(Settings):
     """RK4 steps per revolution (a multiple of 6 lands on every cam phase boundary)."""
     event_tol: Annotated[float, Field(gt=0.0, lt=1e-3)] = 1e-12
     """Event times are located to event_tol × max(1, revolution period)."""
-    max_steps: Annotated[int, Field(ge=1000)] = 5_000_000
+    max_steps: Annotated[int, Field(ge=1000, le=MAX_STEPS)] = 5_000_000
     """Steps per cell before the cell fails with 'step budget'."""
 
 
@@ -174,7 +161,7 @@ class TransientSettings(Settings):
     jump_cap: Annotated[float, Field(gt=0.0)] = 0.02
     jump_residual: Annotated[float, Field(gt=0.0)] = 1e-3
     """Newton jumps are tried only where |x_k − x_{k−n}| is below this."""
-    max_jumps: Annotated[int, Field(ge=0)] = 20
+    max_jumps: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 20
     jump_agree: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.1
     """Also jump (up to 0.2) where the estimate agrees with the one n revolutions
     earlier to this fraction of its distance, whatever the residual (0: off)."""
@@ -185,18 +172,18 @@ class TransientSettings(Settings):
     extrapolate: Annotated[int, Field(ge=0, le=2)] = 2
     """Warm start: 0 the previous cell's state; 1 linear, 2 quadratic extrapolation
     through the previous cells' fixed points (where they are cycles of one period)."""
-    chaos_after: Annotated[int, Field(ge=0)] = 96
+    chaos_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 96
     """From this revolution on, a clearly chaotic motion ends the transient (0: never)."""
     chaos_lyapunov: Annotated[float, Field(gt=0.0)] = 0.1
     """Lyapunov exponent per revolution (last read window) that counts as clearly chaotic."""
-    quasiperiodic_after: Annotated[int, Field(ge=0)] = 0
+    quasiperiodic_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 0
     """From this revolution on, a quasi-periodic motion (|Lyapunov exponent| ≤ lyap_tol)
     ends the transient (0: never)."""
 
 
 class ClassifySettings(Settings):
     n_max: Annotated[int, Field(ge=1, le=256)] = 32
-    chatter_p: Annotated[int, Field(ge=1)] = 7
+    chatter_p: Annotated[int, Field(ge=1, le=MAX_COUNT)] = 7
     window_revolutions: Annotated[int, Field(ge=1, le=100_000)] = 64
     """Read window: fixed transient, and non-periodic verdicts (Lyapunov exponent)."""
     period_tol: Annotated[float, Field(gt=0.0, lt=1.0)] = 1e-6
@@ -222,9 +209,9 @@ class TileSettings(Settings):
     @field_validator("rows", mode="before")
     @classmethod
     def whole_number_or_auto(cls, value):
-        if value == "auto" or (type(value) is int and value >= 1):
+        if value == "auto" or (type(value) is int and 1 <= value <= MAX_POINTS):
             return value
-        raise ValueError("must be an integer ≥ 1, or auto")
+        raise ValueError(f"must be an integer from 1 to {MAX_POINTS} (an axis' most), or auto")
 
 
 class ChainSettings(Settings):
@@ -306,6 +293,11 @@ class Job(Settings):
     store: str | None = None
     """Path of the result store; '.h5'/'.hdf5' selects HDF5, anything else Zarr."""
 
+    @field_validator("store")
+    @classmethod
+    def a_store_path(cls, store: str | None) -> str | None:
+        return None if store is None else check_store_path(store)
+
     @model_validator(mode="before")
     @classmethod
     def fill_fixed(cls, data):
@@ -324,7 +316,12 @@ class Job(Settings):
     @classmethod
     def omega_and_one_more(cls, sweep: dict[str, Axis]) -> dict[str, Axis]:
         keys = list(sweep)
-        if tuple(keys) == BASIN_AXES:  # a basin: initial states, checked as any number
+        if tuple(keys) == BASIN_AXES:  # a basin: initial states, finite (Settings) and bounded
+            for name, axis in sweep.items():
+                for end, value in (("from", axis.start), ("to", axis.stop)):
+                    if abs(value) > MAX_START:
+                        raise ValueError(f"{name}.{end}: a start is within ±{MAX_START:g}, "
+                                         f"got {value:g}")  # fmt: skip
             return sweep
         unknown = [k for k in keys if k not in MAP_AXES]
         if unknown:
@@ -590,11 +587,9 @@ def load_job(path: str | Path) -> Job:
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        data = path.read_bytes()
     except OSError as exc:
         raise JobError(f"cannot read job file {path}: {exc.strerror}") from None
-    try:
-        data = yaml.load(text, Loader=UniqueKeyLoader)
-    except yaml.YAMLError as exc:
-        raise JobError(f"job file {path}: not valid YAML: {exc}") from None
-    return Job.from_dict(data, source=f"job file {path}")
+    except ValueError as exc:  # a NUL byte in the path
+        raise JobError(f"cannot read job file {path!r}: {exc}") from None
+    return Job.from_dict(parse_job_text(data, f"job file {path}"), source=f"job file {path}")

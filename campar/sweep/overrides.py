@@ -10,7 +10,8 @@ line, naming the key and what is allowed.
 import yaml
 
 from ..errors import JobError
-from .job import Job, UniqueKeyLoader
+from .job import Job
+from .job_file import UniqueKeyLoader
 
 
 def parse_assignment(text: str) -> tuple[str, object]:

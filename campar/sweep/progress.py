@@ -184,6 +184,7 @@ def summarize(reader) -> dict:
         },  # fmt: skip
         "sets": {way: dict(c.most_common()) for way, c in tally.sets.items()},
         "damaged": report.damaged,
+        "variables": report.variables,
         "problems": report.problems,
         "checksums": report.checksums,
         "runs": len(runs),
@@ -207,6 +208,7 @@ def describe(reader, max_labels: int = 12) -> str:
         f"cells   {s['cells'][0]}/{s['cells'][1]} done, {failed} failed (status ≠ 0)",
     ]
     lines += [f"          {count} × {why}" for why, count in s["failed"].items()]
+    lines += [f"damage  variable {name}: {why}" for name, why in s["variables"].items()]
     lines += [f"damage  {problem}" for problem in s["problems"]]
     if not s["checksums"]:
         lines.append("check   format without checksums: tiles checked for being readable only")
@@ -289,5 +291,8 @@ def verify_report(path) -> tuple[str, bool]:
         *(f"  {line}" for line in report.lines()),
     ]
     if not report.clean:
-        lines.append("`campar run` on this store repairs it, computing damaged tiles again")
+        lines.append(
+            "`campar run` on this store repairs it: damaged variables rewritten from the job, "
+            "damaged tiles computed again"
+        )
     return "\n".join(lines), report.clean

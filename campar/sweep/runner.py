@@ -50,7 +50,7 @@ import numpy as np
 
 from ..errors import CamparError, Interrupted, JobError, StoreIOError
 from .budget import check_budget
-from .job import Job
+from .job import Job, check_store_path
 from .plan import Tile, auto_tile_rows, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
 from .signals import Signals, early_interruption
@@ -372,9 +372,13 @@ def run_job(
     or ``max_memory`` bytes (``budget``'s defaults if None). Under MPI every rank
     returns or raises alike (workers' errors carry ``rank``; the master reports them).
     """
-    path = store_path or job.store
+    path = job.store if store_path is None else store_path
     if path is None:
         raise JobError(f"job {job.name} names no store: add 'store: PATH' or pass --store PATH")
+    try:
+        check_store_path(path)
+    except ValueError as exc:
+        raise JobError(f"store {str(path)!r}: {exc}") from None
     if job.tiles.rows != "auto":
         check_budget(job, max_store=max_store, max_memory=max_memory)
     with Signals() as signals:

@@ -2,10 +2,14 @@
 
 SIGTERM, SIGINT and SIGUSR1 (what SLURM and mpich's mpirun send) mean "stop":
 
+- from the first line of the ``campar`` program (``campar.cli``, before it imports
+  anything else: ``guard_program``) until ``campar.cli.main`` runs, a stop signal
+  ends the process at once with that one line (nothing is open yet);
 - before the run's own handlers are installed (imports, reading the job,
   opening the store, starting MPI), ``guard_start`` turns them into
   ``Interrupted("interrupted before start")`` — one line, exit 130 for SIGINT
-  (a Ctrl-C) and 75 for the others, nothing computed. Under a launcher of
+  (a Ctrl-C) and 75 for the others (resumable: what SLURM's requeue looks
+  for, ``slurm/campar.sbatch``), nothing computed. Under a launcher of
   several ranks a rank must not leave early on its own (the others would wait
   in MPI_Init for ever, measured with mpich): there the signal is kept, and the
   run's ``Signals`` starts with it, so all ranks stop together (exit 75);
@@ -16,8 +20,10 @@ SIGTERM, SIGINT and SIGUSR1 (what SLURM and mpich's mpirun send) mean "stop":
 
 Only the main thread receives Python signal handlers, and only there are they
 installed (a library caller's threads are left alone). Before Python has run
-campar's first line (interpreter start-up, a few tens of milliseconds) the
-system's defaults apply: nothing of campar can be running then.
+campar's first line the interpreter's own handling applies: its start-up and
+its ``site`` module (with an editable install, setuptools' finder) take
+0.05–0.15 s (docs/stores.md, measured), and a SIGINT there ends Python with its
+own KeyboardInterrupt message; nothing of campar is running then.
 """
 
 import os
@@ -43,9 +49,29 @@ def guard_start() -> dict:
     handlers it replaced (for ``restore_signals``)."""
     if threading.current_thread() is not threading.main_thread():
         return {}
+    if _phase["now"] != "starting":  # kept by ``guard_program`` since the program's start
+        _kept.clear()
     _phase["now"] = "starting"
-    _kept.clear()
     return {sig: signal.signal(sig, _before_start) for sig in SIGNALS}
+
+
+def guard_program() -> None:
+    """The ``campar`` program's first line: a stop signal before ``main`` runs (while the
+    command's modules import) ends the process with one line, at once; under a launcher
+    of several ranks it is kept for the run, as ``guard_start`` keeps it."""
+    if threading.current_thread() is threading.main_thread():
+        _phase["now"] = "starting"
+        for sig in SIGNALS:
+            signal.signal(sig, _before_main)
+
+
+def _before_main(signum, frame):
+    if _ranks() > 1:
+        _kept.append((signum, time.monotonic()))
+        return
+    text = str(early_interruption(signum))
+    os.write(2, f"campar: {text}\n".encode())
+    os._exit(EXIT_CODES.get(signum, Interrupted.exit_code))  # nothing is open yet
 
 
 def _ranks() -> int:

@@ -86,6 +86,13 @@ def continue_from_cell(parameter: str, span: tuple[float, float], fixed: dict, *
     -------
     ContinuationResult
 
+    Examples
+    --------
+    >>> from campar.views.continuation import continue_from_cell
+    >>> result = continue_from_cell("omega", (6.0, 5.0), {"mu_kn": 0.91})
+    >>> result.start.label, [(sp.type, round(sp.value, 5)) for _, sp in result.special_points()]
+    ('3-1', [('G', 5.46923), ('SN', 5.27333)])
+
     Raises
     ------
     ContinuationError
@@ -202,14 +209,16 @@ class LineStructure:
 
 
 def line_structure(window: tuple[float, float], points: int, fixed: dict, *, switch: int = 3,
-                   census: int = 0, census_points: int = 9, model: dict | None = None,
+                   census: int = 0, census_points: int = 9, max_period: int = 32,
+                   model: dict | None = None,
                    settings: BranchSettings | None = None,
                    section_map: SectionMap | None = None) -> LineStructure:  # fmt: skip
     """The branch structure along ω over ``window`` at the parameters ``fixed``.
 
     The line is simulated from the window's upper end down (``campar line``, ``points``
     cells); from the middle cell of every run of one periodic label a cycle is solved for
-    and continued both ways across the window, switching at PD points ``switch`` deep.
+    and continued both ways across the window, switching at PD points ``switch`` deep
+    (onto cycles of at most ``max_period`` revolutions).
     With ``census`` > 0, the attractors that many starts reach (``find_attractors``) at
     ``census_points`` speeds spread over the window seed branches too: the attractors
     the line's path does not visit. A seed whose cycle lies on a branch already computed
@@ -260,24 +269,32 @@ def line_structure(window: tuple[float, float], points: int, fixed: dict, *, swi
             continue
         seeds.append((omega, label))
         for direction in (-1.0, 1.0):
-            roots.append(continue_with_switching(orbit, "omega", window, switch,
-                                                 direction=direction, section_map=smap,
-                                                 settings=settings, switched=switched))  # fmt: skip
+            root = continue_with_switching(orbit, "omega", window, switch, direction=direction,
+                                           section_map=smap, settings=settings,
+                                           switched=switched, max_period=max_period)  # fmt: skip
+            roots.append(root)
+            if root.closed:  # a loop: the other direction goes round it again
+                break
     return LineStructure(roots, seeds, line, time.perf_counter() - began, smap.shots - shots0)
 
 
-def on_a_branch(roots: list[Branch], omega: float, points, tol: float = 1e-6) -> bool:
-    """True when the cycle with section ``points`` at ω lies on a computed branch."""
+def on_a_branch(roots: list[Branch], omega: float, points, tol: float = 1e-4) -> bool:
+    """True when the cycle with section ``points`` at ω lies on a computed branch: between
+    two consecutive branch points that bracket ω, the branch's cycle (interpolated
+    linearly) within ``tol`` plus the two points' own distance of it, up to a cyclic
+    shift (a branch's steps are short against the distance between distinct cycles)."""
     n = len(points)
+    points = np.asarray(points)
     for root in roots:
         for branch in root.walk():
-            if branch.n != n or not len(branch.values):
+            if branch.n != n:
                 continue
-            close = np.nonzero(np.abs(branch.values - omega) < 0.02)[0]
-            for i in close:
-                # the branch point's cycle at its own ω; compare after a cyclic shift
+            v = branch.values
+            for i in np.nonzero((v[:-1] - omega) * (v[1:] - omega) <= 0.0)[0]:
+                w = 0.0 if v[i + 1] == v[i] else (omega - v[i]) / (v[i + 1] - v[i])
+                cycle = (1 - w) * branch.sections[i] + w * branch.sections[i + 1]
+                reach = tol + np.abs(branch.sections[i + 1] - branch.sections[i]).max()
                 for shift in range(n):
-                    if np.abs(np.roll(branch.sections[i], shift, axis=0) - points).max() < \
-                            max(tol, 50 * abs(branch.values[i] - omega)):  # fmt: skip
+                    if np.abs(np.roll(cycle, shift, axis=0) - points).max() < reach:
                         return True
     return False

@@ -42,16 +42,26 @@ its numbers are laid out alike. The Dataset reads lazily; close it (or use
 ``with``) to release the file.
 """
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from ..core.codes import KIND_LABELS, cell_label
-from ..errors import StoreDamaged
+from ..errors import StoreDamaged, StoreDamageWarning
 from ..sweep.census import cycle_tolerance
 from ..sweep.plan import plan_tiles
-from ..sweep.store import FORMAT, backend_name, read_store, store_arrays, upgraded_attrs
+from ..sweep.store import (
+    CHECKSUMS_ATTR,
+    FORMAT,
+    backend_name,
+    cell_arrays,
+    read_store,
+    store_arrays,
+    upgraded_attrs,
+    verify_store,
+)
 from .basins import basin_variables
 from .cycles import hysteresis_cells
 
@@ -72,6 +82,11 @@ def open(path: str | Path) -> xr.Dataset:
     the n-p text of every cell, a ``both`` store ``hysteresis``, a census
     ``attractor_label``, a basin store ``basin`` and the attractors' variables.
 
+    Nothing is read unverified: every committed tile is checked against its checksum and
+    every variable (coordinates, metadata, decoding attributes) against its own first
+    (docs/stores.md). A damaged tile reads as not computed (its cells the fill, its
+    ``done`` 0), with a StoreDamageWarning naming it; ``campar run`` repairs it.
+
     Parameters
     ----------
     path : str or pathlib.Path
@@ -87,7 +102,8 @@ def open(path: str | Path) -> xr.Dataset:
     campar.errors.StoreError
         No readable campar store at ``path``.
     campar.errors.StoreDamaged
-        An HDF5 file damaged (``campar run`` repairs it).
+        A damaged variable (a wrong coordinate or decoding attribute would make every value
+        wrong), or an HDF5 file damaged; ``campar run`` repairs both.
 
     Examples
     --------
@@ -102,9 +118,23 @@ def open(path: str | Path) -> xr.Dataset:
     with read_store(path) as reader:
         if reader.file_damage:  # xarray would hand the damaged file to HDF5 itself
             raise StoreDamaged(f"{path}: {reader.file_damage}; `campar run` repairs it")
-        ds = _open_current(path, reader) if reader.format == FORMAT else _from_reader(reader)
+        report = verify_store(reader)
+        if report.variables:
+            said = "; ".join(f"variable {name}: {why}" for name, why in report.variables.items())
+            raise StoreDamaged(
+                f"{path} is damaged: {said}; `campar run` rewrites it from the job "
+                "(`campar verify` lists every problem)"
+            )
+        if reader.format == FORMAT:
+            ds = _open_current(path, reader)
+        else:
+            ds = _from_reader(reader, report)
+        if report.damaged:
+            ds = _without_damaged(ds, reader, report)
+            warnings.warn(damage_warning(path, report.damaged), StoreDamageWarning, stacklevel=2)
         job = reader.job
     ds = _normalise(ds)
+    ds.attrs.pop(CHECKSUMS_ATTR, None)  # each backend's own, of its own bytes: checked above
     c = job.classify.chatter_p
     ds["label"] = (
         ds["kind"].dims,
@@ -183,7 +213,46 @@ def _open_current(path: Path, reader) -> xr.Dataset:
     return ds
 
 
-def _from_reader(reader) -> xr.Dataset:
+SHOWN_TILES = 5  # damaged tiles a warning names (with why); `campar verify` lists all
+
+
+def damage_warning(path: Path, damaged: dict[int, str]) -> str:
+    shown = "; ".join(f"tile {i}: {why}" for i, why in sorted(damaged.items())[:SHOWN_TILES])
+    more = f"; … {len(damaged) - SHOWN_TILES} more" if len(damaged) > SHOWN_TILES else ""
+    return (
+        f"{path}: {len(damaged)} damaged tiles read as not computed ({shown}{more}); "
+        "`campar run` computes them again"
+    )
+
+
+def verified_cells(reader, report) -> dict[str, np.ndarray]:
+    """Every per-cell array: the fill, but in the tiles that verified (read tile by tile)."""
+    cells = {a.name: np.full(a.shape, a.fill, a.dtype) for a in cell_arrays(reader.job)}
+    tiles = plan_tiles(reader.job)
+    for index in np.flatnonzero(report.verified).tolist():
+        for name, values in cells.items():
+            values[tiles[index].region] = reader.read_tile(name, tiles[index])
+    return cells
+
+
+def _without_damaged(ds: xr.Dataset, reader, report) -> xr.Dataset:
+    """``ds`` with the damaged tiles as not computed: every per-cell array and the per-tile
+    flags and checksums in memory, from the tiles that verified (xarray would read the
+    damaged chunks, and a codec raise, or hand on changed values)."""
+    variables = {}
+    for name, values in verified_cells(reader, report).items():
+        old = ds[name].variable
+        variables[name] = xr.Variable(old.dims, values, old.attrs, old.encoding)
+    sums = reader.tile_checksums()[0]
+    for name, values in (("done", report.verified), ("checksum", sums)):
+        if values is not None:
+            old = ds[name].variable
+            kept = np.where(report.verified, values, 0).astype(old.dtype)
+            variables[name] = xr.Variable(old.dims, kept, old.attrs, old.encoding)
+    return ds.assign(variables)
+
+
+def _from_reader(reader, report=None) -> xr.Dataset:
     """An older store as the current format opens: variables and attributes from its job."""
     variables, coords = {}, []
     for a in store_arrays(reader.job):
@@ -198,6 +267,8 @@ def _from_reader(reader) -> xr.Dataset:
             data = reader.done.astype(a.dtype)
         elif a.name == "checksum":  # none before format 3
             data = np.zeros(a.shape, a.dtype)
+        elif report is not None and report.damaged:
+            data = np.full(a.shape, a.fill, a.dtype)  # its tiles are set by _without_damaged
         else:
             data = reader.read(a.name)
         variables[a.name] = xr.Variable(a.dims, data, attrs, encoding)

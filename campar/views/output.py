@@ -2,10 +2,11 @@
 
 A figure or an array file is written at the very end of a command, after
 minutes of computing perhaps: a directory that cannot be written, or a suffix
-no writer knows, must be found out first. ``writable_file`` creates the
-missing folders (as the writer would) and a probe file in the target folder,
-then removes the probe; ``figure_file`` also checks that matplotlib writes
-the suffix. Both raise OutputError (exit 73) with one line saying what to change.
+no writer knows, must be found out first. ``writable_file`` creates a probe
+file in the target folder, then removes the probe; a folder that does not
+exist is refused, never created (a typo in a path must not make folders
+anywhere); ``figure_file`` also checks that matplotlib writes the suffix.
+Both raise OutputError (exit 73) with one line saying what to change.
 """
 
 import os
@@ -16,15 +17,19 @@ from ..errors import OutputError
 
 
 def writable_file(path: str | Path, what: str = "output") -> Path:
-    """``path`` if a file can be written there (its folder created if missing)."""
+    """``path`` if a file can be written there (its folder must exist)."""
     path = Path(path)
     if path.is_dir():
         raise OutputError(f"cannot write the {what} {path}: it is a directory; name a file")
     if path.exists() and not os.access(path, os.W_OK):
         raise OutputError(f"cannot write the {what} {path}: the file is read-only")
     folder = path.parent
+    if not folder.is_dir():
+        why = f"{folder} is a file, not a folder" if folder.exists() else (
+            f"the folder {folder} does not exist; create it, or choose another path"
+        )  # fmt: skip
+        raise OutputError(f"cannot write the {what} {path}: {why}")
     try:
-        folder.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=folder, prefix=".campar-probe-"):
             pass
     except OSError as exc:

@@ -17,10 +17,13 @@ and the HDF5 file is a netCDF-4 file, so ``xarray.open_zarr`` and
 ``xarray.open_dataset(path, engine="h5netcdf")`` give the same Dataset
 (``campar.open``). Format 1 stores are still read; only the current format resumes.
 
-From format 3 on every committed tile carries a checksum (``_integrity``):
-``verify_store`` reads every committed tile back and reports the damaged ones,
-and ``open_store`` does so before a resume, makes the damaged tiles pending
-again (logging which and why) and so recomputes them. A store reached through
+From format 3 on every committed tile carries a checksum (``_integrity``), and
+every variable — coordinates, array metadata, the attributes that say how values
+decode — one of its own (``_metadata``): ``verify_store`` reads every committed
+tile back and checks every variable, reporting the damaged ones, and
+``open_store`` does so before a resume, rewrites the damaged variables from the
+job, makes the damaged tiles pending again (logging which and why) and so
+recomputes them. A store reached through
 symbolic links is used at its real path: the lock, the files and every atomic
 replace act there, and the links stay. A failed read or write of the store
 (full disk, permissions) raises StoreIOError (exit 74) naming the path and the
@@ -43,6 +46,7 @@ from . import _hdf5, _zarr
 from ._base import Store, StoreReader
 from ._integrity import Verification, tile_checksum, verify_store
 from ._lock import StoreLock, holder_alive, lock_path
+from ._metadata import CHECKSUMS_ATTR
 from ._schema import (
     FORMAT,
     ArraySchema,
@@ -58,6 +62,7 @@ from ._schema import (
 )
 
 __all__ = [
+    "CHECKSUMS_ATTR",
     "FORMAT",
     "ArraySchema",
     "Store",
@@ -113,6 +118,12 @@ def open_store(path: str | Path, job: Job, *, overwrite: bool = False) -> Store:
     backend, real = _backend(path), real_path(path)
     lock = StoreLock.acquire(real)
     try:
+        if real.is_file() and real.stat().st_nlink > 1:
+            raise StoreError(
+                f"{path} has {real.stat().st_nlink} names (hard links): a store is locked by "
+                "its name, so a run through another name would write it too; remove the other "
+                "links (find -samefile) and run again"
+            )
         _remove_aside(real)
         attrs = _read_attrs_for(path, real, backend, job)
         if attrs is None and real.exists() and not _empty_dir(real):
@@ -172,9 +183,11 @@ def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job):
         return None
     for problem in report.problems:
         log.warning("%s: %s", path, problem)
+    for name, why in report.variables.items():
+        log.warning("%s: variable %s is damaged (%s): rewritten from the job", path, name, why)
     for index, why in sorted(report.damaged.items()):
         log.warning("%s: tile %d is damaged (%s): computed again", path, index, why)
-    if not report.clean:
+    if not report.clean or not report.metadata_checksums:
         backend.repair(real, job, report)
     if report.committed:
         log.info(

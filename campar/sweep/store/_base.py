@@ -8,13 +8,16 @@ For developers — a backend implements:
   campar store of this backend;
 - ``clean_leftovers(path)``: remove what a killed writer left behind and
   finish any commit it left half done;
-- ``repair(path, job, report)``: make the tiles a verification found damaged
-  pending again, their cells the fill value (a resume then recomputes them);
+- ``repair(path, job, report)``: rewrite the variables a verification found
+  damaged from the job, record the variables' checksums where the store has
+  none, and make the tiles it found damaged pending again, their cells the fill
+  value (a resume then recomputes them);
 - ``read_attrs`` raising StoreDamaged with ``sealed_job`` set, and
   ``set_store_aside(path)``, if the backend can tell the job of a store it
   cannot read (HDF5's seal): a resume of that job keeps it aside and restarts;
 - a ``Store`` subclass with ``_write_tile``, ``_write_runs`` and ``_close``;
-- a ``StoreReader`` subclass with ``_read_rows``, ``_tile_values``, ``_shapes``
+- a ``StoreReader`` subclass with ``_read_rows``, ``_tile_values``, ``_shapes``,
+  ``_describe``, ``_fresh`` (its variables' metadata, ``_metadata``)
   and ``close`` (and ``journaled``/``journal_problems`` if
   committed tiles can wait outside the store's arrays). Reads of one tile must
   raise, never crash, on damaged bytes: ``_integrity`` turns that into a report;
@@ -40,7 +43,16 @@ from ..job import Job, job_digest
 from ..plan import Tile, plan_tiles
 from ._integrity import describe_exception, tile_checksum
 from ._lock import StoreLock
-from ._schema import CHECKSUMS_FROM, cell_arrays, check_tile_arrays, coordinates, layout_problems
+from ._metadata import CHECKSUMS_ATTR, GLOBAL, variable_problems
+from ._schema import (
+    CHECKSUMS_FROM,
+    FORMAT,
+    cell_arrays,
+    check_tile_arrays,
+    coordinates,
+    layout_problems,
+    store_arrays,
+)
 
 
 class StoreReader(ABC):
@@ -143,6 +155,32 @@ class StoreReader(ABC):
     def metadata_problems(self) -> list[str]:
         """Parts of the store's metadata a reader does not need but other tools do, damaged."""
         return []
+
+    @property
+    def metadata_checksums(self) -> bool:
+        """Whether the store's variables carry checksums (a store of the current format
+        written before them does not: its next run records them)."""
+        stored = self.attrs.get(CHECKSUMS_ATTR)
+        return self.format != FORMAT or (isinstance(stored, dict) and GLOBAL in stored)
+
+    def variable_damage(self) -> dict[str, str]:
+        """{variable: what changed} — coordinates, array metadata and the attributes that say
+        how values decode, against their checksums (``_metadata``); stores of the current
+        format only (older ones are read as their job lays them out)."""
+        if self.format != FORMAT:
+            return {}
+        arrays = store_arrays(self.job)
+        stored = self.attrs.get(CHECKSUMS_ATTR)  # unreadable: checked against the job instead
+        stored = stored if isinstance(stored, dict) else None
+        return variable_problems(self._describe(arrays), stored, lambda: self._fresh(arrays))
+
+    @abstractmethod
+    def _describe(self, arrays) -> dict:
+        """{name: ``_metadata.Variable``, or why it cannot be read} of ``arrays``."""
+
+    @abstractmethod
+    def _fresh(self, arrays) -> dict:
+        """The same of a store of this job built afresh (what ``repair`` writes)."""
 
     @property
     def file_damage(self) -> str | None:

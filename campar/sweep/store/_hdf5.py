@@ -43,6 +43,7 @@ attributes, which keeps that structure.
 
 import contextlib
 import errno
+import json
 import logging
 import os
 import re
@@ -84,6 +85,7 @@ from ._journal import (  # noqa: F401 (re-exported: the backend's journal)
     write_entry,
 )
 from ._lock import StoreLock
+from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests, global_document
 from ._schema import (
     FORMAT,
     TILE_ARRAYS,
@@ -206,6 +208,62 @@ def _layout(f: h5py.File, job: Job) -> None:
             for axis, dim in enumerate(a.dims):
                 data.dims[axis].attach_scale(f[dim])
         write_attrs(data, a.attrs, a.dtype)
+    f.attrs[CHECKSUMS_ATTR] = json.dumps(digests(describe_file(f, arrays)))
+
+
+# Attributes HDF5 keeps for dimension scales: references to other datasets, which change
+# with the file's layout, not with what the values mean.
+SCALE_LINKS = ("DIMENSION_LIST", "REFERENCE_LIST")
+
+
+def describe_file(f: h5py.File, arrays) -> dict:
+    """{name: ``_metadata.Variable``, or why it cannot be read} of the variables ``arrays``
+    of an open store file: each dataset's type, shape, chunks, fill value, filters and
+    attributes, and a coordinate's values."""
+    attrs = {key: _plain(value) for key, value in f.attrs.items()}
+    found: dict = {GLOBAL: Variable({"attributes": global_document(attrs)})}
+    for a in arrays:
+        try:
+            data = f[a.name]
+            document = {
+                "dtype": data.dtype.str, "shape": list(data.shape),
+                "chunks": list(data.chunks) if data.chunks else None,
+                "fillvalue": _plain(data.fillvalue), "compression": data.compression,
+                "compression_opts": _plain(data.compression_opts), "shuffle": data.shuffle,
+                "scaleoffset": data.scaleoffset, "fletcher32": data.fletcher32,
+                "attrs": {key: _plain(value) for key, value in data.attrs.items()
+                          if key not in SCALE_LINKS},
+            }  # fmt: skip
+            values = np.asarray(data[()]) if a.values is not None else None
+        except KeyError:
+            found[a.name] = f"dataset {a.name} is missing"
+            continue
+        except Exception as exc:  # h5py raises many kinds
+            found[a.name] = f"dataset {a.name} unreadable ({describe_exception(exc)})"
+            continue
+        found[a.name] = Variable({a.name: document}, values)
+    return found
+
+
+def _plain(value):
+    """An attribute or property as a JSON value (text from bytes, lists from arrays)."""
+    if isinstance(value, bytes):
+        return value.decode(errors="replace")
+    if isinstance(value, np.ndarray):
+        return [_plain(v) for v in value.tolist()]
+    if isinstance(value, np.generic):
+        return _plain(value.item())
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value if isinstance(value, str | int | float | bool | type(None)) else repr(value)
+
+
+def fresh_variables(job: Job, arrays) -> dict:
+    """The variables of a store file of ``job`` built afresh (in memory)."""
+    memory = dict(driver="core", backing_store=False, userblock_size=USERBLOCK)
+    with h5py.File("expected.h5", "w", track_order=True, **memory) as f:
+        _layout(f, job)
+        return describe_file(f, arrays)
 
 
 def _create_dataset(f: h5py.File, a: ArraySchema) -> h5py.Dataset:
@@ -248,7 +306,8 @@ def repair(path: Path, job: Job, report: Verification) -> None:
             reserve(fh, _room(path, journal_entries(path).values()), tmp)
         with Hdf5Reader(path, None, path) as old, h5py.File(tmp, "r+") as new:
             for key, value in old._file.attrs.items():  # date created, history, run log
-                new.attrs[key] = value
+                if key in VOLATILE_ATTRS and key != CHECKSUMS_ATTR:  # the rest: the job's
+                    new.attrs[key] = value
             sums = old.tile_checksums()[0]
             for index in keep:
                 tile = old._tiles[index]
@@ -471,6 +530,12 @@ class Hdf5Reader(StoreReader):
         return {
             name: tuple(v.shape) for name, v in self._file.items() if isinstance(v, h5py.Dataset)
         }
+
+    def _describe(self, arrays) -> dict:
+        return describe_file(self._file, arrays)
+
+    def _fresh(self, arrays) -> dict:
+        return fresh_variables(self.job, arrays)
 
     def _tile_values(self, name: str) -> tuple[np.ndarray, dict[int, str]]:
         data = self._file[name]

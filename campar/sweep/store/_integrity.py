@@ -1,5 +1,6 @@
 """Integrity of committed tiles: a checksum per tile, and the check that reads every
-committed tile back (``campar verify``, ``campar status``, ``campar plot`` and every resume).
+committed tile back (``campar verify``, ``campar status``, ``campar plot``, ``campar.open``
+and every resume), with the store's variables against their own checksums (``_metadata``).
 
 A tile's checksum is BLAKE2b with an 8-byte digest of every per-cell array over
 the tile's rows, in the store's order, each preceded by its name, dtype and
@@ -24,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..plan import Tile, plan_tiles
+from ._metadata import CHECKSUMS_ATTR
 from ._schema import fill_value
 
 DIGEST_BYTES = 8  # 64 bits: a damaged tile passes with probability 2**-64
@@ -67,7 +69,9 @@ class Verification:
     committed: list[int] = field(default_factory=list)  # done flag set (or unreadable)
     damaged: dict[int, str] = field(default_factory=dict)  # tile → why it cannot be trusted
     problems: list[str] = field(default_factory=list)  # of the store, not of one tile
+    variables: dict[str, str] = field(default_factory=dict)  # variable → what changed in it
     checksums: bool = True  # the format carries checksums (else: readability only)
+    metadata_checksums: bool = True  # the variables carry checksums (``_metadata``)
 
     @property
     def verified(self) -> np.ndarray:
@@ -78,11 +82,13 @@ class Verification:
 
     @property
     def clean(self) -> bool:
-        return not self.damaged and not self.problems
+        return not self.damaged and not self.problems and not self.variables
 
     def lines(self, limit: int = 50) -> list[str]:
-        """The report: one line per damaged tile (up to ``limit``) and per store problem."""
-        lines = [f"tile {i}: {why}" for i, why in sorted(self.damaged.items())[:limit]]
+        """The report: one line per damaged variable, per damaged tile (up to ``limit``) and
+        per store problem."""
+        lines = [f"variable {name}: {why}" for name, why in self.variables.items()]
+        lines += [f"tile {i}: {why}" for i, why in sorted(self.damaged.items())[:limit]]
         if len(self.damaged) > limit:
             lines.append(f"… and {len(self.damaged) - limit} more damaged tiles")
         return lines + list(self.problems)
@@ -112,6 +118,13 @@ def verify_store(reader, visit: Callable[[TileCheck], None] | None = None) -> Ve
     report = Verification(len(plan_tiles(reader.job)))
     report.checksums = reader.tile_checksums()[0] is not None
     report.problems += reader.metadata_problems()
+    report.variables = reader.variable_damage()
+    report.metadata_checksums = reader.metadata_checksums
+    if CHECKSUMS_ATTR in reader.attrs and not report.metadata_checksums:
+        report.problems.append(
+            f"the variables' checksums (attribute {CHECKSUMS_ATTR}) cannot be read: every "
+            "variable was checked against the stored job instead; `campar run` records them"
+        )
     for check in check_tiles(reader):
         report.committed.append(check.tile.index)
         if check.problem:

@@ -19,7 +19,7 @@ import socket
 from datetime import UTC, datetime
 from pathlib import Path
 
-from ...errors import StoreLocked, io_error
+from ...errors import StoreIOError, StoreLocked, io_error
 
 log = logging.getLogger("campar.sweep.store")
 
@@ -72,6 +72,10 @@ class StoreLock:
     def acquire(cls, store: Path) -> "StoreLock":
         path = lock_path(store)
         try:
+            blocking = next((p for p in path.parents if p.exists() or p.is_symlink()), None)
+            if blocking is not None and not blocking.is_dir():  # mkdir would say "File exists"
+                raise StoreIOError(f"cannot create the store {store}: {blocking} is a file, "
+                                   "not a folder")  # fmt: skip
             path.parent.mkdir(parents=True, exist_ok=True)
             return cls._acquire(store, path)
         except OSError as exc:

@@ -16,6 +16,7 @@ axis (``tile_shape``), and coordinates ``direction`` (down, up) and
 laid out exactly as before (same format, no direction axis).
 """
 
+import contextlib
 import json
 import math
 from dataclasses import dataclass, field
@@ -30,6 +31,7 @@ from ..arrays import COMPONENTS, PARTS, TAIL_DIMS, array_names, array_spec
 from ..job import DIRECTIONS, Job, job_digest
 from ..plan import Tile, plan_tiles
 from ._cf import cell_attrs, checksum_attrs, coordinate_attrs, done_attrs, global_attrs, history
+from ._metadata import CHECKSUMS_ATTR
 
 # Bumped when the layout changes in a way old readers cannot follow. 1: no CF
 # metadata, tail dimension "var" unlabelled, ``done`` bool, Zarr attributes as
@@ -237,6 +239,9 @@ def decode_attrs(raw) -> dict:
             value = value.item()
         if key in JSON_ATTRS and isinstance(value, str):  # format 1 Zarr: already nested
             value = json.loads(value)
+        elif key == CHECKSUMS_ATTR:  # kept as it is if it is not JSON: a problem verify names
+            with contextlib.suppress(TypeError, ValueError):
+                value = json.loads(value)
         attrs[key] = value
     return attrs
 

@@ -20,10 +20,12 @@ xarray encodes it (floats as base64 of the little-endian double).
 
 import asyncio
 import base64
+import json
 import os
 import re
 import shutil
 import struct
+import tempfile
 import warnings
 from pathlib import Path
 
@@ -40,6 +42,7 @@ from ._base import Store, StoreReader, tile_values
 from ._chunks import DirectChunk
 from ._integrity import Verification, describe_exception
 from ._lock import StoreLock
+from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests, global_document
 from ._schema import (
     TILE_ARRAYS,
     cell_arrays,
@@ -57,6 +60,11 @@ def read_attrs(path: Path) -> dict | None:
     """Attributes of the campar store at ``path``, or None if it is none; StoreDamaged if it
     has a campar store's layout but its metadata cannot be read."""
     if not (path / "zarr.json").is_file():
+        if (path / "done").is_dir() and (path / "checksum").is_dir():
+            raise StoreDamaged(
+                f"{path} has a campar store's layout but its metadata (zarr.json) is missing: "
+                "campar cannot tell which job it holds; move it away and run again"
+            )
         return None
     try:
         attrs = zarr.open_group(path, mode="r").attrs.asdict()
@@ -101,28 +109,144 @@ def _settle(seconds: float = 30.0) -> None:
     sync(others_done())
 
 
-def _build(tmp: Path, job: Job) -> None:
+def _build(tmp: Path, job: Job, separator: str | None = None) -> None:
+    """A new store of ``job`` at ``tmp`` (chunk keys with ``separator``; None: CHUNK_KEYS)."""
     group = zarr.create_group(tmp, zarr_format=3, attributes=initial_attrs(job))
-    for a in store_arrays(job):
+    keys = CHUNK_KEYS if separator is None else {**CHUNK_KEYS, "separator": separator}
+    arrays = store_arrays(job)
+    for a in arrays:
         text = a.dtype.kind == "U"
         array = group.create_array(
             a.name, shape=a.shape, dtype=str if text else a.dtype, chunks=a.chunks,
             fill_value="" if text else a.fill, dimension_names=list(a.dims),
             attributes=zarr_attrs(a.attrs, a.dtype),
-            compressors=_codecs(a.name), chunk_key_encoding=CHUNK_KEYS,
+            compressors=_codecs(a.name), chunk_key_encoding=keys,
         )  # fmt: skip
         if a.values is not None:
             array[...] = a.values
+    record_checksums(tmp, arrays)
+
+
+def record_checksums(path: Path, arrays) -> None:
+    """Record the checksums of the variables as their own documents hold them
+    (``_metadata``), then consolidate every document into the store's zarr.json."""
+    group = zarr.open_group(path, mode="r+", use_consolidated=False)
+    found = describe_variables(path, arrays, group, consolidated=False)
+    group.attrs[CHECKSUMS_ATTR] = json.dumps(digests(found))
     with warnings.catch_warnings():
         # "consolidated metadata is not part of the v3 spec": xarray reads it, and we want that.
         warnings.simplefilter("ignore", ZarrUserWarning)
-        zarr.consolidate_metadata(tmp)
+        zarr.consolidate_metadata(path)
 
 
 # Chunk files named c.<i>.<j> beside the array's zarr.json, not c/<i>/<j>: a tile's first
 # write into c/<i>/ made that folder, and on the 2-rank plane those ~1,300 mkdirs were
 # ~0.5 s of CPU taken from the lanes (docs/scaling.md). Readers follow the metadata.
 CHUNK_KEYS = {"name": "default", "separator": "."}
+CONSOLIDATED = "zarr.json (consolidated)"  # where campar and xarray read a variable's metadata
+
+
+def describe_variables(path: Path, arrays, group, consolidated: bool = True) -> dict:
+    """{name: ``_metadata.Variable``, or why it cannot be read} of the store's variables
+    ``arrays`` (``ArraySchema``): each one's own zarr.json and (``consolidated``) its copy in
+    the store's zarr.json; a coordinate's values read as campar and xarray read them."""
+    copies = None
+    found: dict = {GLOBAL: "the store's zarr.json cannot be read"}
+    try:
+        document = json.loads((path / "zarr.json").read_bytes())
+        found[GLOBAL] = Variable({"zarr.json": global_document(document["attributes"])})
+        if consolidated:
+            copies = document["consolidated_metadata"]["metadata"]
+    except (OSError, ValueError, KeyError, TypeError):
+        copies = {} if consolidated else None  # each variable then missing from it, and said so
+    for a in arrays:
+        variable, own = Variable(), path / a.name / "zarr.json"
+        try:
+            variable.documents[f"{a.name}/zarr.json"] = json.loads(own.read_bytes())
+        except FileNotFoundError:
+            found[a.name] = f"{a.name}/zarr.json is missing"
+            continue
+        except (OSError, ValueError) as exc:
+            found[a.name] = f"{a.name}/zarr.json unreadable ({describe_exception(exc)})"
+            continue
+        if copies is not None:
+            if not isinstance(copies.get(a.name), dict):
+                found[a.name] = f"missing from the store's consolidated metadata ({CONSOLIDATED})"
+                continue
+            variable.documents[CONSOLIDATED] = copies[a.name]
+        if a.values is not None:
+            try:
+                variable.values = np.asarray(group[a.name][...])
+            except Exception as exc:  # zarr and numcodecs raise many kinds
+                found[a.name] = f"values unreadable ({describe_exception(exc)})"
+                continue
+        found[a.name] = variable
+    return found
+
+
+_fresh: dict[tuple, dict] = {}  # (job hash, separator) → its variables: the last few jobs
+
+
+def fresh_variables(job: Job, arrays, separator: str) -> dict:
+    """The variables of a store of ``job`` built afresh (in a temporary folder, ~0.3 s;
+    kept for the next check of the same job, as ``status`` then ``verify`` make)."""
+    key = (job.digest(), separator, tuple(a.name for a in arrays))
+    if key not in _fresh:
+        with tempfile.TemporaryDirectory(prefix="campar-expected-") as tmp:
+            path = Path(tmp) / "expected.zarr"
+            _build(path, job, separator)
+            found = describe_variables(path, arrays, zarr.open_group(path, mode="r"))
+        while len(_fresh) >= 4:
+            _fresh.pop(next(iter(_fresh)))
+        _fresh[key] = found
+    return _fresh[key]
+
+
+def chunk_separator(path: Path, job: Job) -> str:
+    """The separator of the store's chunk keys: "." (c.<i>.<j>), or "/" in stores made
+    before it (c/<i>/<j>), as the metadata says, or as the chunk files lie."""
+    for a in cell_arrays(job):
+        for document in (path / a.name / "zarr.json", path / "zarr.json"):
+            try:
+                data = json.loads(document.read_bytes())
+                if document.parent == path:
+                    data = data["consolidated_metadata"]["metadata"][a.name]
+                return data["chunk_key_encoding"]["configuration"]["separator"]
+            except (OSError, ValueError, KeyError, TypeError):
+                continue
+    return "/" if any((path / a.name / "c").is_dir() for a in cell_arrays(job)) else "."
+
+
+def repair_variables(path: Path, job: Job, names) -> None:
+    """Rewrite the variables ``names`` from the job — metadata documents, and coordinates'
+    values — each file written aside and renamed into place, then record the checksums and
+    consolidate. The cells' chunks are left as they are (their tiles verify on their own)."""
+    arrays = store_arrays(job)
+    if GLOBAL in names:  # what the store holds, from the job; what its runs wrote is kept
+        group = zarr.open_group(path, mode="r+", use_consolidated=False)
+        wanted = {k: v for k, v in initial_attrs(job).items() if k not in VOLATILE_ATTRS}
+        for key in [k for k in group.attrs if k not in wanted and k not in VOLATILE_ATTRS]:
+            del group.attrs[key]
+        group.attrs.update(wanted)
+    fresh = Path(tempfile.mkdtemp(prefix=f"{path.name}.creating-", dir=path.parent))
+    try:
+        _build(fresh / "store", job, chunk_separator(path, job))
+        for a in arrays:
+            if a.name not in names:
+                continue
+            source, target = fresh / "store" / a.name, path / a.name
+            target.mkdir(exist_ok=True)
+            if a.values is not None:  # a coordinate: its chunk files too
+                for old in target.iterdir():
+                    if old.name != "zarr.json":
+                        shutil.rmtree(old) if old.is_dir() else old.unlink()
+                for new in source.iterdir():
+                    if new.name != "zarr.json":
+                        os.replace(new, target / new.name)
+            os.replace(source / "zarr.json", target / "zarr.json")
+    finally:
+        shutil.rmtree(fresh, ignore_errors=True)
+    record_checksums(path, arrays)
 
 
 def _codecs(name: str) -> list:
@@ -162,8 +286,11 @@ def clean_leftovers(path: Path, job: Job) -> list[Path]:
 
 
 def repair(path: Path, job: Job, report: Verification) -> None:
-    """Make the damaged tiles pending: unset the flag, then delete the checksum's and the
-    arrays' chunks (read as the fill from then on)."""
+    """Rewrite the damaged variables from the job (and record the checksums of a store
+    without them); then make the damaged tiles pending: unset the flag, then delete the
+    checksum's and the arrays' chunks (read as the fill from then on)."""
+    if report.variables or not report.metadata_checksums:
+        repair_variables(path, job, report.variables)
     group = zarr.open_group(path, mode="r+")
     tiles = plan_tiles(job)
     for index in sorted(report.damaged):
@@ -303,16 +430,11 @@ class ZarrReader(StoreReader):
     def _read_rows(self, name: str, rows: slice, layer: int | None) -> np.ndarray:
         return self._group[name][self.selection(rows, layer)]
 
-    def metadata_problems(self) -> list[str]:
-        """Arrays whose own metadata document is damaged (campar and xarray read the
-        consolidated copy in the store's zarr.json; other Zarr readers do not)."""
-        problems = []
-        for name, _ in self._group.arrays():
-            try:
-                zarr.open_array(self.real / name, mode="r", zarr_format=3)
-            except Exception as exc:
-                problems.append(f"{name}/zarr.json unreadable ({describe_exception(exc)})")
-        return problems
+    def _describe(self, arrays) -> dict:
+        return describe_variables(self.real, arrays, self._group)
+
+    def _fresh(self, arrays) -> dict:
+        return fresh_variables(self.job, arrays, chunk_separator(self.real, self.job))
 
     def close(self) -> None:
         pass  # zarr holds no open files between reads

@@ -9,11 +9,14 @@ starts lie at θ = 0, on the stroboscopic section itself, so a cycle's points li
 its own basin.
 """
 
+import logging
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ...core.codes import Kind
+from ...errors import StoreDamageWarning
 from ...sweep.job import cell_edges
 from .style import axis_label, figure_style, new_figure, parameter_text, save_figure
 
@@ -91,6 +94,14 @@ def plot_basin_store(path, output=None) -> Path:
     from ..output import figure_file
 
     output = figure_file(output or f"{Path(path).stem}-basin.png")
-    with open_store(path) as ds:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", StoreDamageWarning)
+        ds = open_store(path)  # damaged tiles read as not computed: drawn so, said in one line
+    for warning in caught:
+        if issubclass(warning.category, StoreDamageWarning):
+            logging.getLogger("campar.views").warning("%s", warning.message)
+        else:
+            warnings.warn(warning.message, warning.category, stacklevel=2)
+    with ds:
         figure = plot_basin(ds)
     return save_figure(figure, output)

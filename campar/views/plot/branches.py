@@ -61,9 +61,12 @@ def draw_special_points(ax, branch, colour: str) -> None:
                     fontsize=6.5, color=colour, zorder=6)  # fmt: skip
 
 
-def plot_branches(root, *, line=None, ax=None, title: str | None = None):
-    """The branch ``root`` and every branch switched from it (``Branch.walk``), over the
-    σn points of ``line`` (a ``BifurcationLine`` of the same parameters) if given."""
+def plot_branches(roots, *, line=None, ax=None, title: str | None = None):
+    """The branch ``roots`` (one Branch or a list) and every branch switched from each
+    (``Branch.walk``), over the σn points of ``line`` (a ``BifurcationLine`` of the same
+    parameters) if given."""
+    roots = roots if isinstance(roots, (list, tuple)) else [roots]
+    branches = [branch for root in roots for branch in root.walk()]
     with figure_style():
         if ax is None:
             ax = new_figure(5.6, 3.8).add_subplot()
@@ -73,18 +76,18 @@ def plot_branches(root, *, line=None, ax=None, title: str | None = None):
             keep = np.isfinite(y)
             ax.scatter(omega[keep], y[keep], s=0.8, c=LINE_GREY, lw=0, rasterized=True, zorder=1)
         periods: list[int] = []
-        for branch in root.walk():
+        for branch in sorted(branches, key=lambda b: b.n):
             colour = period_colour(branch.n, periods)
             draw_branch(ax, branch, colour)
             draw_special_points(ax, branch, colour)
-        ax.set_xlabel(axis_label(root.parameter))
+        ax.set_xlabel(axis_label(roots[0].parameter))
         ax.set_ylabel(r"$\sigma_n$: $y$ at $\theta = 0$ (units of $h$)")
         handles = [Line2D([], [], color="black", linewidth=1.0, label="stable"),
                    Line2D([], [], color="black", linewidth=0.8, linestyle=(0, (3, 2)),
                           label="unstable")]  # fmt: skip
         handles += [Line2D([], [], color=period_colour(n, periods), linewidth=1.0,
                            label=f"period {n}") for n in periods]  # fmt: skip
-        types = sorted({sp.type for b in root.walk() for sp in b.special})
+        types = sorted({sp.type for b in branches for sp in b.special})
         handles += [Line2D([], [], marker=MARKERS.get(t, "x"), markerfacecolor="white",
                            markeredgecolor="black", linestyle="none", label=t)
                     for t in types]  # fmt: skip
@@ -92,7 +95,7 @@ def plot_branches(root, *, line=None, ax=None, title: str | None = None):
             handles.append(Line2D([], [], marker=".", color=LINE_GREY, linestyle="none",
                                   label="simulation (σn)"))  # fmt: skip
         ax.legend(handles=handles, loc="best", fontsize=6.5, ncols=2)
-        ax.set_title(parameter_text(root.parameters) if title is None else title, loc="left")
+        ax.set_title(parameter_text(roots[0].parameters) if title is None else title, loc="left")
     return ax.figure
 
 

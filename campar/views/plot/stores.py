@@ -105,6 +105,11 @@ def read_map(path, what: str = "labels", *, omega=None, second=None, direction=N
         report = verify_store(store, take)
         if what == "hysteresis":
             arrays.update(store_hysteresis(store, report.verified, rows, cols))
+    if report.variables:  # the map is drawn from the job's grid: the damage changes nothing here
+        log.warning(
+            "%s: damaged variables %s (`campar verify %s` says why); drawn from the job's grid",
+            path, ", ".join(report.variables), path,
+        )  # fmt: skip
     if report.damaged:
         log.warning(
             "%s: %d damaged tiles drawn as not computed (`campar verify %s` says why)",
