@@ -101,7 +101,7 @@ def hysteresis(job_path: Path) -> dict:
             band = np.asarray(ds["hysteresis"].values)
             omega = np.asarray(ds["omega"].values)
             second = np.asarray(ds[job.second].values)
-    smap = SectionMap(job.model.model_dump())
+    smap = SectionMap(job.model.model_dump(mode="json"))
     h = abs(omega[1] - omega[0])
     explained_rows, rows, edges, explained = 0, 0, 0, 0
     kinds_found: dict[str, int] = {}

@@ -73,9 +73,11 @@ class Shot:
         return self.image - self.start
 
 
-def model_settings(tensile="clamp", duty_cycle="separation", cam_velocity="chain") -> dict:
-    """The job model's options as a dict (validated when the SectionMap is built)."""
-    return {"tensile": tensile, "duty_cycle": duty_cycle, "cam_velocity": cam_velocity}
+def model_settings(tensile="clamp", duty_cycle="separation", cam_velocity="chain",
+                   **laws) -> dict:  # fmt: skip
+    """The job model's options as a dict (validated when the SectionMap is built): the
+    force law's options and, in ``laws``, the job's ``cam`` and ``contact`` sections."""
+    return {"tensile": tensile, "duty_cycle": duty_cycle, "cam_velocity": cam_velocity, **laws}
 
 
 def parameter_vector(parameters: dict) -> np.ndarray:

@@ -125,10 +125,8 @@ def compile_curves(job) -> None:
 
 
 def curve_model(job) -> dict:
-    """The options of the job's force law, as a SectionMap takes them."""
-    model = job.model
-    return {"tensile": model.tensile, "duty_cycle": model.duty_cycle,
-            "cam_velocity": model.cam_velocity}  # fmt: skip
+    """The job's model section (force law, cam and contact laws), as a SectionMap takes it."""
+    return job.model.model_dump(mode="json")
 
 
 register(run_curves_tile, compile_curves)

@@ -58,7 +58,7 @@ def store_seeds(path, types=SEED_TYPES, *, group: bool = True) -> list[list[Seed
         omega = np.asarray(ds["omega"].values, dtype=float)
         second = np.asarray(ds[second_name].values, dtype=float)
     fixed = dict(job.fixed)
-    model = job.model.model_dump()
+    model = job.model.model_dump(mode="json")
     window = ((float(omega.min()), float(omega.max())), (float(second.min()), float(second.max())))
     spacing = (float(np.abs(np.diff(omega)).mean()) if len(omega) > 1 else 1.0,
                float(np.abs(np.diff(second)).mean()) if len(second) > 1 else 1.0)  # fmt: skip
