@@ -72,8 +72,9 @@ def test_the_maps_pd_edges_lie_on_the_curve(tongue):
     shares: campar bench continuation, benchmarks/RESULTS.md)."""
     found = store_boundaries(tongue)
     with open_store(tongue) as ds:
-        kinds, omega, mu_kn = ds["kind"].values, ds["omega"].values, ds["mu_kn"].values
-    a = agreement(found, read_curves(tongue), omega, mu_kn, kinds, "PD")
+        grid = {"omega": ds["omega"].values, "second": ds["mu_kn"].values,
+                "kind": ds["kind"].values, "n": ds["n"].values}  # fmt: skip
+    a = agreement(found, read_curves(tongue), grid, "PD")
     assert a.edges_near >= 0.95, a
     assert a.length_near >= 0.75, a
 

@@ -72,7 +72,7 @@ def test_cycles_agree_with_an_independent_scipy_shooting(smap, parameters, guess
     (rtol 1e-12): states to 1e-8, multipliers to 1e-6."""
     orbit = find_cycle(n, guess, section_map=smap, **parameters)
     assert orbit.label == label and orbit.residual <= 1e-10
-    x, m = scipy_shooting.fixed_point(parameters, orbit.state, n)
+    x, m = scipy_shooting.fixed_point(parameters, guess, n)  # from the guess, not campar's x
     assert np.abs(x - np.array(orbit.state)).max() < 1e-8
     np.testing.assert_allclose(np.array(orbit.multipliers), scipy_shooting.multipliers(m),
                                atol=1e-6)  # fmt: skip

@@ -106,131 +106,43 @@ class Agreement:
                 "curve_points": self.counts[1]}  # fmt: skip
 
 
-def agreement(found, curves, omega, second, kinds, kind_type: str) -> Agreement:
+def agreement(found, curves, grid, kind_type: str) -> Agreement:
     """``Agreement`` of the typed edges ``found`` (MapBoundaries) with ``curves`` of type
-    ``kind_type``; ``kinds`` (second, omega): the map's kind codes (0: periodic)."""
-    omega, second = np.asarray(omega, float), np.asarray(second, float)
+    ``kind_type``. ``grid``: the map's omega and second axes and its kind and n arrays
+    (second, omega). A curve's point is judged where the map shows the curve's cycles on
+    both sides of it — in the 3 × 3 cells around it every cell periodic, and of the
+    curve's period (for PD, of the doubled period too) — and is beside an edge where a
+    typed edge of the map lies within one cell."""
+    omega, second = np.asarray(grid["omega"], float), np.asarray(grid["second"], float)
+    kinds, periods = np.asarray(grid["kind"]), np.asarray(grid["n"])
     spacing = np.array([np.abs(np.diff(omega)).mean(), np.abs(np.diff(second)).mean()])
     plane = ("omega", found.second_name)
     mine = [c for c in curves if c.type == kind_type]
-    points = np.vstack([in_plane(c, plane) for c in mine]) if mine else np.zeros((0, 2))
     edges = [s for s in found.segments if s.type == kind_type]
     centres = np.array([[0.5 * (s.edge[0] + s.edge[2]), 0.5 * (s.edge[1] + s.edge[3])]
                         for s in edges]).reshape(-1, 2)  # fmt: skip
+    points = np.vstack([in_plane(c, plane) for c in mine]) if mine else np.zeros((0, 2))
     near = distances_to(centres / spacing, points / spacing) <= NEAR_CELLS + 0.5
     edges_near = float(near.mean()) if len(edges) else float("nan")
-    # the curves' points inside the map whose surrounding cells are periodic
-    xe, ye = cell_edges(omega), cell_edges(second)
+    xe, ye = np.sort(cell_edges(omega)), np.sort(cell_edges(second))
     judged, beside = 0, 0
-    for point in points:
-        j = np.searchsorted(np.sort(xe), point[0]) - 1
-        i = np.searchsorted(np.sort(ye), point[1]) - 1
-        if not (0 <= j < len(omega) and 0 <= i < len(second)):
-            continue
-        jj = j if omega[0] < omega[-1] else len(omega) - 1 - j
-        ii = i if second[0] < second[-1] else len(second) - 1 - i
-        block = kinds[max(ii - 1, 0) : ii + 2, max(jj - 1, 0) : jj + 2]
-        if not (block == 0).all():
-            continue
-        judged += 1
-        if len(centres) and np.min(np.linalg.norm((centres - point) / spacing, axis=1)) <= \
-                NEAR_CELLS + 0.5:  # fmt: skip
-            beside += 1
+    for curve in mine:
+        for point in in_plane(curve, plane):
+            j, i = np.searchsorted(xe, point[0]) - 1, np.searchsorted(ye, point[1]) - 1
+            if not (0 <= j < len(omega) and 0 <= i < len(second)):
+                continue
+            jj = j if omega[0] < omega[-1] else len(omega) - 1 - j
+            ii = i if second[0] < second[-1] else len(second) - 1 - i
+            block = (slice(max(ii - 1, 0), ii + 2), slice(max(jj - 1, 0), jj + 2))
+            shown = set(periods[block][kinds[block] == 0].tolist())
+            wanted = {curve.n, 2 * curve.n} if kind_type == "PD" else {curve.n}
+            if not ((kinds[block] == 0).all() and wanted <= shown):
+                continue
+            judged += 1
+            distance = np.linalg.norm((centres - point) / spacing, axis=1)
+            beside += bool(len(centres)) and distance.min() <= NEAR_CELLS + 0.5
     length_near = beside / judged if judged else float("nan")
     return Agreement(kind_type, edges_near, length_near, (len(edges), judged))
-
-
-@dataclass
-class MapCurves:
-    """The continued curves of a map store and how they were found.
-
-    curves: one per bifurcation set found in the window (merged); seeds: the typed edges
-    seeded from; rounds: task rounds run (each seeds the edges no curve passed near
-    yet); failures: (cell, why) of the tasks that found no curve; seconds, shots: cost.
-    """
-
-    curves: list
-    seeds: int
-    tasks: int
-    rounds: int
-    failures: list[tuple[tuple[int, int], str]]
-    seconds: float = 0.0
-
-    def to_dict(self) -> dict:
-        return {
-            "curves": [c.to_dict() for c in self.curves], "seeds": self.seeds,
-            "tasks": self.tasks, "rounds": self.rounds,
-            "failures": [{"cell": list(cell), "why": why} for cell, why in self.failures],
-            "seconds": self.seconds,
-        }  # fmt: skip
-
-
-def run_serially(tasks: list[list[Seed]]) -> list:
-    """Each task's curve, or the ContinuationError it ended with, in one process."""
-    from ..continuation.mapscale import curve_from_task
-    from ..continuation.section_map import SectionMap
-    from ..errors import ContinuationError
-
-    maps: dict = {}
-    results = []
-    for task in tasks:
-        key = tuple(sorted(task[0].model.items()))
-        smap = maps.setdefault(key, None) or SectionMap(task[0].model)
-        maps[key] = smap
-        try:
-            results.append(curve_from_task(task, section_map=smap))
-        except ContinuationError as exc:
-            results.append(exc)
-    return results
-
-
-def covered(seed: Seed, curves, plane, spacing) -> bool:
-    """True when a curve of the seed's type and period passes within one cell (and a half,
-    the edge's own offset) of the seed's edge."""
-    i = plane.index(seed.axis)
-    centre = np.array([seed.parameters[plane[0]], seed.parameters[plane[1]]], dtype=float)
-    centre[i] = 0.5 * (centre[i] + seed.neighbour)
-    scale = np.asarray(spacing, dtype=float)
-    for curve in curves:
-        if (curve.type, curve.n) != (seed.type, seed.n):
-            continue
-        if distances_to(centre[None, :] / scale, in_plane(curve, plane) / scale)[0] <= \
-                NEAR_CELLS + 0.5:  # fmt: skip
-            return True
-    return False
-
-
-def compute_map_curves(path, types=SEED_TYPES, *, rounds: int = 3,
-                       run_tasks=run_serially) -> MapCurves:  # fmt: skip
-    """Every curve of ``types`` of a map store: rounds of tasks (``group_seeds`` of the
-    seeds no curve covers yet), each run by ``run_tasks`` (a list of tasks → a list of
-    curves or exceptions, in order: serially, or by the runner's ranks)."""
-    import time
-
-    from ..continuation.mapscale import merge_curves
-
-    began = time.perf_counter()
-    raw = [task[0] for task in store_seeds(path, types, group=False)]
-    curves, failures, tried, n_tasks, done_rounds = [], [], set(), 0, 0
-    if not raw:
-        return MapCurves([], 0, 0, 0, [], time.perf_counter() - began)
-    plane, spacing = raw[0].plane, raw[0].spacing
-    pending = raw
-    for _ in range(rounds):
-        tasks = group_seeds(pending)
-        if not tasks:
-            break
-        done_rounds += 1
-        n_tasks += len(tasks)
-        for task, result in zip(tasks, run_tasks(tasks), strict=True):
-            if isinstance(result, Exception):
-                failures.append((task[0].cell, str(result)))
-                tried.update(seed.cell for seed in task)
-            else:
-                curves.append(result)
-        curves = [curves[i] for i in merge_curves(curves, plane, spacing)]
-        pending = [s for s in raw if s.cell not in tried and not covered(s, curves, plane, spacing)]
-    return MapCurves(curves, len(raw), n_tasks, done_rounds, failures, time.perf_counter() - began)
 
 
 def curves_store_path(map_path) -> str:
