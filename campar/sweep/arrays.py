@@ -8,7 +8,7 @@ K1·h; the cam angle is θ = ω t.
 
 import numpy as np
 
-from .curves_job import CURVE_ARRAY_DOCS, CURVE_ARRAYS, CURVE_TAIL_DIMS
+from .curves_job import CURVE_ARRAYS, CURVE_TAIL_DIMS
 from .job import Job
 
 # Arrays each job output brings into the store; "label" is always present.
@@ -167,7 +167,6 @@ ARRAY_DOCS = {
         "NaN where the cell has fewer attractors",
     ),
 }  # fmt: skip
-ARRAY_DOCS.update(CURVE_ARRAY_DOCS)
 
 
 def array_names(job: Job) -> list[str]:

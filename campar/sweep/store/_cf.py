@@ -14,6 +14,7 @@ import numpy as np
 from ... import __version__
 from ...core.codes import KIND_NAMES, STATUS_MESSAGES, Flag, Status
 from ..arrays import ARRAY_DOCS
+from ..curves_job import CURVE_ARRAY_DOCS
 from ..job import Job
 
 CONVENTIONS = "CF-1.10"
@@ -100,7 +101,7 @@ def flag_attrs(name: str, dtype: np.dtype) -> dict:
 
 def cell_attrs(job: Job, name: str, dtype: np.dtype, fill) -> dict:
     """CF attributes of a per-cell array (``_FillValue``: the value of uncomputed cells)."""
-    long_name, units, comment = ARRAY_DOCS[name]
+    long_name, units, comment = ARRAY_DOCS[name] if name in ARRAY_DOCS else CURVE_ARRAY_DOCS[name]
     attrs = {"long_name": long_name}
     if units is not None:
         attrs["units"] = units
