@@ -380,20 +380,14 @@ class Continuation:
         ds = (value - a.u[2]) / a.tangent[2]
         guess = a.u + ds * a.tangent
         guess[2] = value
-        found = self.correct(guess, np.array([0.0, 0.0, 1.0]), guess, a.column)
-        if found is None:
-            return None
-        u, shot, _ = found
-        try:
-            return self.point(u, shot, a.tangent, a.s + ds)
-        except ContinuationError:
-            return None
+        return self.corrected(a, guess, np.array([0.0, 0.0, 1.0]), ds)
 
-    # -- special points ---------------------------------------------------------------
-    def along(self, a: BranchPoint, s: float) -> BranchPoint | None:
-        """The corrected branch point at arclength s past a (on a's tangent's normal plane)."""
-        anchor = a.u + s * a.tangent
-        found = self.correct(anchor, a.tangent, anchor, a.column)
+    def corrected(self, a: BranchPoint, guess: np.ndarray, normal: np.ndarray,
+                  s: float) -> BranchPoint | None:  # fmt: skip
+        """The branch point Newton finds from ``guess`` on the plane normal·(u − guess) = 0,
+        with a's parameter column, oriented along a and at arclength s past it; None where
+        the corrector or the new point's column fails."""
+        found = self.correct(guess, normal, guess, a.column)
         if found is None:
             return None
         u, shot, _ = found
@@ -401,6 +395,11 @@ class Continuation:
             return self.point(u, shot, a.tangent, a.s + s)
         except ContinuationError:
             return None
+
+    # -- special points ---------------------------------------------------------------
+    def along(self, a: BranchPoint, s: float) -> BranchPoint | None:
+        """The corrected branch point at arclength s past a (on a's tangent's normal plane)."""
+        return self.corrected(a, a.u + s * a.tangent, a.tangent, s)
 
     def locate(self, a: BranchPoint, b: BranchPoint,
                kind: str) -> tuple[SpecialPoint, BranchPoint] | None:  # fmt: skip

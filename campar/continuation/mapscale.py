@@ -1,10 +1,12 @@
 """Curves at map scale: from a seed cell beside a typed edge of a map to a continued curve.
 
 A map's typed edges (campar.views.boundaries) say where, to within a cell, a PD, SN or G
-transition happens. A ``Seed`` is such an edge reduced to plain data: the periodic cell
-on the side whose orbit bifurcates (its parameters and stored state), the neighbouring
-cell's value along the edge's axis, the plane and its window. ``curve_from_seed`` is the
-task a runner hands out for it, a plain function of plain data:
+transition happens. A ``Seed`` (campar.sweep.curves_job.SeedSettings: as a curves job
+stores it) is such an edge reduced to plain data: the periodic cell on the side whose
+orbit bifurcates (its type, period and detachments, its cell, parameters and stored
+state), the edge's axis and the neighbouring cell's value along it, the plane, its
+window and cell spacing, the map's model, and how many edges it stands for.
+``curve_from_seed`` is what a runner's task does with it, a plain function of plain data:
 
 1. Newton's method on Pⁿ from the cell's stored state gives its n-cycle (the map's state
    is accurate to its rtol; the fixed point to 1e-10);
@@ -18,11 +20,10 @@ Seeds on one curve (neighbouring edges of one type and period) are merged before
 (``merge_curves``): what is left is one curve per bifurcation set in the window.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..errors import ContinuationError
+from ..sweep.curves_job import SeedSettings as Seed
 from .branch import BranchSettings, continue_branch
 from .curves import BifurcationCurve, CurveSettings, continue_curve
 from .orbit import find_cycle
@@ -32,52 +33,6 @@ SEED_TYPES = ("PD", "SN", "G")  # the map types a curve is seeded from (the mode
 GROUP_CELLS = 6  # seed cells of one type and period this close (in cells) are one task
 CANDIDATES = 8  # seeds of a group tried in turn (those a found curve passes near are skipped)
 SAME_CURVE_CELLS = 1.5  # a curve whose points all lie this close to another is that curve
-
-
-@dataclass(frozen=True)
-class Seed:
-    """One map edge to start a curve from.
-
-    type: PD, SN or G; n, p: the seed cell's cycle; cell: its (row, column) in the map;
-    parameters: every model parameter at the seed cell; state: its stored (y, y') at
-    θ = 0; axis: the parameter along which the edge lies between the seed cell and its
-    neighbour, whose value is ``neighbour``; plane: (ω, second); window: the plane's
-    ranges; spacing: the cell spacing along both axes (for merging); cells: how many
-    edges of the map this seed stands for.
-    """
-
-    type: str
-    n: int
-    p: int
-    cell: tuple[int, int]
-    parameters: dict
-    state: tuple[float, float]
-    axis: str
-    neighbour: float
-    plane: tuple[str, str]
-    window: tuple[tuple[float, float], tuple[float, float]]
-    spacing: tuple[float, float]
-    model: dict
-    cells: int = 1
-
-    def to_dict(self) -> dict:
-        return {
-            "type": self.type, "n": self.n, "p": self.p, "cell": list(self.cell),
-            "parameters": self.parameters, "state": list(self.state), "axis": self.axis,
-            "neighbour": self.neighbour, "plane": list(self.plane),
-            "window": [list(w) for w in self.window], "spacing": list(self.spacing),
-            "model": self.model, "cells": self.cells,
-        }  # fmt: skip
-
-    @classmethod
-    def from_dict(cls, data: dict) -> "Seed":
-        return cls(
-            type=data["type"], n=int(data["n"]), p=int(data["p"]), cell=tuple(data["cell"]),
-            parameters=dict(data["parameters"]), state=tuple(data["state"]),
-            axis=data["axis"], neighbour=float(data["neighbour"]), plane=tuple(data["plane"]),
-            window=tuple(tuple(w) for w in data["window"]), spacing=tuple(data["spacing"]),
-            model=dict(data["model"]), cells=int(data.get("cells", 1)),
-        )  # fmt: skip
 
 
 def group_seeds(seeds: list[Seed]) -> list[list[Seed]]:
@@ -112,7 +67,7 @@ def group_seeds(seeds: list[Seed]) -> list[list[Seed]]:
         for q in np.linspace(0, len(members) - 1, CANDIDATES + 1).round().astype(int):
             if members[q] not in order and len(order) < CANDIDATES:
                 order.append(members[q])
-        tasks.append([Seed(**{**seeds[i].__dict__, "cells": len(members)}) for i in order])
+        tasks.append([seeds[i].model_copy(update={"cells": len(members)}) for i in order])
     return tasks
 
 

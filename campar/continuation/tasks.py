@@ -114,8 +114,7 @@ def curves_of_rows(arrays: dict, plane: tuple[str, str]) -> list[dict]:
 
 def run_curves_tile(job, tile) -> dict[str, np.ndarray]:
     """The runner's tile of a curves job: its rows' tasks, as ``curve_rows``."""
-    tasks = [[Seed(**seed.model_dump()) for seed in job.curves.tasks[row]]
-             for row in range(tile.row_start, tile.row_stop)]  # fmt: skip
+    tasks = [list(job.curves.tasks[row]) for row in range(tile.row_start, tile.row_stop)]
     return curve_rows(tasks, job.curves.points, SectionMap(curve_model(job)))
 
 

@@ -65,7 +65,15 @@ CURVE_ARRAY_DOCS = {
 
 
 class SeedSettings(Settings):
-    """One seed of a task (campar.continuation.mapscale.Seed, as data)."""
+    """One seed of a task: a map's typed edge as plain data (campar.continuation.mapscale).
+
+    type: PD, SN or G; n, p: the seed cell's cycle; cell: its (row, column) in the map;
+    parameters: every model parameter there; state: its stored (y, y') at θ = 0; axis:
+    the parameter along which the edge lies, whose value at the neighbouring cell is
+    ``neighbour``; plane: (omega, second); window: the plane's ranges; spacing: the cell
+    spacing along both axes; model: the map's model section; cells: the edges it stands
+    for.
+    """
 
     type: Literal["PD", "SN", "G"]
     n: Annotated[int, Field(ge=1, le=MAX_COUNT)]

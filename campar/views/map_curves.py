@@ -170,7 +170,8 @@ def curves_job(map_path, types=SEED_TYPES, *, points: int = 400, store=None):
     if not tasks:
         raise JobError(f"{map_path}: no typed edge of {', '.join(types)} to seed a curve from "
                        "(the map needs the multipliers output for PD and SN)")  # fmt: skip
-    data = curves_job_data(map_job, str(map_path), [[s.to_dict() for s in t] for t in tasks],
+    data = curves_job_data(map_job, str(map_path),
+                           [[s.model_dump(mode="json") for s in t] for t in tasks],
                            types=types, points=points,
                            store=str(store or curves_store_path(map_path)))  # fmt: skip
     return Job.from_dict(data, source=f"curves of {map_path}")
