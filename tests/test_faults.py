@@ -237,7 +237,7 @@ def interrupt_until_complete(job_file, job, mpi: bool, rng, how: str, timing) ->
         if proc.returncode == 0:
             break
         counts["interrupted"] += 1
-        allowed = (-signal.SIGKILL, 137, 1) if how == "kill" else (75, 130)
+        allowed = (-signal.SIGKILL, 137, 1) if how == "kill" else (75, 130, 143)
         if how == "kill" and mpi:  # hydra's mpiexec exits 255 when its proxy is killed first
             allowed += (255,)
         assert proc.returncode in allowed, (proc.returncode, err[-2000:])

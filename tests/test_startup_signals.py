@@ -47,7 +47,7 @@ def assert_one_line_stop(code: int, err: str, expected: tuple[int, ...]) -> None
 
 
 @pytest.mark.parametrize("imported", ["argparse", "numpy"])
-@pytest.mark.parametrize("signame,code", [("SIGINT", 130), ("SIGTERM", 75)])
+@pytest.mark.parametrize("signame,code", [("SIGINT", 130), ("SIGTERM", 143), ("SIGUSR1", 75)])
 def test_a_signal_while_campar_imports_is_one_line(write_job, imported, signame, code):
     path, _ = write_job()
     env = {**subprocess_env(), "IMPORT": imported, "SIGNAL": signame}

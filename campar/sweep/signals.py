@@ -8,8 +8,8 @@ SIGTERM, SIGINT and SIGUSR1 (what SLURM and mpich's mpirun send) mean "stop":
 - before the run's own handlers are installed (imports, reading the job,
   opening the store, starting MPI), ``guard_start`` turns them into
   ``Interrupted("interrupted before start")`` — one line, exit 130 for SIGINT
-  (a Ctrl-C) and 75 for the others (resumable: what SLURM's requeue looks
-  for, ``slurm/campar.sbatch``), nothing computed. Under a launcher of
+  (a Ctrl-C), 143 for SIGTERM and 75 for SIGUSR1 (resumable: what SLURM's
+  requeue looks for, ``slurm/campar.sbatch``), nothing computed. Under a launcher of
   several ranks a rank must not leave early on its own (the others would wait
   in MPI_Init for ever, measured with mpich): there the signal is kept, and the
   run's ``Signals`` starts with it, so all ranks stop together (exit 75);
@@ -35,7 +35,9 @@ from ..errors import Interrupted
 
 SIGNALS = (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1)
 INSIST_SECONDS = 1.0
-EXIT_CODES = {signal.SIGINT: 130}  # 128 + SIGINT, as a shell reports a Ctrl-C; others 75
+# Before a run starts: 128 + the signal, as a shell reports it, for SIGINT (a Ctrl-C) and
+# SIGTERM (`kill`); SIGUSR1, SLURM's warning, is 75: resumable, what the requeue looks for
+EXIT_CODES = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
 MPI_SIZE_ENV = ("PMI_SIZE", "OMPI_COMM_WORLD_SIZE", "PMIX_SIZE")  # set by MPI launchers
 
@@ -108,7 +110,7 @@ def _before_start(signum, frame):
 
 def early_interruption(signum: int) -> Interrupted:
     """What a stop signal before the run's start raises (or, under MPI, the run once every
-    rank has stopped): exit 130 for SIGINT, 75 for the others."""
+    rank has stopped): exit 130 for SIGINT, 143 for SIGTERM, 75 for SIGUSR1."""
     return Interrupted(
         f"interrupted before start by {signal.Signals(signum).name}: no tile was computed; "
         "run the same command again",
