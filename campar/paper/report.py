@@ -205,6 +205,13 @@ def _claims() -> list[Claim]:
          "mass); T12 tests the angle of the peak of Pn"),
     ]  # fmt: skip
     rows += [Claim(key, src, text, "–", None, untested=why) for key, src, text, why in never]
+    rows.append(Claim(
+        "N2", "Figs. 2d,e, 4c", "tongue-shaped 'lingual' domains of subharmonic n-p between "
+        "n-p and (n+1)-(p+1), bounded by PD of n-p and G of (n+1)-(p+1)", "the 2-2 and 2-1 "
+        f"tongues of the (ω, μkn) and (ω, μcn) maps: ≥ {continued.BOUNDED_SHARE:.0%} of each "
+        "tongue's boundary within a cell of continued PD and G curves (campar curves), both "
+        "present", continued.tongue_claim, sized=True, command=continued.tongue_command,
+    ))  # fmt: skip
     rows.append(
         Claim(
             "N4",
@@ -218,7 +225,8 @@ def _claims() -> list[Claim]:
             command=continued.structure_command,
         )
     )
-    return rows
+    tested_later = sorted((r for r in rows if r.key.startswith("N")), key=lambda c: int(c.key[1:]))
+    return [r for r in rows if not r.key.startswith("N")] + tested_later
 
 
 CLAIMS = _claims()
