@@ -285,8 +285,14 @@ def test_a_tabulated_cosine_law_reproduces_the_built_in_map(tmp_path):
         {**base, "model": {"cam": {"table": str(table), "table_joins": "phases"}}}))  # fmt: skip
     labels = [cell_labels(m["kind"], m["n"], m["p"]) for m in (built_in, tabulated)]
     np.testing.assert_array_equal(labels[1], labels[0])
-    periodic = built_in["kind"] == 0
-    assert periodic.sum() > 9000
+    # A cell whose budget ended on a slow stable cycle is periodic within 1e-4 of its cycle
+    # (the kernel's SLOW_SETTLED), not converged: its figures agree to that distance.
+    budget = Job.from_dict(base).transient.max_revolutions
+    ended = np.maximum(built_in["revolutions"], tabulated["revolutions"]) >= budget
+    slow = (built_in["kind"] == 0) & ended
+    periodic = (built_in["kind"] == 0) & ~ended
+    assert periodic.sum() > 9000 and slow.sum() <= 5
+    assert np.abs(tabulated["dc"] - built_in["dc"])[slow].max(initial=0.0) < 1e-4
 
     def difference(name):
         return np.abs(tabulated[name] - built_in[name])[periodic]

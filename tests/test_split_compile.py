@@ -36,7 +36,7 @@ COLD_POINT = textwrap.dedent("""
     chain_side = [analysis.assess_revolution, analysis.window_stats, analysis.repeat_period,
                   analysis.distinct_period, analysis.stable_subperiod, analysis.cycle_jacobian,
                   analysis.near_unit_circle, analysis.multipliers_of, analysis.spectral_radius,
-                  analysis.slow_cycle_nearby, analysis.nonperiodic_kind, analysis.stretch_tangent]
+                  analysis.slow_cycle_period, analysis.nonperiodic_kind, analysis.stretch_tangent]
     revolution_side = [analysis.add_step_stats, integrator.step_error, integrator.dense_eval,
                        integrator.advance]
     stats = revolution.run_revolution.stats

@@ -76,6 +76,33 @@ def continue_with_switching(orbit: PeriodicOrbit, parameter: str, window, depth:
     Where no doubled branch could be started, the reason is kept in the branch's
     ``switch_failures``. No branch of period above ``max_period`` is switched onto.
 
+    Parameters
+    ----------
+    orbit : PeriodicOrbit
+        The corrected orbit the root branch starts from.
+    parameter : str
+        The continuation parameter: omega, f0, mu_kn, mu_cn or zeta.
+    window : (float, float)
+        The parameter window every branch stays in.
+    depth : int
+        How many doublings deep to switch (0: the root branch alone).
+    direction : float, optional
+        +1 or -1: the root branch's first step in the parameter (default: towards the
+        window's far end).
+    section_map : SectionMap, optional
+        The section map to shoot with (one is built from the orbit's model if not given).
+    settings : BranchSettings, optional
+        Step control of every branch.
+    switched : list, optional
+        The (period, parameter value) of PD points already switched, shared between calls.
+    max_period : int
+        The longest period a branch is switched onto.
+
+    Returns
+    -------
+    Branch
+        The root branch; the switched branches are its descendants (``Branch.walk``).
+
     Examples
     --------
     >>> from campar.continuation.orbit import find_cycle

@@ -32,7 +32,7 @@ from .analysis import (
     near_unit_circle,
     nonperiodic_kind,
     repeat_period,
-    slow_cycle_nearby,
+    slow_cycle_period,
     spectral_radius,
     stable_subperiod,
     stretch_tangent,
@@ -80,6 +80,7 @@ OUT_LYAPUNOV = 8  # largest Lyapunov exponent
 
 SLOW_MARGIN = 0.02  # a multiplier this close to the unit circle marks a slow cell
 SLOW_REACH = 0.1  # … and, for a non-periodic cell, a stable cycle estimate this close
+SLOW_SETTLED = 1e-4  # a slow stable cycle this close at the budget's end is the cell's motion
 PERIOD_REACH = 1e-5  # a converged cycle this close to a stable one of a divisor period is it
 GRAZE_TOL = 1e-5  # a dip of ε this close to 0 marks a cell whose p is sensitive
 EXTRAPOLATE_MAX = 0.05  # extrapolate the warm start only between close fixed points
@@ -388,6 +389,11 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     out.steps[i] = steps
     out.status[i] = OK
     final = k
+    if n == 0 and cs.transient == CONVERGED:
+        # the budget ended on a slow stable cycle (analysis.slow_cycle_period): it is the
+        # motion, which the window would read as a torus (its exponent is near 0)
+        n = slow_cycle_period(cw.xs, cw.jac, k, max(base, k - cs.window_revolutions),
+                              cs.n_max, SLOW_SETTLED, SLOW_MARGIN)  # fmt: skip
     if n > 0:
         m = distinct_period(cw.xs, k, n, cs.period_tol)
         if cs.transient == CONVERGED:  # (the paper's recipe keeps its plain repeat test)
@@ -423,7 +429,7 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
         stretch, _ = record_window(out, i, cw, k - count, count, period_time)
         out.n[i] = 0
         out.kind[i] = nonperiodic_kind(stretch, cs.lyap_tol)
-        if slow_cycle_nearby(cw.xs, cw.jac, k, k - count, cs.n_max, SLOW_REACH, SLOW_MARGIN):
+        if slow_cycle_period(cw.xs, cw.jac, k, k - count, cs.n_max, SLOW_REACH, SLOW_MARGIN):
             flags |= FLAG_SLOW
         if out.lyapunov.shape[0] > 0:
             out.lyapunov[i] = stretch / period_time

@@ -254,7 +254,7 @@ class Job(Settings):
     Parameters
     ----------
     name, sweep, fixed, model, initial, integrator, transient : the job's sections
-    classify, outputs, tiles, chains, attractors, store : the job's sections
+    classify, outputs, tiles, chains, attractors, curves, store : the job's sections
 
     Examples
     --------

@@ -81,6 +81,12 @@ def continue_from_cell(parameter: str, span: tuple[float, float], fixed: dict, *
     curve_types : iterable of str
         PD, SN, NS, G: continue the curve of every special point of these types found on
         the branches in the plane (parameter, ``second``) over (span, ``second_window``).
+    second : str, optional
+        The second parameter of those curves.
+    second_window : (float, float), optional
+        The window of ``second`` the curves stay in.
+    section_map : SectionMap, optional
+        The section map to shoot with (one is built from ``model`` if not given).
 
     Returns
     -------
