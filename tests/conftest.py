@@ -93,6 +93,17 @@ def write_job(tmp_path):
 _REFERENCES = {}
 
 
+def short_curves(patch: pytest.MonkeyPatch, points: int = 40) -> None:
+    """Continued curves of at most ``points`` points: a tiny gallery or report runs
+    ``campar curves`` beside every map it draws, and the curves' points, not the map's
+    cells, set its cost."""
+    from functools import partial
+
+    from campar.views import map_curves
+
+    patch.setattr(map_curves, "curves_job", partial(map_curves.curves_job, points=points))
+
+
 def reference_arrays(job: Job) -> dict[str, np.ndarray]:
     """The whole map computed tile by tile in this process, without runner or store."""
     key = job.digest()

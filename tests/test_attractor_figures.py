@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
+from conftest import short_curves
 
 from campar.core.codes import Kind, Status
 from campar.paper import setups as paper
@@ -33,6 +34,7 @@ def structure_gallery(tmp_path_factory):
     out = tmp_path_factory.mktemp("structure")
     with pytest.MonkeyPatch.context() as mp:
         mp.setitem(paper.SIZES, "small", TINY)
+        short_curves(mp)
         g = gallery.Gallery(out / "g", "small", "clamp", out / "stores", log=lambda _: None)
         g.outdir.mkdir()
         draw_structure(g)
@@ -111,6 +113,7 @@ def section(tmp_path_factory):
     stores = tmp_path_factory.mktemp("stores")
     with pytest.MonkeyPatch.context() as mp:
         mp.setitem(paper.SIZES, "small", SMALL)
+        short_curves(mp)
         text = "\n".join(structure_section("small", stores, log=lambda _: None))
     return text, stores
 

@@ -11,7 +11,7 @@ import pytest
 from campar.bench import scipy_shooting
 from campar.bench.scipy_model import Model, integrate
 from campar.continuation.branch import BranchSettings, continue_branch
-from campar.continuation.curves import continue_curve
+from campar.continuation.curves import CurveSettings, continue_curve
 from campar.continuation.orbit import find_cycle
 from campar.continuation.section_map import SectionMap
 from campar.continuation.switching import continue_with_switching
@@ -160,6 +160,17 @@ def test_the_pd_curve_passes_through_the_pd_points_of_other_lines(smap, period_o
     assert abs(pd.value - omega) < 1e-7
     # every point of the curve has the multiplier −1
     assert np.abs(curve.multipliers[:, 0] + 1.0).max() < 1e-7
+
+
+@pytest.mark.parametrize("max_points", [2, 7])
+def test_a_curve_has_at_most_max_points_in_both_directions_together(smap, period_one, max_points):
+    """The seed lies inside the window: the curve goes both ways from it, and a curves job
+    stores at most ``max_points`` points a curve."""
+    settings = CurveSettings(max_points=max_points)
+    curve = continue_curve(period_one.special[0], "mu_kn", ((2.0, 5.0), (0.84, 0.93)),
+                           section_map=smap, settings=settings)  # fmt: skip
+    assert len(curve.values) == max_points
+    assert "max_points" in curve.end
 
 
 def test_campar_continue_prints_the_branch_as_json():

@@ -168,6 +168,7 @@ def test_one_probe_loop_takes_in_every_waiting_message():
     """mpich's Iprobe can bring a message in and still answer no: the master's loop must
     not stop at the first no, or a backlog of messages drains one per poll."""
     script = textwrap.dedent("""
+        import sys
         import time
         import numpy as np
         from mpi4py import MPI
@@ -185,7 +186,7 @@ def test_one_probe_loop_takes_in_every_waiting_message():
             for _ in waiting_messages(comm, MPI.ANY_SOURCE, 5, status):
                 comm.Recv(np.empty(1, np.int64), status.Get_source(), 5)
                 taken += 1
-            print("taken", taken, "of", 3 * (comm.Get_size() - 1), flush=True)
+            sys.stdout.write(f"taken {taken} of {3 * (comm.Get_size() - 1)}\\n")
     """)
     result = run_mpi(4, "-c", script, command=[sys.executable], timeout=120)
     assert "taken 9 of 9" in result.stdout, result.stdout  # a loop that stops early: 1 of 9
@@ -246,8 +247,9 @@ COLD_RUN = textwrap.dedent("""
     def compiled(dispatcher):  # [loaded from the cache, compiled here]
         stats = dispatcher.stats
         return [sum(stats.cache_hits.values()), sum(stats.cache_misses.values())]
-    print(json.dumps({"rank": mpi_world().Get_rank(), "chain": compiled(kernel.chain_compiled),
-                      "revolution": compiled(revolution.run_revolution)}))
+    sys.stdout.write(json.dumps({"rank": mpi_world().Get_rank(),
+                                 "chain": compiled(kernel.chain_compiled),
+                                 "revolution": compiled(revolution.run_revolution)}) + "\\n")
 """)
 
 
@@ -286,6 +288,7 @@ def test_every_rank_of_an_spmd_caller_sees_the_masters_error(write_job):
     _, changed = write_job(integrator={"rtol": 1e-9}, store=job.store)
     script = textwrap.dedent(f"""
         import os
+        import sys
         from campar.errors import StoreMismatch
         from campar.sweep.job import Job
         from campar.sweep.runner import run_job
@@ -293,9 +296,10 @@ def test_every_rank_of_an_spmd_caller_sees_the_masters_error(write_job):
         try:
             run_job(job)
         except StoreMismatch as exc:
-            print("rank", os.environ["PMI_RANK"], "refused", getattr(exc, "rank", 0), flush=True)
+            rank = os.environ["PMI_RANK"]
+            sys.stdout.write(f"rank {{rank}} refused {{getattr(exc, 'rank', 0)}}\\n")
             run_job(job, overwrite=True)
-            print("rank", os.environ["PMI_RANK"], "overwrote", flush=True)
+            sys.stdout.write(f"rank {{rank}} overwrote\\n")
     """)
     result = run_mpi(2, "-c", script, command=[sys.executable])
     assert result.returncode == 0, result.stderr
@@ -325,7 +329,8 @@ def test_no_rank_spins_while_waiting(write_job):
         runner.run_tile = sleepy
         wall, cpu = time.perf_counter(), time.process_time()
         code = main(["run", {str(path)!r}])
-        print("usage", time.perf_counter() - wall, time.process_time() - cpu, flush=True)
+        usage = f"usage {{time.perf_counter() - wall}} {{time.process_time() - cpu}}\\n"
+        sys.stdout.write(usage)  # one write: the ranks' lines reach mpirun whole
         sys.exit(code)
     """)
     result = run_mpi(2, "-c", script, command=[sys.executable])

@@ -14,7 +14,7 @@ from functools import cache
 
 import numpy as np
 import pytest
-from conftest import reference_case
+from conftest import reference_case, short_curves
 
 from campar.bench.scipy_model import Model, integrate
 from campar.bench.scipy_peer import scipy_cell
@@ -62,11 +62,13 @@ def number(text: str) -> float:
 
 @pytest.fixture(scope="module")
 def regenerated(tmp_path_factory):
-    """The report with 6 × 6 planes (only its M rows depend on the planes)."""
+    """The report with 6 × 6 planes and short curves (only its M and N2 rows depend on
+    them), without the section that evaluates every claim again under the options."""
     stores = tmp_path_factory.mktemp("stores")
     with pytest.MonkeyPatch.context() as patch:
         patch.setitem(paper.SIZES, "small", paper.Size(plane=6, line=60))
-        return build_report("small", stores=stores, log=lambda _: None)
+        short_curves(patch)
+        return build_report("small", stores=stores, log=lambda _: None, options=False)
 
 
 @pytest.fixture

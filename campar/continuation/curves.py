@@ -19,7 +19,8 @@ exact to newton_tol whatever the differences' error). The parameters are scaled 
 window of the plane, so a step has the same meaning along either axis.
 
 A curve ends where it leaves the window, returns to its first point (a closed curve),
-after ``max_points`` points, or where no point is found ahead.
+at ``max_points`` points (both directions from its seed together), or where no point is
+found ahead.
 """
 
 import math
@@ -230,16 +231,16 @@ class CurveContinuation:
         u, shot, _ = found
         return u, shot, self.jacobian(u, shot)
 
-    def run(self, u0, shot0, jac0, direction: float):
-        """Points (u, shot) of the curve from u0 along the tangent whose λ2 component has the
-        sign of ``direction``; and why it ended."""
+    def run(self, u0, shot0, jac0, direction: float, max_points: int):
+        """At most ``max_points`` points (u, shot) of the curve from u0 along the tangent
+        whose λ2 component has the sign of ``direction``; and why it ended."""
         cfg = self.settings
         t = self.tangent(jac0, np.array([0.0, 0.0, 0.0, direction]))
         points = [(u0, shot0)]
         u, jac, ds = u0, jac0, cfg.step
         end = f"reached {cfg.max_points} points (max_points)"
         closed = False
-        while len(points) < cfg.max_points:
+        while len(points) < max_points:
             predicted = u + ds * t
             found = self.correct(predicted, t, predicted, jac)
             accepted = None
@@ -340,10 +341,11 @@ def continue_curve(sp: SpecialPoint, second: str, window, *,
     engine = CurveContinuation(smap, sp.type, sp.n, par, names, window, settings)
     shots0 = smap.shots
     u0, shot0, jac0 = engine.start(sp)
-    ahead, end_ahead, closed = engine.run(u0, shot0, jac0, +1.0)
+    limit = engine.settings.max_points
+    ahead, end_ahead, closed = engine.run(u0, shot0, jac0, +1.0, limit)
     behind, end_behind = [], ""
-    if not closed:
-        behind, end_behind, _ = engine.run(u0, shot0, jac0, -1.0)
+    if not closed:  # the seed is the first point of both halves
+        behind, end_behind, _ = engine.run(u0, shot0, jac0, -1.0, limit - len(ahead) + 1)
     points = [*reversed(behind[1:]), *ahead]
     end = end_ahead if closed else f"{end_behind}; {end_ahead}"
     from .orbit import multipliers_of
