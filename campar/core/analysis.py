@@ -244,16 +244,6 @@ def slow_cycle_period(xs, jac, k, first, n_max, reach, margin):
         if dist_now <= reach and near_unit_circle(m, margin):
             return n
     return 0
-    m = jacobian_at(jac, k - 1)
-    for n in range(1, avail + 1):
-        if n > 1:
-            m = mat2_mul(m, jacobian_at(jac, k - n))
-        if not spectral_radius(m) < 1.0:
-            continue
-        _, _, dist_now, _ = newton_fixed_point(xs[k, 0], xs[k, 1], xs[k - n, 0], xs[k - n, 1], m)
-        if dist_now <= reach and near_unit_circle(m, margin):
-            return True
-    return False
 
 
 @hot
