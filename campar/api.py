@@ -100,8 +100,7 @@ def run(
     if job.kind == "curves":
         from .continuation import tasks  # noqa: F401 (registers a curves job's tile function)
     path = job.store if store is None else store  # an empty --store is refused, not ignored
-    run_job(job, path, overwrite=overwrite, grace=grace, max_store=max_store,
-            max_memory=max_memory)  # fmt: skip
+    run_job(job, path, overwrite=overwrite, grace=grace, max_store=max_store, max_memory=max_memory)
     return Path(path)
 
 
@@ -151,8 +150,14 @@ def forecast(
 
     if ranks < 1:
         raise JobError(f"ranks must be ≥ 1, got {ranks}")
-    return plan(job_of(job, settings), store, ranks=ranks, overwrite=overwrite,
-                max_store=max_store, max_memory=max_memory)  # fmt: skip
+    return plan(
+        job_of(job, settings),
+        store,
+        ranks=ranks,
+        overwrite=overwrite,
+        max_store=max_store,
+        max_memory=max_memory,
+    )
 
 
 def line(
@@ -222,7 +227,18 @@ def line(
 
     if points < 2:
         raise JobError(f"a line has at least 2 points, got {points}")
-    job = line_job(omega, points, f0=f0, mu_kn=mu_kn, mu_cn=mu_cn, zeta=zeta, tensile=tensile,
-                   duty_cycle=duty_cycle, cam_velocity=cam_velocity, transient=transient,
-                   revolutions=revolutions, sections=sections)  # fmt: skip
+    job = line_job(
+        omega,
+        points,
+        f0=f0,
+        mu_kn=mu_kn,
+        mu_cn=mu_cn,
+        zeta=zeta,
+        tensile=tensile,
+        duty_cycle=duty_cycle,
+        cam_velocity=cam_velocity,
+        transient=transient,
+        revolutions=revolutions,
+        sections=sections,
+    )
     return compute_line(job)

@@ -47,11 +47,23 @@ def reference_case(case_id: int) -> dict:
 def case_arguments(case: dict) -> list[str]:
     """`campar point` options that set every parameter and the start of a reference cell."""
     return [
-        "--omega", str(case["omega"]), "--f0", str(case["f0"]), "--mu-kn", str(case["mu_kn"]),
-        "--mu-cn", str(case["mu_cn"]), "--zeta", str(case["zeta"]),
-        "--tensile", "clamp" if case["clamp"] else "allow",
-        "--y0", str(case["initial_state"]["y"]), "--v0", str(case["initial_state"]["yd"]),
-    ]  # fmt: skip
+        "--omega",
+        str(case["omega"]),
+        "--f0",
+        str(case["f0"]),
+        "--mu-kn",
+        str(case["mu_kn"]),
+        "--mu-cn",
+        str(case["mu_cn"]),
+        "--zeta",
+        str(case["zeta"]),
+        "--tensile",
+        "clamp" if case["clamp"] else "allow",
+        "--y0",
+        str(case["initial_state"]["y"]),
+        "--v0",
+        str(case["initial_state"]["yd"]),
+    ]
 
 
 # 6 × 12 cells, one chain a tile; "slow" fixes a long transient so a tile takes
@@ -216,8 +228,11 @@ def assert_mpirun_store_equals(job_data: dict, tmp_path: Path, serial: Path) -> 
     job_file.write_text(json.dumps({**job_data, "store": str(parallel)}))
     result = subprocess.run(
         [str(MPIRUN), "-n", "2", *CAMPAR, "run", str(job_file)],
-        capture_output=True, text=True, timeout=300, env=subprocess_env(),
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=subprocess_env(),
+    )
     assert result.returncode == 0, result.stderr
     with read_store(parallel) as reader:
         assert reader.attrs["runs"][-1]["ranks"] == 2

@@ -144,9 +144,15 @@ def plausible_tile(job: Job, tile, rng: np.random.Generator) -> dict[str, np.nda
 
 def plausible_store(path: Path, points: int) -> Job:
     """A points × points store of ``plausible_tile``s (4000: 16 million cells, ~20 s)."""
-    job = Job.from_dict({"name": "big", "sweep": {
-        "omega": {"from": 6.0, "to": 0.02, "points": points},
-        "mu_cn": {"from": 0.99, "to": 0.5, "points": points}}})  # fmt: skip
+    job = Job.from_dict(
+        {
+            "name": "big",
+            "sweep": {
+                "omega": {"from": 6.0, "to": 0.02, "points": points},
+                "mu_cn": {"from": 0.99, "to": 0.5, "points": points},
+            },
+        }
+    )
     rng = np.random.default_rng(0)
     with open_store(path, job) as store:
         for tile in plan_tiles(job):
@@ -165,6 +171,11 @@ def peak_rss_mb(*args: str) -> float:
         "assert done.returncode == 0, done.stderr.decode()\n"
         "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)"
     )
-    out = subprocess.run([sys.executable, "-c", probe, *args], capture_output=True, text=True,
-                         timeout=600, check=True)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", probe, *args],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=True,
+    )
     return int(out.stdout) / 1024

@@ -66,8 +66,10 @@ def assess_each_revolution(xs, jac, agree):
     """assess_revolution after every revolution, as the kernel calls it (one est buffer)."""
     est = np.full((32, 32, 3), -1.0)
     assess_revolution = through_numba(A.assess_revolution)
-    return [assess_revolution(xs, jac, est, k, 0, 32, 1e-9, 1e-6, 1e-3, 0.02, agree)
-            for k in range(1, xs.shape[0])]  # fmt: skip
+    return [
+        assess_revolution(xs, jac, est, k, 0, 32, 1e-9, 1e-6, 1e-3, 0.02, agree)
+        for k in range(1, xs.shape[0])
+    ]
 
 
 def test_slow_cycle_far_away_is_reached_by_a_jump_on_agreeing_estimates():

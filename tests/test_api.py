@@ -17,8 +17,18 @@ REPOSITORY = __import__("pathlib").Path(__file__).resolve().parents[1]
 
 def test_dir_lists_the_public_names():
     names = dir(campar)
-    for name in ("run", "forecast", "line", "open", "simulate_point", "PointResult",
-                 "find_attractors", "BifurcationLine", "Job", "load_job"):  # fmt: skip
+    for name in (
+        "run",
+        "forecast",
+        "line",
+        "open",
+        "simulate_point",
+        "PointResult",
+        "find_attractors",
+        "BifurcationLine",
+        "Job",
+        "load_job",
+    ):
         assert name in names
         assert callable(getattr(campar, name))
 
@@ -38,11 +48,22 @@ def test_the_public_functions_have_numpydoc_sections():
 def test_run_returns_the_store_the_cli_writes(tmp_path, capsys):
     """The same job through campar.run and `campar run --set`: the same map, cell for cell."""
     settings = {"sweep.omega.points": 6, "sweep.mu_cn.points": 4}
-    store = campar.run(REPOSITORY / "jobs/smoke.yaml",
-                       store=tmp_path / "api.zarr", settings=settings)  # fmt: skip
+    store = campar.run(
+        REPOSITORY / "jobs/smoke.yaml", store=tmp_path / "api.zarr", settings=settings
+    )
     assert store == tmp_path / "api.zarr"
-    code = main(["run", str(REPOSITORY / "jobs/smoke.yaml"), "--store", str(tmp_path / "cli.zarr"),
-                 "--set", "sweep.omega.points=6", "--set", "sweep.mu_cn.points=4"])  # fmt: skip
+    code = main(
+        [
+            "run",
+            str(REPOSITORY / "jobs/smoke.yaml"),
+            "--store",
+            str(tmp_path / "cli.zarr"),
+            "--set",
+            "sweep.omega.points=6",
+            "--set",
+            "sweep.mu_cn.points=4",
+        ]
+    )
     assert code == 0
     api, cli = campar.open(store), campar.open(tmp_path / "cli.zarr")
     assert api["label"].shape == (4, 6)
@@ -52,9 +73,25 @@ def test_run_returns_the_store_the_cli_writes(tmp_path, capsys):
 
 def test_line_returns_what_the_cli_writes(tmp_path, capsys):
     line = campar.line((3.0, 2.9), points=5, mu_kn=0.9)
-    assert main(["line", "--omega", "2.9:3", "--points", "5", "--mu-kn", "0.9",
-                 "--npz", str(tmp_path / "l.npz"), "-o", str(tmp_path / "l.png"),
-                 "--json"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "line",
+                "--omega",
+                "2.9:3",
+                "--points",
+                "5",
+                "--mu-kn",
+                "0.9",
+                "--npz",
+                str(tmp_path / "l.npz"),
+                "-o",
+                str(tmp_path / "l.png"),
+                "--json",
+            ]
+        )
+        == 0
+    )
     printed = json.loads(capsys.readouterr().out)["lines"][0]
     assert printed == json.loads(json.dumps(line.to_dict()))
     stored = np.load(tmp_path / "l.npz")

@@ -137,26 +137,32 @@ def raw_counts(path):
     """Hysteretic cells and down-sweep label changes crossed back at the same edge, from
     the raw arrays of a both store."""
     ds = xr.open_zarr(path, mask_and_scale=False)
-    layers = [{k: ds[k].isel(direction=d).values for k in ("kind", "status", "n", "p",
-               "sections")} for d in (0, 1)]  # fmt: skip
+    layers = [
+        {k: ds[k].isel(direction=d).values for k in ("kind", "status", "n", "p", "sections")}
+        for d in (0, 1)
+    ]
     both = settled(*(layers[0][k] for k in ("kind", "status", "n", "sections")))
     both &= settled(*(layers[1][k] for k in ("kind", "status", "n", "sections")))
     hysteretic = 0
     for i, j in zip(*np.nonzero(both), strict=True):
         a, b = layers[0], layers[1]
-        hysteretic += not same_cycle(a["sections"][i, j], int(a["n"][i, j]),
-                                     b["sections"][i, j], int(b["n"][i, j]))  # fmt: skip
+        hysteretic += not same_cycle(
+            a["sections"][i, j], int(a["n"][i, j]), b["sections"][i, j], int(b["n"][i, j])
+        )
 
     # labels as (kind, n, p) with n, p only for periodic cells (chatter grouped: p ≥ 7)
     def key(layer):
         periodic = layer["kind"] == Kind.PERIODIC
-        return np.stack([layer["kind"], np.where(periodic, layer["n"], 0),
-                         np.where(periodic, layer["p"], 0)], axis=-1)  # fmt: skip
+        return np.stack(
+            [layer["kind"], np.where(periodic, layer["n"], 0), np.where(periodic, layer["p"], 0)],
+            axis=-1,
+        )
 
     down, up = key(layers[0]), key(layers[1])
     change = (down[:, :-1] != down[:, 1:]).any(axis=-1)
-    back = change & (up[:, :-1] == down[:, :-1]).all(axis=-1) & (up[:, 1:] == down[:, 1:]).all(
-        axis=-1)  # fmt: skip
+    back = (
+        change & (up[:, :-1] == down[:, :-1]).all(axis=-1) & (up[:, 1:] == down[:, 1:]).all(axis=-1)
+    )
     return hysteretic, int(both.sum()), int(change.sum()), int(back.sum())
 
 
@@ -166,8 +172,7 @@ PLANE = {"f0": "omega_f0", "μkn": "mu_kn", "μcn": "mu_cn"}
 
 def rows_of(text: str, heading: str) -> list:
     block = text.split(heading, 1)[1].split("\n### ", 1)[0]
-    return [(PLANE[m[1]], m[2], m[3].split(" | ")) for m in map(ROW.match, block.splitlines())
-            if m]  # fmt: skip
+    return [(PLANE[m[1]], m[2], m[3].split(" | ")) for m in map(ROW.match, block.splitlines()) if m]
 
 
 @pytest.mark.slow  # the report's section on two tiny planes (~7 s); the counting's own
@@ -213,8 +218,15 @@ def test_regions_and_crossings_on_a_drawn_example():
     assert region.tongue and region.tip == pytest.approx(0.7) and region.widest == 8
     down = np.array([["1-1", "1-1", "2-2", "2-2"]])
     up = np.array([["1-1", "2-2", "2-2", "2-2"]])
-    both = st.BothMap(np.array([4.0, 3.0, 2.0, 1.0]), np.array([0.8]), "mu_kn", down, up,
-                      np.zeros((1, 4), bool), np.ones((1, 4), bool))  # fmt: skip
+    both = st.BothMap(
+        np.array([4.0, 3.0, 2.0, 1.0]),
+        np.array([0.8]),
+        "mu_kn",
+        down,
+        up,
+        np.zeros((1, 4), bool),
+        np.ones((1, 4), bool),
+    )
     c = st.irreversibility(both, "down")
     assert (c.total, c.same, c.near, c.far, c.never) == (1, 0, 1, 0, 0)
 
@@ -223,8 +235,15 @@ def test_label_regions_carry_the_types_of_their_boundary():
     from campar.paper import structure_stats as st
 
     down = np.array([["1-1", "2-2", "2-2", "2-1"]] * 3)
-    both = st.BothMap(np.array([4.0, 3.0, 2.0, 1.0]), np.array([0.7, 0.8, 0.9]), "mu_kn",
-                      down, down.copy(), np.zeros((3, 4), bool), np.ones((3, 4), bool))  # fmt: skip
+    both = st.BothMap(
+        np.array([4.0, 3.0, 2.0, 1.0]),
+        np.array([0.7, 0.8, 0.9]),
+        "mu_kn",
+        down,
+        down.copy(),
+        np.zeros((3, 4), bool),
+        np.ones((3, 4), bool),
+    )
     both.edges["down"] = [((i, 0), (i, 1), "PD") for i in range(3)]
     both.edges["down"] += [((i, 2), (i, 3), "G") for i in range(3)]
     regions = {r.label: r for r in st.label_regions(both, "down", min_cells=3)}

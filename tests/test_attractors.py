@@ -120,8 +120,7 @@ def test_the_bistable_cell_has_the_two_cycles_scipy_settles_on(bistable):
 
 
 def test_the_given_start_reaches_the_3_2_cycle():
-    census = find_attractors(BISTABLE["omega"], count=8, given=[START_3_2],
-                             mu_kn=BISTABLE["mu_kn"])  # fmt: skip
+    census = find_attractors(BISTABLE["omega"], count=8, given=[START_3_2], mu_kn=BISTABLE["mu_kn"])
     labels = [census.attractors[g].label for g in census.basin]
     assert labels[:2] == ["1-1", "3-2"]
     assert census.basin.min() >= 0
@@ -133,8 +132,9 @@ def test_each_attractor_is_what_campar_point_gives_from_its_start(bistable):
         alone = simulate_point(BISTABLE["omega"], mu_kn=BISTABLE["mu_kn"], y0=y0, v0=v0)
         assert alone.label == attractor.label and alone.state == attractor.state
         # … and its state is a point of the cycle: started there, campar stays on it
-        again = simulate_point(BISTABLE["omega"], mu_kn=BISTABLE["mu_kn"], y0=attractor.state[0],
-                               v0=attractor.state[1])  # fmt: skip
+        again = simulate_point(
+            BISTABLE["omega"], mu_kn=BISTABLE["mu_kn"], y0=attractor.state[0], v0=attractor.state[1]
+        )
         assert same_cycle(again.sections, attractor.result.sections, match_tolerance())
 
 
@@ -161,10 +161,27 @@ def test_starts_that_settle_on_nothing_are_no_attractor():
 
 def test_point_attractors_json_lists_each_attractor_with_its_fraction():
     out = subprocess.run(
-        [sys.executable, "-m", "campar.cli", "point", "--omega", "5.8", "--mu-kn", "0.86",
-         "--attractors", "8", "--y0", str(START_3_2[0]), "--v0", str(START_3_2[1]), "--json"],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "campar.cli",
+            "point",
+            "--omega",
+            "5.8",
+            "--mu-kn",
+            "0.86",
+            "--attractors",
+            "8",
+            "--y0",
+            str(START_3_2[0]),
+            "--v0",
+            str(START_3_2[1]),
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert data["starts"] == 8 and data["unsettled"] == []
@@ -179,7 +196,20 @@ def test_point_attractors_json_lists_each_attractor_with_its_fraction():
 
 def test_point_attractors_refuses_too_few_starts():
     out = subprocess.run(
-        [sys.executable, "-m", "campar.cli", "point", "--omega", "3", "--attractors", "1",
-         "--y0", "0.5"], capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "campar.cli",
+            "point",
+            "--omega",
+            "3",
+            "--attractors",
+            "1",
+            "--y0",
+            "0.5",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert out.returncode == 2 and "--attractors must be ≥ 2" in out.stderr

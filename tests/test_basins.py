@@ -100,9 +100,15 @@ def test_every_cell_is_the_find_attractors_record_of_its_start_and_grouped_alike
         sections = ds["sections"].values.reshape(len(starts), *ds["sections"].shape[2:])
         for rank in ds["attractor"].values:
             i = int(np.flatnonzero(ds["basin"].values.ravel() == rank)[-1])
-            point = simulate_point(5.8, y0=float(starts[i, 0]), v0=float(starts[i, 1]), mu_kn=0.86,
-                                   multipliers=True, sections=CLOUD_POINTS,
-                                   chaos_after=CHAOS_AFTER)  # fmt: skip
+            point = simulate_point(
+                5.8,
+                y0=float(starts[i, 0]),
+                v0=float(starts[i, 1]),
+                mu_kn=0.86,
+                multipliers=True,
+                sections=CLOUD_POINTS,
+                chaos_after=CHAOS_AFTER,
+            )
             assert (point.n, point.p) == (
                 int(ds["n"].values.ravel()[i]),
                 int(ds["p"].values.ravel()[i]),

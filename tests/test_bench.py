@@ -67,9 +67,12 @@ def test_benchmark_runs_tiny_and_prints_its_table(name, capsys, tmp_path, monkey
 @pytest.fixture(scope="module")
 def precision_runs():
     return precision.measure(
-        cells=["1-0 contact", "1-2 impacts"], rtols=[1e-4, 1e-6, 1e-8, 1e-10],
-        rk4_steps=[120, 480], scipy_rtols=[], min_seconds=0.0,
-    )  # fmt: skip
+        cells=["1-0 contact", "1-2 impacts"],
+        rtols=[1e-4, 1e-6, 1e-8, 1e-10],
+        rk4_steps=[120, 480],
+        scipy_rtols=[],
+        min_seconds=0.0,
+    )
 
 
 def test_dp5_error_falls_with_rtol_in_proportion(precision_runs):
@@ -77,8 +80,9 @@ def test_dp5_error_falls_with_rtol_in_proportion(precision_runs):
     for cell in refs:
         err = {r.setting: r.state_error for r in runs if r.cell == cell and r.method == "dp54"}
         assert err[1e-10] < err[1e-6], (cell, err)
-    slopes = {f.cell: f.slope for f in precision.fits(runs, refs)
-              if f.what == "DP5 state err vs rtol"}  # fmt: skip
+    slopes = {
+        f.cell: f.slope for f in precision.fits(runs, refs) if f.what == "DP5 state err vs rtol"
+    }
     assert set(slopes) == set(refs)
     for cell, slope in slopes.items():
         assert 0.7 <= slope <= 1.3, (cell, slope)

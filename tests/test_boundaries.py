@@ -67,10 +67,15 @@ CELLS = [
 
 # Edges along ω, as (row, column before | column after): their type.
 ALONG_OMEGA = {
-    (0, 1, 2): "PD", (0, 3, 4): "chaos",
-    (1, 1, 2): "NS", (1, 2, 3): "unknown", (1, 4, 5): "unknown",
-    (2, 1, 2): "SN", (2, 3, 4): "G", (2, 4, 5): "jump",
-}  # fmt: skip
+    (0, 1, 2): "PD",
+    (0, 3, 4): "chaos",
+    (1, 1, 2): "NS",
+    (1, 2, 3): "unknown",
+    (1, 4, 5): "unknown",
+    (2, 1, 2): "SN",
+    (2, 3, 4): "G",
+    (2, 4, 5): "jump",
+}
 
 
 def constructed_map(*, multipliers=True, lyapunov=True):
@@ -230,11 +235,12 @@ def pd_store(tmp_path_factory):
 
     root = tmp_path_factory.mktemp("pd")
     job = {
-        "name": "pd", "sweep": {"omega": {"from": 2.5, "to": 2.2, "points": 100},
-                                "mu_kn": PD_ROWS},
-        "outputs": ["label", "eps", "multipliers"], "tiles": {"rows": 1},
+        "name": "pd",
+        "sweep": {"omega": {"from": 2.5, "to": 2.2, "points": 100}, "mu_kn": PD_ROWS},
+        "outputs": ["label", "eps", "multipliers"],
+        "tiles": {"rows": 1},
         "store": str(root / "pd.zarr"),
-    }  # fmt: skip
+    }
     path = root / "pd.yaml"
     path.write_text(yaml.safe_dump(job, sort_keys=False))
     assert main(["run", str(path)]) == 0
@@ -262,8 +268,7 @@ def test_a_map_period_doubling_matches_its_line_and_scipys_multiplier(pd_store):
         state = store.read("state")[0, col]
         stored = store.read("multipliers")[0, col]
     model = Model(t.after.omega, mu_kn=0.91)
-    reference = sorted(np.linalg.eigvals(section_jacobian(model, state, 1)), key=abs,
-                       reverse=True)  # fmt: skip
+    reference = sorted(np.linalg.eigvals(section_jacobian(model, state, 1)), key=abs, reverse=True)
     mine = sorted(stored[:, 0] + 1j * stored[:, 1], key=abs, reverse=True)
     np.testing.assert_allclose(mine, reference, atol=1e-4)
     assert abs(reference[0].imag) < 1e-9 and abs(reference[0] + 1) < NEAR
@@ -285,8 +290,11 @@ def test_plot_bifurcations_json_counts_every_typed_segment(pd_store, tmp_path, c
     data = json.loads(capsys.readouterr().out)
     assert data["multipliers"] and sum(data["counts"].values()) == len(data["segments"])
     assert data["counts"]["PD"] >= 1 and set(data["counts"]) == set(TYPES)
-    (pd,) = [s for s in data["segments"]
-             if s["type"] == "PD" and s["axis"] == "omega" and s["cells"][0][0] == 0]  # fmt: skip
+    (pd,) = [
+        s
+        for s in data["segments"]
+        if s["type"] == "PD" and s["axis"] == "omega" and s["cells"][0][0] == 0
+    ]
     re, im = pd["evidence"]["value"]
     assert abs(re + 1) < NEAR and im == 0.0 and pd["after"]["mu_kn"] == 0.91
     assert out.exists() and data["figure"] == str(out)
@@ -295,8 +303,9 @@ def test_plot_bifurcations_json_counts_every_typed_segment(pd_store, tmp_path, c
     assert main(zoomed) == 1 and "no cell centre of omega" in capsys.readouterr().err
 
 
-def test_plot_bifurcations_json_writes_no_image_unless_asked(pd_store, tmp_path, monkeypatch,
-                                                            capsys):  # fmt: skip
+def test_plot_bifurcations_json_writes_no_image_unless_asked(
+    pd_store, tmp_path, monkeypatch, capsys
+):
     here = tmp_path / "here"
     here.mkdir()
     monkeypatch.chdir(here)
@@ -315,11 +324,16 @@ def test_a_store_of_both_sweeps_types_the_sweep_asked_for(tmp_path):
     import yaml
 
     job = {
-        "name": "both", "sweep": {"omega": {"from": 2.5, "to": 2.2, "points": 60},
-                                  "mu_kn": {"from": 0.91, "to": 0.9, "points": 3}},
-        "chains": {"direction": "both"}, "outputs": ["label", "eps", "multipliers"],
-        "tiles": {"rows": 1}, "store": str(tmp_path / "both.zarr"),
-    }  # fmt: skip
+        "name": "both",
+        "sweep": {
+            "omega": {"from": 2.5, "to": 2.2, "points": 60},
+            "mu_kn": {"from": 0.91, "to": 0.9, "points": 3},
+        },
+        "chains": {"direction": "both"},
+        "outputs": ["label", "eps", "multipliers"],
+        "tiles": {"rows": 1},
+        "store": str(tmp_path / "both.zarr"),
+    }
     (tmp_path / "both.yaml").write_text(yaml.safe_dump(job, sort_keys=False))
     assert main(["run", str(tmp_path / "both.yaml")]) == 0
     for direction, first in (("down", -1), ("up", 1)):

@@ -31,8 +31,9 @@ def smap():
 def period_one(smap):
     """The 1-1 branch at μkn = 0.91 from ω = 5 down to 2, with one doubling followed."""
     orbit = find_cycle(1, (0.6, -0.6), section_map=smap, omega=5.0, mu_kn=MU_KN)
-    return continue_with_switching(orbit, "omega", (2.0, 5.0), 1, direction=-1.0,
-                                   section_map=smap, settings=SETTINGS)  # fmt: skip
+    return continue_with_switching(
+        orbit, "omega", (2.0, 5.0), 1, direction=-1.0, section_map=smap, settings=SETTINGS
+    )
 
 
 @pytest.fixture(scope="module")
@@ -115,8 +116,9 @@ def test_grazing_is_where_the_map_kernel_changes_the_detachment_count(period_thr
     graze = period_three.special[0]
     assert graze.labels == ("3-1", "3-2") and graze.accuracy <= 1e-8
     for side, label in ((+1e-5, "3-1"), (-1e-5, "3-2")):
-        cell = simulate_point(graze.value + side, mu_kn=MU_KN, y0=graze.state[0],
-                              v0=graze.state[1], rtol=1e-11)  # fmt: skip
+        cell = simulate_point(
+            graze.value + side, mu_kn=MU_KN, y0=graze.state[0], v0=graze.state[1], rtol=1e-11
+        )
         assert cell.label == label, side
 
 
@@ -126,8 +128,7 @@ def test_grazing_agrees_with_scipys_contact_events(period_three):
     for side, detachments in ((+1e-4, 1), (-1e-4, 2)):
         parameters = {"omega": graze.value + side, "mu_kn": MU_KN}
         x, _ = scipy_shooting.fixed_point(parameters, graze.state, 3)
-        _, events, _ = integrate(Model(**parameters), x, 3, rtol=1e-12, atol=1e-14,
-                                 max_step=1e-3)  # fmt: skip
+        _, events, _ = integrate(Model(**parameters), x, 3, rtol=1e-12, atol=1e-14, max_step=1e-3)
         assert sum(kind == "detachment" for _, kind in events) == detachments, side
 
 
@@ -147,15 +148,22 @@ def test_no_neimark_sacker_point_exists_det_dp_is_below_one(period_one, period_t
 def test_the_pd_curve_passes_through_the_pd_points_of_other_lines(smap, period_one):
     """A point of the PD curve continued from μkn = 0.91 is a PD point of the line through
     it: a branch along ω at that point's μkn locates its PD at the curve's ω."""
-    curve = continue_curve(period_one.special[0], "mu_kn", ((2.0, 5.0), (0.84, 0.93)),
-                           section_map=smap)  # fmt: skip
+    curve = continue_curve(
+        period_one.special[0], "mu_kn", ((2.0, 5.0), (0.84, 0.93)), section_map=smap
+    )
     assert curve.type == "PD" and len(curve.values) > 20
     assert curve.values[:, 1].min() < 0.85  # the tongue closes below μkn = 0.85
     k = int(np.argmin(np.abs(curve.values[:, 1] - 0.88)))
     omega, mu_kn = curve.values[k]
     orbit = find_cycle(1, curve.states[k], section_map=smap, omega=omega + 0.05, mu_kn=mu_kn)
-    line = continue_branch(orbit, "omega", (omega - 0.05, omega + 0.05), direction=-1.0,
-                           section_map=smap, settings=SETTINGS)  # fmt: skip
+    line = continue_branch(
+        orbit,
+        "omega",
+        (omega - 0.05, omega + 0.05),
+        direction=-1.0,
+        section_map=smap,
+        settings=SETTINGS,
+    )
     (pd,) = [sp for sp in line.special if sp.type == "PD"]
     assert abs(pd.value - omega) < 1e-7
     # every point of the curve has the multiplier −1
@@ -167,17 +175,34 @@ def test_a_curve_has_at_most_max_points_in_both_directions_together(smap, period
     """The seed lies inside the window: the curve goes both ways from it, and a curves job
     stores at most ``max_points`` points a curve."""
     settings = CurveSettings(max_points=max_points)
-    curve = continue_curve(period_one.special[0], "mu_kn", ((2.0, 5.0), (0.84, 0.93)),
-                           section_map=smap, settings=settings)  # fmt: skip
+    curve = continue_curve(
+        period_one.special[0],
+        "mu_kn",
+        ((2.0, 5.0), (0.84, 0.93)),
+        section_map=smap,
+        settings=settings,
+    )
     assert len(curve.values) == max_points
     assert "max_points" in curve.end
 
 
 def test_campar_continue_prints_the_branch_as_json():
     out = subprocess.run(
-        [sys.executable, "-m", "campar.cli", "continue", "--omega", "6:5", "--mu-kn", "0.91",
-         "--json"], capture_output=True, text=True, check=True,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "campar.cli",
+            "continue",
+            "--omega",
+            "6:5",
+            "--mu-kn",
+            "0.91",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     data = json.loads(out.stdout)
     assert data["start"]["label"] == "3-1" and data["branch"]["n"] == 3
     assert [sp["type"] for sp in data["special"]] == ["G", "SN"]
@@ -186,9 +211,23 @@ def test_campar_continue_prints_the_branch_as_json():
 
 def test_campar_point_cycle_finds_the_unstable_cycle():
     out = subprocess.run(
-        [sys.executable, "-m", "campar.cli", "point", "--omega", "3.54", "--mu-kn", "0.91",
-         "--cycle", "1", "--json"], capture_output=True, text=True, check=True,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "campar.cli",
+            "point",
+            "--omega",
+            "3.54",
+            "--mu-kn",
+            "0.91",
+            "--cycle",
+            "1",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     orbit = json.loads(out.stdout)
     assert orbit["label"] == "1-1" and not orbit["stable"]
     assert orbit["multipliers"][0][0] < -1.0 and orbit["residual"] <= 1e-10
@@ -201,7 +240,8 @@ def test_bad_continuation_requests_are_one_line():
         (["--omega", "6:2", "--curves", "PD"], "second parameter"),
         (["--omega", "6:2", "--switch", "-1"], "--switch must be"),
     ):
-        out = subprocess.run([sys.executable, "-m", "campar.cli", "continue", *argv],
-                             capture_output=True, text=True)  # fmt: skip
+        out = subprocess.run(
+            [sys.executable, "-m", "campar.cli", "continue", *argv], capture_output=True, text=True
+        )
         assert out.returncode == 2 and message in out.stderr, (argv, out.stderr)
         assert len(out.stderr.strip().splitlines()) == 1

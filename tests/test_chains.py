@@ -93,8 +93,11 @@ def test_a_continued_map_under_mpirun_equals_the_serial_one(write_job):
     path, job = write_job(name="cont", chains={"start": "continue"})
     result = subprocess.run(
         [str(MPIRUN), "-n", "2", *CAMPAR, "run", str(path)],
-        capture_output=True, text=True, timeout=300, env=subprocess_env(),
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=subprocess_env(),
+    )
     assert result.returncode == 0, result.stderr
     with read_store(job.store) as reader:
         assert reader.attrs["job"]["chains"]["start"] == "continue"
@@ -118,7 +121,8 @@ def test_a_both_job_runs_each_direction_as_its_one_direction_job_with_its_own_se
             got, expected = run_tile(both, tile), run_tile(one, alone)
             for name, values in expected.items():
                 assert np.array_equal(got[name], values, equal_nan=True), (direction, name)
-    assert not np.array_equal(chain_starts(both.one_direction("down")),
-                              chain_starts(both.one_direction("up")))  # fmt: skip
+    assert not np.array_equal(
+        chain_starts(both.one_direction("down")), chain_starts(both.one_direction("up"))
+    )
     with pytest.raises(ValueError, match="take one_direction first"):
         chain_starts(both)

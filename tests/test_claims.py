@@ -22,8 +22,9 @@ CELLS = 2 * NEIGHBOURS + 1
 def hood(path, rest=None, long=(), omega0=OMEGA0) -> Neighbourhood:
     omegas = tuple(omega0 + (NEIGHBOURS - i) * STEP for i in range(CELLS))
     rest = path if rest is None else rest
-    return Neighbourhood(omega0, omegas, tuple(path), tuple(rest), ((0.0, 0.0),) * CELLS,
-                         tuple(long))  # fmt: skip
+    return Neighbourhood(
+        omega0, omegas, tuple(path), tuple(rest), ((0.0, 0.0),) * CELLS, tuple(long)
+    )
 
 
 def around(centre: str, others: str) -> list[str]:
@@ -116,8 +117,9 @@ class SyntheticEvidence:
 
     def line(self, omega, points, **options):
         w = np.linspace(max(omega), min(omega), points)
-        return SimpleNamespace(omega=w, state=np.zeros((points, 2)),
-                               labels=[self.path_label(x) for x in w])  # fmt: skip
+        return SimpleNamespace(
+            omega=w, state=np.zeros((points, 2)), labels=[self.path_label(x) for x in w]
+        )
 
     def rest(self, omega, **params):
         return SimpleNamespace(label=self.rest_label(omega), kind="periodic", multipliers=())

@@ -46,8 +46,10 @@ def test_the_commands_share_one_definition_of_the_model_flags(command):
     for name in option_fields():
         assert mine[name] == point[name], name
     if command == "line":  # a chain's transient too (continue solves for cycles instead)
-        assert (mine["transient"], mine["revolutions"]) == (point["transient"],
-                                                            point["revolutions"])  # fmt: skip
+        assert (mine["transient"], mine["revolutions"]) == (
+            point["transient"],
+            point["revolutions"],
+        )
 
 
 def test_a_lines_model_flags_reach_the_kernel(tmp_path):
@@ -55,9 +57,25 @@ def test_a_lines_model_flags_reach_the_kernel(tmp_path):
     rest, μcn = 0.9, the clamp active in contact) is a cycle of SciPy's *literal* model, and
     its duty cycle is SciPy's count of the time without force, not the separated time."""
     npz, png = tmp_path / "line.npz", tmp_path / "line.png"
-    code = main(["line", "--omega", "2:1.99", "--points", "2", "--mu-cn", "0.9",
-                 "--cam-velocity", "literal", "--duty-cycle", "force",
-                 "--npz", str(npz), "-o", str(png)])  # fmt: skip
+    code = main(
+        [
+            "line",
+            "--omega",
+            "2:1.99",
+            "--points",
+            "2",
+            "--mu-cn",
+            "0.9",
+            "--cam-velocity",
+            "literal",
+            "--duty-cycle",
+            "force",
+            "--npz",
+            str(npz),
+            "-o",
+            str(png),
+        ]
+    )
     assert code == 0
     arrays = np.load(npz)
     assert str(arrays["cam_velocity"]) == "literal" and str(arrays["duty_cycle"]) == "force"
@@ -73,8 +91,20 @@ def test_a_lines_model_flags_reach_the_kernel(tmp_path):
 
 
 def test_line_json_names_the_model_options(tmp_path, capsys):
-    code = main(["line", "--omega", "2:1.99", "--points", "2", "--duty-cycle", "force",
-                 "-o", str(tmp_path / "l.png"), "--json"])  # fmt: skip
+    code = main(
+        [
+            "line",
+            "--omega",
+            "2:1.99",
+            "--points",
+            "2",
+            "--duty-cycle",
+            "force",
+            "-o",
+            str(tmp_path / "l.png"),
+            "--json",
+        ]
+    )
     assert code == 0
     (line,) = json.loads(capsys.readouterr().out)["lines"]
     assert line["parameters"]["duty_cycle"] == "force"

@@ -13,10 +13,12 @@ from campar.sweep.job import Job
 
 GRID = {
     "name": "pair",
-    "sweep": {"omega": {"from": 1.6, "to": 0.4, "points": 9},
-              "mu_cn": {"from": 0.99, "to": 0.88, "points": 3}},
+    "sweep": {
+        "omega": {"from": 1.6, "to": 0.4, "points": 9},
+        "mu_cn": {"from": 0.99, "to": 0.88, "points": 3},
+    },
     "tiles": {"rows": 1},
-}  # fmt: skip
+}
 
 
 @pytest.fixture(scope="module")
@@ -26,8 +28,19 @@ def pair(tmp_path_factory):
     path = root / "pair.yaml"
     path.write_text(yaml.safe_dump(GRID, sort_keys=False))
     for law in ("clamp", "allow"):
-        assert main(["run", str(path), "--store", str(root / f"{law}.zarr"),
-                     "--set", f"model.tensile={law}"]) == 0  # fmt: skip
+        assert (
+            main(
+                [
+                    "run",
+                    str(path),
+                    "--store",
+                    str(root / f"{law}.zarr"),
+                    "--set",
+                    f"model.tensile={law}",
+                ]
+            )
+            == 0
+        )
     return root / "clamp.zarr", root / "allow.zarr"
 
 
@@ -92,13 +105,16 @@ def test_plot_what_n_and_p_from_a_store(pair, tmp_path):
         assert main(["plot", str(a), "--what", what, "-o", str(out)]) == 0 and out.exists()
 
 
-@pytest.mark.parametrize("argv, hint", [
-    (["point", "--omega", "3", "--mukn", "0.8"], "did you mean --mu-kn"),
-    (["line", "--omega", "3:2", "--cam-velocty", "literal"], "did you mean --cam-velocity"),
-    (["run", "job.yaml", "--dryrun"], "did you mean --dry-run"),
-    (["pont", "--omega", "3"], "did you mean point"),
-    (["point", "--omega", "1", "--tensile", "alow"], "did you mean allow"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "argv, hint",
+    [
+        (["point", "--omega", "3", "--mukn", "0.8"], "did you mean --mu-kn"),
+        (["line", "--omega", "3:2", "--cam-velocty", "literal"], "did you mean --cam-velocity"),
+        (["run", "job.yaml", "--dryrun"], "did you mean --dry-run"),
+        (["pont", "--omega", "3"], "did you mean point"),
+        (["point", "--omega", "1", "--tensile", "alow"], "did you mean allow"),
+    ],
+)
 def test_a_misspelled_flag_names_the_one_meant_with_its_commands_usage(argv, hint, capsys):
     with pytest.raises(SystemExit) as exit:
         main(argv)

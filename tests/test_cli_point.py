@@ -23,11 +23,26 @@ def test_point_json_has_the_documented_keys_and_the_reference_cells_values():
     out = campar("point", *case_arguments(case), "--json", "--multipliers", "--lyapunov")
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
-    for key in ("label", "n", "p", "kind", "dc", "eps_min", "eps_max", "pn_max",
-                "revolutions", "steps", "multipliers", "lyapunov"):  # fmt: skip
+    for key in (
+        "label",
+        "n",
+        "p",
+        "kind",
+        "dc",
+        "eps_min",
+        "eps_max",
+        "pn_max",
+        "revolutions",
+        "steps",
+        "multipliers",
+        "lyapunov",
+    ):
         assert key in data
-    assert (data["label"], data["n"], data["p"]) == (expected["label"], expected["n"],
-                                                     expected["p"])  # fmt: skip
+    assert (data["label"], data["n"], data["p"]) == (
+        expected["label"],
+        expected["n"],
+        expected["p"],
+    )
     assert data["dc"] == pytest.approx(expected["DC"], abs=0.0025)
     assert data["eps_min"] == pytest.approx(expected["eps_min"], abs=0.0025)
     assert data["eps_max"] == pytest.approx(expected["eps_max"], abs=0.0025)
@@ -77,10 +92,18 @@ def test_the_campar_process_runs_one_blas_thread_unless_told_otherwise(preset):
     env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
     if preset:
         env["OPENBLAS_NUM_THREADS"] = preset
-    probe = ("import campar.cli, os, numpy; print(os.environ['OPENBLAS_NUM_THREADS'], "
-             "open('/proc/self/status').read().split('Threads:')[1].split()[0])")  # fmt: skip
-    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                         env=env, timeout=60, check=True)  # fmt: skip
+    probe = (
+        "import campar.cli, os, numpy; print(os.environ['OPENBLAS_NUM_THREADS'], "
+        "open('/proc/self/status').read().split('Threads:')[1].split()[0])"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", probe],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=60,
+        check=True,
+    )
     setting, threads = out.stdout.split()
     assert setting == (preset or "1")
     # OpenBLAS caps its pool at the cores: with "3" the process has more than one thread
@@ -117,8 +140,12 @@ def test_the_program_spares_its_exit_the_collector_but_a_call_from_python_does_n
         "code = main()\n"
         "print(code, gc.get_freeze_count() > 0)\n"
     )
-    out = subprocess.run([sys.executable, "-c", probe, "/nonexistent/s.zarr"],
-                         capture_output=True, text=True, timeout=120)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", probe, "/nonexistent/s.zarr"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert out.returncode == 0, out.stderr
     (code_a, frozen_a), (code_b, frozen_b) = (line.split() for line in out.stdout.splitlines())
     assert code_a == code_b != "0"  # a store that is not there: refused, alike both ways

@@ -11,10 +11,12 @@ from campar.sweep.store import read_store
 
 SMOKE = {
     "name": "tiny",
-    "sweep": {"omega": {"from": 3.0, "to": 2.0, "points": 5},
-              "mu_cn": {"from": 0.9, "to": 0.6, "points": 3}},
+    "sweep": {
+        "omega": {"from": 3.0, "to": 2.0, "points": 5},
+        "mu_cn": {"from": 0.9, "to": 0.6, "points": 3},
+    },
     "tiles": {"rows": 2},
-}  # fmt: skip
+}
 
 
 @pytest.fixture
@@ -26,11 +28,30 @@ def job_file(tmp_path):
 
 def test_set_changes_the_job_as_an_edited_file_would(tmp_path, job_file):
     store = tmp_path / "set.zarr"
-    assert main(["run", str(job_file), "--store", str(store), "--set", "sweep.omega.points=4",
-                 "--set", "model.tensile=allow", "--set", "outputs=[label, dc]"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "run",
+                str(job_file),
+                "--store",
+                str(store),
+                "--set",
+                "sweep.omega.points=4",
+                "--set",
+                "model.tensile=allow",
+                "--set",
+                "outputs=[label, dc]",
+            ]
+        )
+        == 0
+    )
     edited = tmp_path / "edited.yaml"
-    data = {**SMOKE, "sweep": {**SMOKE["sweep"], "omega": {"from": 3.0, "to": 2.0, "points": 4}},
-            "model": {"tensile": "allow"}, "outputs": ["label", "dc"]}  # fmt: skip
+    data = {
+        **SMOKE,
+        "sweep": {**SMOKE["sweep"], "omega": {"from": 3.0, "to": 2.0, "points": 4}},
+        "model": {"tensile": "allow"},
+        "outputs": ["label", "dc"],
+    }
     edited.write_text(yaml.safe_dump(data, sort_keys=False))
     assert main(["run", str(edited), "--store", str(tmp_path / "file.zarr")]) == 0
     with read_store(store) as a, read_store(tmp_path / "file.zarr") as b:
@@ -39,16 +60,24 @@ def test_set_changes_the_job_as_an_edited_file_would(tmp_path, job_file):
         assert (a.read("dc") == b.read("dc")).all()
 
 
-@pytest.mark.parametrize("setting, message", [
-    ("sweep.omega.pointz=200",
-     "--set: sweep.omega.pointz: unknown key; allowed here: from, to, points"),
-    ("sweep.omega.points=abc", "--set: sweep.omega.points: must be a number, not text"),
-    ("sweep.omega.points=0", "--set: sweep.omega.points: Input should be greater than or equal"),
-    ("model.tensile=pull", "--set: model.tensile: Input should be 'clamp' or 'allow'"),
-    ("modle.tensile=allow", "--set: modle: unknown key; allowed here: name, sweep"),
-    ("model.tensile.x=1", "--set model.tensile.x: model.tensile is 'clamp', not a mapping"),
-    ("sweep.omega.points", "--set expects KEY=VALUE"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "setting, message",
+    [
+        (
+            "sweep.omega.pointz=200",
+            "--set: sweep.omega.pointz: unknown key; allowed here: from, to, points",
+        ),
+        ("sweep.omega.points=abc", "--set: sweep.omega.points: must be a number, not text"),
+        (
+            "sweep.omega.points=0",
+            "--set: sweep.omega.points: Input should be greater than or equal",
+        ),
+        ("model.tensile=pull", "--set: model.tensile: Input should be 'clamp' or 'allow'"),
+        ("modle.tensile=allow", "--set: modle: unknown key; allowed here: name, sweep"),
+        ("model.tensile.x=1", "--set model.tensile.x: model.tensile is 'clamp', not a mapping"),
+        ("sweep.omega.points", "--set expects KEY=VALUE"),
+    ],
+)
 def test_a_bad_setting_is_one_line_and_exit_2_with_nothing_written(
     tmp_path, job_file, capsys, setting, message
 ):
@@ -74,8 +103,9 @@ def dry_run(*args, capsys) -> dict:
 
 def test_dry_run_plans_and_writes_nothing_then_sees_what_a_store_holds(tmp_path, job_file, capsys):
     store = tmp_path / "tiny.zarr"
-    plan = dry_run(str(job_file), "--store", str(store), "--set", "sweep.mu_cn.points=5",
-                   capsys=capsys)  # fmt: skip
+    plan = dry_run(
+        str(job_file), "--store", str(store), "--set", "sweep.mu_cn.points=5", capsys=capsys
+    )
     assert not store.exists()
     assert plan["store"] == f"{store}  (new)"
     assert plan["cells"].startswith("25 (5 mu_cn × 5 omega), 25 to compute")
@@ -84,13 +114,22 @@ def test_dry_run_plans_and_writes_nothing_then_sees_what_a_store_holds(tmp_path,
     assert re.fullmatch(r"about [\d.]+ MiB per rank", plan["memory"]), plan["memory"]
     seconds = re.fullmatch(r"about (\d+) (s|min|h) on 1 rank", plan["time"])
     assert seconds, plan["time"]
-    two = dry_run(str(job_file), "--store", str(store), "--set", "sweep.mu_cn.points=5",
-                  "--ranks", "2", capsys=capsys)  # fmt: skip
+    two = dry_run(
+        str(job_file),
+        "--store",
+        str(store),
+        "--set",
+        "sweep.mu_cn.points=5",
+        "--ranks",
+        "2",
+        capsys=capsys,
+    )
     assert two["time"].endswith("on 2 ranks")
     assert main(["run", str(job_file), "--store", str(store), "--set", "sweep.mu_cn.points=5"]) == 0
     capsys.readouterr()
-    done = dry_run(str(job_file), "--store", str(store), "--set", "sweep.mu_cn.points=5",
-                   capsys=capsys)  # fmt: skip
+    done = dry_run(
+        str(job_file), "--store", str(store), "--set", "sweep.mu_cn.points=5", capsys=capsys
+    )
     assert done["store"] == f"{store}  (holds this job)"
     assert done["cells"].endswith("0 to compute") and done["tiles"].endswith("0 to compute")
     other = dry_run(str(job_file), "--store", str(store), capsys=capsys)  # 3 rows: another job

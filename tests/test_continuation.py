@@ -25,14 +25,18 @@ from campar.sweep.tile import run_tile
 
 def chain(extrapolate: int):
     """One continuation chain along ω from 3 to 1 at the base parameters (μcn 0.8)."""
-    job = Job.from_dict({
-        "name": "chain",
-        "sweep": {"omega": {"from": 3.0, "to": 1.0, "points": 81},
-                  "mu_cn": {"from": 0.8, "to": 0.8, "points": 1}},
-        "fixed": {"zeta": 0.2, "mu_kn": 0.8, "f0": 0.5},
-        "transient": {"extrapolate": extrapolate},
-        "outputs": ["label", "dc", "lyapunov"],
-    })  # fmt: skip
+    job = Job.from_dict(
+        {
+            "name": "chain",
+            "sweep": {
+                "omega": {"from": 3.0, "to": 1.0, "points": 81},
+                "mu_cn": {"from": 0.8, "to": 0.8, "points": 1},
+            },
+            "fixed": {"zeta": 0.2, "mu_kn": 0.8, "f0": 0.5},
+            "transient": {"extrapolate": extrapolate},
+            "outputs": ["label", "dc", "lyapunov"],
+        }
+    )
     (tile,) = plan_tiles(job)
     return job, {name: values[0] for name, values in run_tile(job, tile).items()}
 
@@ -102,8 +106,13 @@ def test_the_slow_escape_from_an_unstable_cycle_is_not_read_as_a_torus():
     leaves the cycle along its unstable direction and settles on the 2-2 cycle, which an
     independent SciPy shooting confirms (stable, at campar's points), as it confirms the
     1-cycle's multiplier and that the orbit's slow growth is that multiplier's."""
-    found = simulate_point(ESCAPE.omega, multipliers=True, y0=NEXT_TO_THE_1_CYCLE["y0"],
-                           v0=NEXT_TO_THE_1_CYCLE["v0"], **ESCAPE.parameters)  # fmt: skip
+    found = simulate_point(
+        ESCAPE.omega,
+        multipliers=True,
+        y0=NEXT_TO_THE_1_CYCLE["y0"],
+        v0=NEXT_TO_THE_1_CYCLE["v0"],
+        **ESCAPE.parameters,
+    )
     assert found.label == "2-2" and found.revolutions < 100
     assert "escaped" in found.flags
     parameters = {"omega": ESCAPE.omega, "mu_cn": ESCAPE.mu_cn}
@@ -137,28 +146,34 @@ def test_a_budget_ending_on_a_slow_stable_cycle_is_that_cycle():
     yet the motion sits on the stable 2-2 cycle that an independent SciPy shooting finds
     (rtol 1e-10) within the 1e-4 the verdict asks; the cell says so, flagged slow."""
     parameters = {"omega": 2.351717171717172, "mu_cn": 0.8515151515151514}
-    found = simulate_point(multipliers=True, y0=0.08519105224337234, v0=-1.0035574481119836,
-                           **parameters)  # fmt: skip
+    found = simulate_point(
+        multipliers=True, y0=0.08519105224337234, v0=-1.0035574481119836, **parameters
+    )
     assert found.label == "2-2" and found.revolutions == 500
     assert "slow" in found.flags
     two, m2 = scipy_shooting.fixed_point(parameters, found.state, 2)
     reference = scipy_shooting.multipliers(m2)
     assert 0.99 < np.abs(reference).max() < 1.0  # stable and slow
     assert np.abs(two - np.array(found.state)).max() < 1e-4
-    np.testing.assert_allclose(sorted(reference.real), sorted(m.real for m in found.multipliers),
-                               atol=1e-3)  # fmt: skip
+    np.testing.assert_allclose(
+        sorted(reference.real), sorted(m.real for m in found.multipliers), atol=1e-3
+    )
 
 
 def one_cell(cell: Cell, y0: float, v0: float, **transient) -> dict:
-    job = Job.from_dict({
-        "name": "one_cell",
-        "sweep": {"omega": {"from": cell.omega, "to": cell.omega, "points": 1},
-                  "mu_cn": {"from": cell.mu_cn, "to": cell.mu_cn, "points": 1}},
-        "fixed": {"zeta": cell.zeta, "mu_kn": cell.mu_kn, "f0": cell.f0},
-        "initial": {"y": y0, "v": v0},
-        "transient": transient,
-        "outputs": ["label", "lyapunov"],
-    })  # fmt: skip
+    job = Job.from_dict(
+        {
+            "name": "one_cell",
+            "sweep": {
+                "omega": {"from": cell.omega, "to": cell.omega, "points": 1},
+                "mu_cn": {"from": cell.mu_cn, "to": cell.mu_cn, "points": 1},
+            },
+            "fixed": {"zeta": cell.zeta, "mu_kn": cell.mu_kn, "f0": cell.f0},
+            "initial": {"y": y0, "v": v0},
+            "transient": transient,
+            "outputs": ["label", "lyapunov"],
+        }
+    )
     (tile,) = plan_tiles(job)
     return {name: values[0, 0] for name, values in run_tile(job, tile).items()}
 

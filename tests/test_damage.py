@@ -65,31 +65,58 @@ ZARR_DAMAGE = [
     ("a chunk's bit flipped", lambda s: _flip(s / "sections" / "c.2.0.0.0", 9), [2], None),
     ("dc/zarr.json deleted", lambda s: (s / "dc" / "zarr.json").unlink(), [], "dc"),
     ("n/zarr.json garbage", lambda s: (s / "n" / "zarr.json").write_text("{x"), [], "n"),
-    ("scale_factor in the consolidated copy",
-     lambda s: _consolidated(s, "dc", lambda m: m["attributes"].update(scale_factor=2.0)),
-     [], "dc"),
-    ("add_offset in the array's own document",
-     lambda s: zarr.open_array(s / "dc", mode="r+").attrs.update({"add_offset": 1.0}), [], "dc"),
-    ("_FillValue changed",
-     lambda s: _consolidated(s, "dc", lambda m: m["attributes"].update(_FillValue="AAAAAAAA8D8=")),
-     [], "dc"),
-    ("units changed", lambda s: _consolidated(s, "omega", lambda m: m["attributes"].update(
-        units="rad/s")), [], "omega"),
+    (
+        "scale_factor in the consolidated copy",
+        lambda s: _consolidated(s, "dc", lambda m: m["attributes"].update(scale_factor=2.0)),
+        [],
+        "dc",
+    ),
+    (
+        "add_offset in the array's own document",
+        lambda s: zarr.open_array(s / "dc", mode="r+").attrs.update({"add_offset": 1.0}),
+        [],
+        "dc",
+    ),
+    (
+        "_FillValue changed",
+        lambda s: _consolidated(
+            s, "dc", lambda m: m["attributes"].update(_FillValue="AAAAAAAA8D8=")
+        ),
+        [],
+        "dc",
+    ),
+    (
+        "units changed",
+        lambda s: _consolidated(s, "omega", lambda m: m["attributes"].update(units="rad/s")),
+        [],
+        "omega",
+    ),
     ("omega edited", lambda s: _zarr_set(s, "omega", 0, 5.5), [], "omega"),
     ("zeta edited", lambda s: _zarr_set(s, "zeta", 4, 0.31), [], "zeta"),
     ("a fixed parameter edited", lambda s: _zarr_set(s, "mu_kn", (), 0.5), [], "mu_kn"),
-    ("tile_row_start edited", lambda s: _zarr_set(s, "tile_row_start", 1, 3), [],
-     "tile_row_start"),
+    ("tile_row_start edited", lambda s: _zarr_set(s, "tile_row_start", 1, 3), [], "tile_row_start"),
     ("omega's chunk bit flipped", lambda s: _flip(s / "omega" / "c.0", 3), [], "omega"),
     ("omega's chunk deleted", lambda s: (s / "omega" / "c.0").unlink(), [], "omega"),
-    ("a global attribute edited", lambda s: zarr.open_group(s, mode="r+").attrs.update(
-        {"tensile": "allow"}), [], "(global attributes)"),
-    ("the checksums attribute garbage",
-     lambda s: zarr.open_group(s, mode="r+").attrs.update({"metadata_checksums": "[1"}), [],
-     None),
-]  # fmt: skip
-QUICK_ZARR = ("value edited through zarr", "kind chunks swapped", "dc/zarr.json deleted",
-              "scale_factor in the consolidated copy", "omega edited")  # fmt: skip
+    (
+        "a global attribute edited",
+        lambda s: zarr.open_group(s, mode="r+").attrs.update({"tensile": "allow"}),
+        [],
+        "(global attributes)",
+    ),
+    (
+        "the checksums attribute garbage",
+        lambda s: zarr.open_group(s, mode="r+").attrs.update({"metadata_checksums": "[1"}),
+        [],
+        None,
+    ),
+]
+QUICK_ZARR = (
+    "value edited through zarr",
+    "kind chunks swapped",
+    "dc/zarr.json deleted",
+    "scale_factor in the consolidated copy",
+    "omega edited",
+)
 
 
 def _h5_edit(store, change):
@@ -111,17 +138,26 @@ def _h5_scale(f):
 # HDF5 damage: the file's seal (a digest of every byte) sees it all, and the file is read
 # through a rescued copy of what verifies; an unsealed file is checked variable by variable.
 HDF5_DAMAGE = [
-    ("value edited through h5py", lambda s: _h5_edit(s, lambda f: f["dc"].__setitem__(
-        (0, 0), 0.125)), "file"),
+    (
+        "value edited through h5py",
+        lambda s: _h5_edit(s, lambda f: f["dc"].__setitem__((0, 0), 0.125)),
+        "file",
+    ),
     ("scale_factor added", lambda s: _h5_edit(s, _h5_scale), "file"),
     ("omega edited", lambda s: _h5_edit(s, lambda f: f["omega"].__setitem__(0, 5.5)), "file"),
-    ("_FillValue deleted", lambda s: _h5_edit(s, lambda f: f["dc"].attrs.__delitem__(
-        "_FillValue")), "file"),
+    (
+        "_FillValue deleted",
+        lambda s: _h5_edit(s, lambda f: f["dc"].attrs.__delitem__("_FillValue")),
+        "file",
+    ),
     ("a byte flipped near the end", lambda s: _flip(s, -9), "file"),
     ("unsealed, scale_factor added", lambda s: _h5_unsealed(s, _h5_scale), "dc"),
-    ("unsealed, omega edited",
-     lambda s: _h5_unsealed(s, lambda f: f["omega"].__setitem__(0, 5.5)), "omega"),
-]  # fmt: skip
+    (
+        "unsealed, omega edited",
+        lambda s: _h5_unsealed(s, lambda f: f["omega"].__setitem__(0, 5.5)),
+        "omega",
+    ),
+]
 QUICK_HDF5 = ("unsealed, scale_factor added",)  # a rescue in a child process takes seconds
 
 
@@ -279,11 +315,18 @@ def test_plot_of_a_basin_store_with_a_flipped_bit_draws_it_and_names_the_tile(
     import campar.sweep.runner as runner
     from campar.sweep.job import Job
 
-    job = Job.from_dict({
-        "name": "basin_damage", "sweep": {"y0": {"from": -0.5, "to": 0.5, "points": 6},
-                                          "ydot0": {"from": -1, "to": 1, "points": 4}},
-        "fixed": {"omega": 3.0}, "classify": {"window_revolutions": 16}, "tiles": {"rows": 2},
-    })  # fmt: skip
+    job = Job.from_dict(
+        {
+            "name": "basin_damage",
+            "sweep": {
+                "y0": {"from": -0.5, "to": 0.5, "points": 6},
+                "ydot0": {"from": -1, "to": 1, "points": 4},
+            },
+            "fixed": {"omega": 3.0},
+            "classify": {"window_revolutions": 16},
+            "tiles": {"rows": 2},
+        }
+    )
     path = tmp_path / "basin.zarr"
     runner.run_job(job, path)
     _flip(path / "kind" / "c.0.0", 17)

@@ -185,9 +185,11 @@ def netcdf_dump() -> str | None:
     (Debian's package of the netCDF C tools: the reader every netCDF program shares)."""
     if shutil.which("ncdump") is None and os.geteuid() == 0 and shutil.which("apt-get"):
         env = {**os.environ, "DEBIAN_FRONTEND": "noninteractive"}
-        for command in (["apt-get", "install", "-y", "-q", "netcdf-bin"],
-                        ["apt-get", "update", "-q"],
-                        ["apt-get", "install", "-y", "-q", "netcdf-bin"]):  # fmt: skip
+        for command in (
+            ["apt-get", "install", "-y", "-q", "netcdf-bin"],
+            ["apt-get", "update", "-q"],
+            ["apt-get", "install", "-y", "-q", "netcdf-bin"],
+        ):
             done = subprocess.run(command, capture_output=True, env=env, timeout=900)
             if done.returncode == 0 and shutil.which("ncdump"):
                 break

@@ -31,14 +31,20 @@ def lift(cam, theta, phase):
 def closed_form(name, u):
     """s, s', s'' on u ∈ [0, 1] from the law's definition (docs/design.md)."""
     if name == "cosine":
-        return (1 - math.cos(math.pi * u)) / 2, math.pi / 2 * math.sin(math.pi * u), \
-            math.pi**2 / 2 * math.cos(math.pi * u)  # fmt: skip
+        return (
+            (1 - math.cos(math.pi * u)) / 2,
+            math.pi / 2 * math.sin(math.pi * u),
+            math.pi**2 / 2 * math.cos(math.pi * u),
+        )
     if name == "cycloidal":
         w = 2 * math.pi
         return u - math.sin(w * u) / w, 1 - math.cos(w * u), w * math.sin(w * u)
     if name == "polynomial-345":
-        return 10 * u**3 - 15 * u**4 + 6 * u**5, 30 * u**2 - 60 * u**3 + 30 * u**4, \
-            60 * u - 180 * u**2 + 120 * u**3  # fmt: skip
+        return (
+            10 * u**3 - 15 * u**4 + 6 * u**5,
+            30 * u**2 - 60 * u**3 + 30 * u**4,
+            60 * u - 180 * u**2 + 120 * u**3,
+        )
     return Composite(PIECES[name])(u)  # the peer's: built from the acceleration pieces
 
 
@@ -108,9 +114,12 @@ def test_the_paper_law_is_the_paper_kernel_bit_for_bit():
         phase = through_numba(M.phase_of)(theta) if theta < 2 * math.pi else 3
         s3, c3 = math.sin(3.0 * theta), math.cos(3.0 * theta)
         u = 3.0 * (theta - math.pi)
-        want = {0: (0.5 * (1.0 - c3), 1.5 * s3, 4.5 * c3),
-                2: (0.5 * (1.0 + math.cos(u)), -1.5 * math.sin(u), -4.5 * math.cos(u)),
-                1: (1.0, 0.0, 0.0), 3: (0.0, 0.0, 0.0)}[phase]  # fmt: skip
+        want = {
+            0: (0.5 * (1.0 - c3), 1.5 * s3, 4.5 * c3),
+            2: (0.5 * (1.0 + math.cos(u)), -1.5 * math.sin(u), -4.5 * math.cos(u)),
+            1: (1.0, 0.0, 0.0),
+            3: (0.0, 0.0, 0.0),
+        }[phase]
         assert tuple(lift(C.PAPER_CAM, theta, phase)) == want
 
 
@@ -151,14 +160,18 @@ def test_periodic_spline_is_scipys():
 BAD_TABLES = {
     "too few": ("0,0\n1,1\n", "at least 16"),
     "start": ("\n".join(f"{0.1 + 0.1 * i},{0}" for i in range(40)), "starts at θ = 0"),
-    "order": ("\n".join(f"{t},0" for t in [0, 0.1, 0.3, 0.2, *(0.4 + 0.1 * i for i in range(40))]),
-              "rise strictly"),
+    "order": (
+        "\n".join(f"{t},0" for t in [0, 0.1, 0.3, 0.2, *(0.4 + 0.1 * i for i in range(40))]),
+        "rise strictly",
+    ),
     "degrees": ("\n".join(f"{t},{0}" for t in range(0, 361, 5)), "radians, not degrees"),
-    "open": ("\n".join(f"{2 * math.pi * i / 64!r},{1.0 if i == 64 else 0.0}" for i in range(65)),
-             "does not close"),
+    "open": (
+        "\n".join(f"{2 * math.pi * i / 64!r},{1.0 if i == 64 else 0.0}" for i in range(65)),
+        "does not close",
+    ),
     "gap": ("\n".join(f"{t},{0}" for t in np.linspace(0, 3, 40)), "a gap of"),
     "text": ("theta,S\n0,0\n0.1,x\n", "not two numbers"),
-}  # fmt: skip
+}
 
 
 @pytest.mark.parametrize("case", BAD_TABLES)
@@ -174,8 +187,10 @@ def test_bad_tables_are_refused_with_one_line(case, tmp_path):
     assert "\n" not in str(raised.value)
 
 
-SWEEP = {"omega": {"from": 3.0, "to": 1.0, "points": 5}, "mu_cn": {"from": 0.8, "to": 0.8,
-                                                                    "points": 1}}  # fmt: skip
+SWEEP = {
+    "omega": {"from": 3.0, "to": 1.0, "points": 5},
+    "mu_cn": {"from": 0.8, "to": 0.8, "points": 1},
+}
 
 
 @pytest.mark.parametrize(
@@ -185,18 +200,23 @@ SWEEP = {"omega": {"from": 3.0, "to": 1.0, "points": 5}, "mu_cn": {"from": 0.8, 
         ({"cam": {"phi1": -0.1, "phi4": 2 * math.pi / 3 + math.pi / 3 + 0.1}}, {}, "must be > 0"),
         ({"cam": {"rise": "parabolic"}}, {}, "cycloidal"),
         ({}, {"phi1": {"from": 0.5, "to": 3.5, "points": 3}}, "phi4 .near dwell. must be ≥ 0"),
-        ({"cam": {"phi1": 1.0, "phi4": math.pi - 1.0}},
-         {"phi1": {"from": 0.5, "to": 1, "points": 3}},
-         "both swept and set"),
+        (
+            {"cam": {"phi1": 1.0, "phi4": math.pi - 1.0}},
+            {"phi1": {"from": 0.5, "to": 1, "points": 3}},
+            "both swept and set",
+        ),
         ({}, {"restitution": {"from": 0.5, "to": 0.9, "points": 3}}, "hunt-crossley"),
         ({"contact": {"restitution": 0.5}}, {}, "belongs to lankarani-nikravesh"),
         ({"contact": {"law": "flores", "restitution": 0.0}}, {}, "greater than 0"),
         ({"contact": {"n": 0.5}}, {}, "greater than or equal to 1"),
     ],
-)  # fmt: skip
+)
 def test_inconsistent_laws_are_refused_with_one_line(model, sweep, words):
-    data = {"name": "x", "sweep": {**SWEEP, **sweep} if not sweep else
-            {"omega": SWEEP["omega"], **sweep}, "model": model}  # fmt: skip
+    data = {
+        "name": "x",
+        "sweep": {**SWEEP, **sweep} if not sweep else {"omega": SWEEP["omega"], **sweep},
+        "model": model,
+    }
     with pytest.raises(JobError, match=words) as raised:
         Job.from_dict(data)
     assert "\n" not in str(raised.value)
@@ -204,8 +224,15 @@ def test_inconsistent_laws_are_refused_with_one_line(model, sweep, words):
 
 def test_a_swept_angle_takes_up_the_near_dwell_and_keeps_the_paper_bit_for_bit():
     third = math.pi / 3
-    job = Job.from_dict({"name": "x", "sweep": {"omega": SWEEP["omega"],
-                         "phi1": {"from": third, "to": third + 0.2, "points": 3}}})  # fmt: skip
+    job = Job.from_dict(
+        {
+            "name": "x",
+            "sweep": {
+                "omega": SWEEP["omega"],
+                "phi1": {"from": third, "to": third + 0.2, "points": 3},
+            },
+        }
+    )
     assert job.law(0) == M.kernel_law(M.PAPER_LAW)  # the paper's cam, every float
     cam = job.law(2).cam
     assert cam.bounds[1] == pytest.approx(third + 0.2) and cam.bounds[4] == 2 * math.pi
@@ -217,30 +244,63 @@ def test_a_swept_angle_takes_up_the_near_dwell_and_keeps_the_paper_bit_for_bit()
 
 # (cam and contact settings of the job, the SciPy model's options); each a kernel of its own
 LAW_CASES = {
-    "cycloidal/345": ({"cam": {"rise": "cycloidal", "fall": "polynomial-345", "phi1": 1.1,
-                               "phi2": 1.9, "phi3": 0.9, "phi4": ANGLES[3]}},
-                      dict(rise="cycloidal", fall="polynomial-345", angles=ANGLES)),
-    "trapezoid/sine": ({"cam": {"rise": "modified-trapezoid", "fall": "modified-sine"}},
-                       dict(rise="modified-trapezoid", fall="modified-sine")),
+    "cycloidal/345": (
+        {
+            "cam": {
+                "rise": "cycloidal",
+                "fall": "polynomial-345",
+                "phi1": 1.1,
+                "phi2": 1.9,
+                "phi3": 0.9,
+                "phi4": ANGLES[3],
+            }
+        },
+        dict(rise="cycloidal", fall="polynomial-345", angles=ANGLES),
+    ),
+    "trapezoid/sine": (
+        {"cam": {"rise": "modified-trapezoid", "fall": "modified-sine"}},
+        dict(rise="modified-trapezoid", fall="modified-sine"),
+    ),
     "hunt-crossley n=1.1": ({"contact": {"n": 1.1}}, dict(n=1.1)),
-    "lankarani-nikravesh": ({"contact": {"law": "lankarani-nikravesh", "restitution": 0.6}},
-                            dict(contact="lankarani-nikravesh", restitution=0.6)),
-    "flores": ({"contact": {"law": "flores", "n": 1.3, "restitution": 0.7}},
-               dict(contact="flores", n=1.3, restitution=0.7)),
-}  # fmt: skip
+    "lankarani-nikravesh": (
+        {"contact": {"law": "lankarani-nikravesh", "restitution": 0.6}},
+        dict(contact="lankarani-nikravesh", restitution=0.6),
+    ),
+    "flores": (
+        {"contact": {"law": "flores", "n": 1.3, "restitution": 0.7}},
+        dict(contact="flores", n=1.3, restitution=0.7),
+    ),
+}
 
 
 def campar_orbit(model, omega, x0, revolutions, rtol):
-    job = Job.from_dict({
-        "name": "x", "sweep": {"omega": {"from": omega, "to": omega, "points": 1},
-                               "mu_cn": {"from": 0.8, "to": 0.8, "points": 1}},
-        "model": model, "integrator": {"method": "dp54", "rtol": rtol, "atol": rtol * 1e-2},
-        "outputs": ["label"],
-    })  # fmt: skip
+    job = Job.from_dict(
+        {
+            "name": "x",
+            "sweep": {
+                "omega": {"from": omega, "to": omega, "points": 1},
+                "mu_cn": {"from": 0.8, "to": 0.8, "points": 1},
+            },
+            "model": model,
+            "integrator": {"method": "dp54", "rtol": rtol, "atol": rtol * 1e-2},
+            "outputs": ["label"],
+        }
+    )
     rec = make_trace(1, 1000, 1)
     solver, settings = solver_options(job), cell_settings(job)
-    status, y, v = trace_orbit(omega, 0.2, 0.5, 0.8, 0.8, job.law(), np.array(x0, float), solver,
-                               settings, revolutions, rec)  # fmt: skip
+    status, y, v = trace_orbit(
+        omega,
+        0.2,
+        0.5,
+        0.8,
+        0.8,
+        job.law(),
+        np.array(x0, float),
+        solver,
+        settings,
+        revolutions,
+        rec,
+    )
     assert status == 0
     events = rec.events[: rec.count[1]]
     return np.array([y, v]), [(t, EVENT_NAMES[int(code)]) for t, _, _, code in events]
@@ -265,8 +325,10 @@ def test_each_law_matches_the_scipy_peer(case, omega):
 
 # The paper's (ω, μcn) plane below ω = 4, where no cell is chaotic: chaos turns the table's
 # rounding-level difference into another window, and a cell at its edge into another label.
-PLANE = {"omega": {"from": 4.0, "to": 0.02, "points": 100},
-         "mu_cn": {"from": 0.95, "to": 0.70, "points": 100}}  # fmt: skip
+PLANE = {
+    "omega": {"from": 4.0, "to": 0.02, "points": 100},
+    "mu_cn": {"from": 0.95, "to": 0.70, "points": 100},
+}
 
 
 @pytest.mark.slow
@@ -278,11 +340,17 @@ def test_a_tabulated_cosine_law_reproduces_the_built_in_map(tmp_path):
     law's differs between start states and tolerances by as much, docs/design.md)."""
     table = tmp_path / "cosine.csv"
     table.write_text(cosine_table(36000))
-    base = {"name": "plane", "sweep": PLANE, "chains": {"start": "continue"},
-            "outputs": ["label", "dc", "eps", "pn"], "tiles": {"rows": 10}}  # fmt: skip
+    base = {
+        "name": "plane",
+        "sweep": PLANE,
+        "chains": {"start": "continue"},
+        "outputs": ["label", "dc", "eps", "pn"],
+        "tiles": {"rows": 10},
+    }
     built_in = reference_arrays(Job.from_dict(base))
-    tabulated = reference_arrays(Job.from_dict(
-        {**base, "model": {"cam": {"table": str(table), "table_joins": "phases"}}}))  # fmt: skip
+    tabulated = reference_arrays(
+        Job.from_dict({**base, "model": {"cam": {"table": str(table), "table_joins": "phases"}}})
+    )
     labels = [cell_labels(m["kind"], m["n"], m["p"]) for m in (built_in, tabulated)]
     np.testing.assert_array_equal(labels[1], labels[0])
     # A cell whose budget ended on a slow stable cycle is periodic within 1e-4 of its cycle
@@ -319,8 +387,14 @@ def test_phi1_swept_through_the_papers_angle_gives_the_papers_row_bit_for_bit():
             }
         )
     )
-    paper = reference_arrays(Job.from_dict({"name": "paper", "sweep": {
-        "omega": omega, "mu_cn": {"from": 0.8, "to": 0.8, "points": 1}}}))  # fmt: skip
+    paper = reference_arrays(
+        Job.from_dict(
+            {
+                "name": "paper",
+                "sweep": {"omega": omega, "mu_cn": {"from": 0.8, "to": 0.8, "points": 1}},
+            }
+        )
+    )
     assert np.linspace(third - 0.1, third + 0.1, 3)[1] == third
     for name, values in paper.items():
         np.testing.assert_array_equal(swept[name][1], values[0], err_msg=name)

@@ -65,12 +65,16 @@ def test_a_both_job_stores_sections_and_refuses_bad_directions():
     assert job.wants("sections") and job.directions == ("down", "up")
     assert job.one_direction("up").chains.direction == "up"
     assert job.one_direction("up").to_dict()["outputs"] == job.to_dict()["outputs"]
-    with pytest.raises(JobError, match=r"^job: chains.direction: Input should be 'down', 'up' or "
-                       "'both', got 'sideways'$"):  # fmt: skip
+    with pytest.raises(
+        JobError,
+        match=r"^job: chains.direction: Input should be 'down', 'up' or "
+        "'both', got 'sideways'$",
+    ):
         Job.from_dict(merge(SMALL_JOB, {"chains": {"direction": "sideways"}}))
     with pytest.raises(JobError, match="sections must be ≥ n_max or unset, got 8"):
-        Job.from_dict(merge(SMALL_JOB, {"chains": {"direction": "both"},
-                                        "classify": {"sections": 8}}))  # fmt: skip
+        Job.from_dict(
+            merge(SMALL_JOB, {"chains": {"direction": "both"}, "classify": {"sections": 8}})
+        )
     # One-direction jobs are as before: no sections unless asked, no direction axis.
     assert not Job.from_dict(SMALL_JOB).wants("sections")
 
@@ -119,8 +123,11 @@ def test_a_both_store_is_the_down_and_the_up_store_bit_for_bit(tmp_path, suffix)
     np.testing.assert_array_equal(ds["hysteresis"].values, expected)
     assert expected.any() and not expected.all()
 
-    raw = (xr.open_zarr(paths["both"]) if suffix == ".zarr"
-           else xr.open_dataset(paths["both"], engine="h5netcdf"))  # fmt: skip
+    raw = (
+        xr.open_zarr(paths["both"])
+        if suffix == ".zarr"
+        else xr.open_dataset(paths["both"], engine="h5netcdf")
+    )
     with raw:
         assert raw["kind"].dims == ("direction", "mu_cn", "omega")
         assert raw["direction"].values.tolist() == ["down", "up"]
@@ -268,8 +275,12 @@ def cell(points, n=None, kind=Kind.PERIODIC, status=Status.OK, size=8) -> dict:
     sections = np.full((1, size, 2), np.nan)
     sections[0, : len(points)] = points
     n = len(points) if n is None else n
-    return {"kind": np.array([kind], np.int8), "status": np.array([status], np.int8),
-            "n": np.array([n], np.int32), "sections": sections}  # fmt: skip
+    return {
+        "kind": np.array([kind], np.int8),
+        "status": np.array([status], np.int8),
+        "n": np.array([n], np.int32),
+        "sections": sections,
+    }
 
 
 def hysteretic(a: dict, b: dict) -> bool:
@@ -389,8 +400,13 @@ def test_each_direction_s_cycle_of_the_hysteretic_cells_is_an_attractor_by_scipy
         for direction in ("down", "up"):
             d = row.sel(direction=direction)
             n = int(d["n"][i])
-            peer = scipy_cell(Model(omega, mu_kn=float(row["mu_kn"])), d["state"].values[i], 40,
-                              2 * n + 4, rtol=1e-10)  # fmt: skip
+            peer = scipy_cell(
+                Model(omega, mu_kn=float(row["mu_kn"])),
+                d["state"].values[i],
+                40,
+                2 * n + 4,
+                rtol=1e-10,
+            )
             assert peer.label == f"{n}-{int(d['p'][i])}", (omega, direction)
             cycle = peer.sections[-n:]
             assert same_cycles([n], cycle[None], [n], d["sections"].values[i][None, :n], 1e-5)[0]

@@ -19,8 +19,13 @@ from campar.cli import build_parser
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-PAGES = [ROOT / "README.md", ROOT / "jobs" / "README.md", ROOT / "slurm" / "README.md",
-         ROOT / "benchmarks" / "RESULTS.md", *sorted(DOCS.rglob("*.md"))]  # fmt: skip
+PAGES = [
+    ROOT / "README.md",
+    ROOT / "jobs" / "README.md",
+    ROOT / "slurm" / "README.md",
+    ROOT / "benchmarks" / "RESULTS.md",
+    *sorted(DOCS.rglob("*.md")),
+]
 
 
 def api_objects() -> list[str]:
@@ -39,8 +44,9 @@ def example_dir(tmp_path_factory):
     """A working directory as the examples assume: the jobs, and the smoke map computed."""
     where = tmp_path_factory.mktemp("examples")
     (where / "jobs").symlink_to(ROOT / "jobs")
-    run = subprocess.run([*CAMPAR, "run", "jobs/smoke.yaml"], cwd=where, text=True,
-                         capture_output=True, timeout=600)  # fmt: skip
+    run = subprocess.run(
+        [*CAMPAR, "run", "jobs/smoke.yaml"], cwd=where, text=True, capture_output=True, timeout=600
+    )
     assert run.returncode == 0, run.stderr
     return where
 
@@ -142,8 +148,9 @@ def shown_outputs():
 
 @pytest.mark.parametrize(("page", "command", "shown"), shown_outputs(), ids=str)
 def test_a_command_shown_with_its_output_prints_it(page, command, shown):
-    out = subprocess.run([*CAMPAR, *shlex.split(command)[1:]], text=True,
-                         capture_output=True, timeout=300)  # fmt: skip
+    out = subprocess.run(
+        [*CAMPAR, *shlex.split(command)[1:]], text=True, capture_output=True, timeout=300
+    )
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines() == shown, page
 
@@ -180,9 +187,13 @@ def test_the_version_follows_the_changelog():
 @pytest.mark.slow
 def test_the_site_builds_without_a_warning(tmp_path):
     sphinx = Path(sys.executable).parent / "sphinx-build"
-    run = subprocess.run([str(sphinx), "-W", "--keep-going", "-q", "-b", "html", str(DOCS),
-                          str(tmp_path / "html")], text=True, capture_output=True,
-                         timeout=900, env={**os.environ, "PYTHONWARNINGS": "ignore"})  # fmt: skip
+    run = subprocess.run(
+        [str(sphinx), "-W", "--keep-going", "-q", "-b", "html", str(DOCS), str(tmp_path / "html")],
+        text=True,
+        capture_output=True,
+        timeout=900,
+        env={**os.environ, "PYTHONWARNINGS": "ignore"},
+    )
     assert run.returncode == 0, run.stderr[-5000:]
 
 
@@ -200,8 +211,15 @@ def test_the_readme_tour_runs_as_shown(example_dir):
         while lines[i] != "```" and not lines[i].startswith("$ "):
             shown.append(lines[i])
             i += 1
-        run = subprocess.run(command, shell=True, cwd=example_dir, env=env, text=True,
-                             capture_output=True, timeout=300)  # fmt: skip
+        run = subprocess.run(
+            command,
+            shell=True,
+            cwd=example_dir,
+            env=env,
+            text=True,
+            capture_output=True,
+            timeout=300,
+        )
         assert run.returncode == 0, f"{command}: {run.stderr}"
         assert run.stdout.splitlines() == shown, command
     assert (example_dir / "smoke.png").stat().st_size > 0

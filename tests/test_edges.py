@@ -119,8 +119,9 @@ def test_hdf5_never_meets_a_full_disk_inside_the_library(tmp_path):
     """)
     env = {**os.environ, "PYTHONPATH": os.path.dirname(__file__)}
     with small_disk(disk, 160):
-        done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                              env=env, timeout=120)  # fmt: skip
+        done = subprocess.run(
+            [sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=120
+        )
         assert done.returncode == 1, done.stderr[-2000:]
         assert "StoreIOError" in done.stderr and "No space left on device" in done.stderr
         assert "HDF5-DIAG" not in done.stderr and len(done.stderr.splitlines()) < 40
@@ -188,8 +189,10 @@ def test_a_store_below_a_file_is_named_as_such(tmp_path, capsys):
 
     (tmp_path / "plain.txt").write_text("")
     job = tmp_path / "j.yaml"
-    job.write_text("name: x\nsweep: {omega: {from: 6, to: 1, points: 3}, "
-                   "mu_cn: {from: 0.9, to: 0.5, points: 2}}\n")  # fmt: skip
+    job.write_text(
+        "name: x\nsweep: {omega: {from: 6, to: 1, points: 3}, "
+        "mu_cn: {from: 0.9, to: 0.5, points: 2}}\n"
+    )
     assert main(["run", str(job), "--store", str(tmp_path / "plain.txt" / "s.zarr")]) == 74
     err = capsys.readouterr().err
     assert "plain.txt is a file, not a folder" in err and "File exists" not in err
@@ -198,8 +201,10 @@ def test_a_store_below_a_file_is_named_as_such(tmp_path, capsys):
 def test_plot_and_point_refuse_a_bad_output_in_one_line(tmp_path, capsys):
     path = tmp_path / "s.zarr"
     synthetic_store(path)
-    for args in (("plot", path, "-o", tmp_path / "p.xyz"),
-                 ("point", "--omega", "3", "--plot", "/proc/x.png")):  # fmt: skip
+    for args in (
+        ("plot", path, "-o", tmp_path / "p.xyz"),
+        ("point", "--omega", "3", "--plot", "/proc/x.png"),
+    ):
         assert main([*map(str, args)]) == OutputError.exit_code
         err = capsys.readouterr().err
         assert err.startswith(f"campar {args[0]}: cannot write the figure")
@@ -280,7 +285,7 @@ SWEEP = (
         (SWEEP.replace("{from: 0.9,", "{from: 0.9, from: 0.8,"), "'from' is given twice"),
     ],
     ids=["from=to", "bool points", "bool fixed", "bool rtol", "duplicate top", "duplicate inner"],
-)  # fmt: skip
+)
 def test_job_files_that_mean_something_else_are_refused(tmp_path, text, expected):
     path = tmp_path / "job.yaml"
     path.write_text("name: x\n" + text)
@@ -297,15 +302,28 @@ def test_a_single_point_axis_may_have_from_equal_to():
 
 
 def test_a_job_too_large_is_refused_with_the_estimate_and_the_option_raises_the_limit():
-    huge = Job.from_dict({"name": "huge", "sweep": {
-        "omega": {"from": 6, "to": 0.02, "points": 100_000},
-        "mu_cn": {"from": 0.99, "to": 0.5, "points": 100_000}}})  # fmt: skip
+    huge = Job.from_dict(
+        {
+            "name": "huge",
+            "sweep": {
+                "omega": {"from": 6, "to": 0.02, "points": 100_000},
+                "mu_cn": {"from": 0.99, "to": 0.5, "points": 100_000},
+            },
+        }
+    )
     with pytest.raises(JobError, match=r"store would hold up to 670\.6 GiB.*--max-store 671G"):
         check_budget(huge)
     assert check_budget(huge, max_store=parse_size("671G")).cells == 10**10
-    wide = Job.from_dict({"name": "wide", "tiles": {"rows": 4000}, "sweep": {
-        "omega": {"from": 6, "to": 0.02, "points": 100_000},
-        "mu_cn": {"from": 0.99, "to": 0.5, "points": 4000}}})  # fmt: skip
+    wide = Job.from_dict(
+        {
+            "name": "wide",
+            "tiles": {"rows": 4000},
+            "sweep": {
+                "omega": {"from": 6, "to": 0.02, "points": 100_000},
+                "mu_cn": {"from": 0.99, "to": 0.5, "points": 4000},
+            },
+        }
+    )
     with pytest.raises(JobError, match="each rank would need about .*--max-memory"):
         check_budget(wide, max_store=DEFAULT_MAX_STORE * 100)
     assert estimate(make_job()).store_bytes < 10_000
@@ -314,8 +332,10 @@ def test_a_job_too_large_is_refused_with_the_estimate_and_the_option_raises_the_
 
 def test_campar_run_refuses_a_huge_job_before_touching_the_disk(tmp_path, capsys):
     job = tmp_path / "huge.yaml"
-    job.write_text("name: huge\nsweep:\n  omega: {from: 6, to: 0.02, points: 100000}\n"
-                   "  mu_cn: {from: 0.99, to: 0.5, points: 100000}\n")  # fmt: skip
+    job.write_text(
+        "name: huge\nsweep:\n  omega: {from: 6, to: 0.02, points: 100000}\n"
+        "  mu_cn: {from: 0.99, to: 0.5, points: 100000}\n"
+    )
     assert main(["run", str(job), "--store", str(tmp_path / "huge.zarr")]) == 2
     err = capsys.readouterr().err
     assert "670.6 GiB" in err and "--max-store" in err and len(err.splitlines()) == 1
@@ -353,15 +373,21 @@ def test_a_store_of_synthetic_tiles_resumes_after_a_kill_inside_a_write(tmp_path
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
 def test_under_mpirun_a_bad_job_or_store_is_reported_once(tmp_path):
     bad = tmp_path / "bad.yaml"
-    bad.write_text("name: x\nsweep:\n  omega: {from: 3, to: 3, points: 4}\n"
-                   "  mu_cn: {from: 0.9, to: 0.6, points: 3}\n")  # fmt: skip
+    bad.write_text(
+        "name: x\nsweep:\n  omega: {from: 3, to: 3, points: 4}\n"
+        "  mu_cn: {from: 0.9, to: 0.6, points: 3}\n"
+    )
     good = tmp_path / "good.yaml"
     good.write_text(bad.read_text().replace("to: 3,", "to: 1,"))
     with small_disk(tmp_path / "ro", 64):
         subprocess.run(["mount", "-o", "remount,ro", str(tmp_path / "ro")], check=True)
         for args, code in (((bad,), 2), ((good, "--store", tmp_path / "ro" / "s.zarr"), 74)):
-            out = subprocess.run([str(MPIRUN), "-n", "2", *CAMPAR, "run", *map(str, args)],
-                                 capture_output=True, text=True, timeout=300)  # fmt: skip
+            out = subprocess.run(
+                [str(MPIRUN), "-n", "2", *CAMPAR, "run", *map(str, args)],
+                capture_output=True,
+                text=True,
+                timeout=300,
+            )
             assert out.returncode == code, out.stdout + out.stderr
             assert out.stderr.count("campar run:") == 1, out.stderr
             assert "Traceback" not in out.stderr and "BAD TERMINATION" not in out.stdout

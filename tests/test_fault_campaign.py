@@ -99,8 +99,15 @@ def test_fault_campaign(tmp_path, suffix):
     synthetic_store(pristine, job)
     reference = campar.open(pristine).load()
     table = ZARR_DAMAGE if suffix == ".zarr" else HDF5_DAMAGE
-    counts = dict(faults=0, detected=0, repaired_bitwise=0, refused=0, tracebacks=0,
-                  silently_wrong=0, unchanged=0)  # fmt: skip
+    counts = dict(
+        faults=0,
+        detected=0,
+        repaired_bitwise=0,
+        refused=0,
+        tracebacks=0,
+        silently_wrong=0,
+        unchanged=0,
+    )
     wrong_cases = []
     path = tmp_path / f"s{suffix}"
     for _ in range(FAULTS[suffix] * ROUNDS):
@@ -158,8 +165,13 @@ def test_fault_campaign(tmp_path, suffix):
             warnings.simplefilter("error", StoreDamageWarning)
             assert not _silently_wrong(campar.open(path).load(), reference)
         counts["repaired_bitwise"] += 1
-    print("CAMPAIGN layout=" + suffix.lstrip(".") + " " + " ".join(
-        f"{k}={v}" for k, v in counts.items()), flush=True)  # fmt: skip
+    print(
+        "CAMPAIGN layout="
+        + suffix.lstrip(".")
+        + " "
+        + " ".join(f"{k}={v}" for k, v in counts.items()),
+        flush=True,
+    )
     assert counts["tracebacks"] == 0 and counts["silently_wrong"] == 0, wrong_cases
     assert counts["faults"] > 0.8 * FAULTS[suffix] * ROUNDS
     assert counts["repaired_bitwise"] + counts["refused"] == counts["faults"]

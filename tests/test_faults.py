@@ -79,8 +79,13 @@ def kill_writers(path: Path, kills: int, seed: int, span: float = 0.6) -> int:
     rng = np.random.default_rng(seed)
     for _ in range(kills):
         at = rng.uniform(0.25, 0.25 + span)  # imports take ~0.25 s
-        done = subprocess.run([sys.executable, "-c", script, str(path), str(at)], env=env,
-                              capture_output=True, text=True, timeout=120)  # fmt: skip
+        done = subprocess.run(
+            [sys.executable, "-c", script, str(path), str(at)],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert done.returncode == -signal.SIGKILL, done.stderr
     return kills
 
@@ -194,8 +199,14 @@ def start_run(job_file: Path, mpi: bool) -> subprocess.Popen:
     command = [sys.executable, "-c", RUNNER, "run", str(job_file)]
     if mpi:
         command = [str(MPIRUN), "-n", "2", *command]
-    return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=subprocess_env(), start_new_session=True)  # fmt: skip
+    return subprocess.Popen(
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=subprocess_env(),
+        start_new_session=True,
+    )
 
 
 def timed_run(job_file: Path, mpi: bool) -> tuple[float, float]:
@@ -261,8 +272,9 @@ def test_runs_interrupted_at_random_moments_resume_bitwise_identical(
         pytest.skip(f"no mpirun at {MPIRUN}")
     rng = np.random.default_rng([len(suffix), mpi, len(how)])
     total = {"runs": 0, "interrupted": 0, "campaigns": 0}
-    timing = timed_run(write_job(name="timed", slow=True, store=str(tmp_path / f"t{suffix}"))[0],
-                       mpi)  # fmt: skip
+    timing = timed_run(
+        write_job(name="timed", slow=True, store=str(tmp_path / f"t{suffix}"))[0], mpi
+    )
     for campaign in range(ROUNDS):
         store = tmp_path / f"c{campaign}{suffix}"
         job_file, job = write_job(name=f"c{campaign}", slow=True, store=str(store))

@@ -64,8 +64,9 @@ def test_phase_portrait_marks_every_section_and_detachment_point(orbits):
     orbit, sections, detachments = ax.lines[:3]
     np.testing.assert_allclose(np.column_stack(sections.get_data()), r.sections)
     assert len(detachments.get_xdata()) == r.p
-    np.testing.assert_allclose(np.column_stack(detachments.get_data()),
-                               r.trace.events_named("detachment")[:, 1:])  # fmt: skip
+    np.testing.assert_allclose(
+        np.column_stack(detachments.get_data()), r.trace.events_named("detachment")[:, 1:]
+    )
     assert len(orbit.get_xdata()) == len(r.trace.t)
 
 
@@ -98,9 +99,13 @@ def test_orbit_views_need_a_trace(orbits):
 def test_composite_figures_render(orbits):
     panels = [
         {"kind": "phase", "result": orbits["2-2"], "heading": "$\\omega$ = 3\npaper 2-2"},
-        {"kind": "section", "result": orbits["chaos"], "cloud": orbits["chaos"].sections,
-         "heading": "chaos"},
-    ]  # fmt: skip
+        {
+            "kind": "section",
+            "result": orbits["chaos"],
+            "cloud": orbits["chaos"].sections,
+            "heading": "chaos",
+        },
+    ]
     assert_headless_png(plot_phase_grid(panels, columns=2))
     rows = [("f0", (0.5, 1.5), [[orbits["2-2"], orbits["allow"]], [orbits["1-0"], orbits["1-0"]]])]
     assert_headless_png(plot_gap_family(rows))
@@ -161,8 +166,20 @@ def test_only_one_line_parameter_may_vary():
 def test_line_command_draws_and_saves(tmp_path, capsys):
     out = tmp_path / "line.png"
     npz = tmp_path / "cells.npz"
-    argv = ["line", "--omega", "3.3:2.9", "--points", "40", "--mu-kn", "0.91", "0.922",
-            "-o", str(out), "--npz", str(npz)]  # fmt: skip
+    argv = [
+        "line",
+        "--omega",
+        "3.3:2.9",
+        "--points",
+        "40",
+        "--mu-kn",
+        "0.91",
+        "0.922",
+        "-o",
+        str(out),
+        "--npz",
+        str(npz),
+    ]
     assert main(argv) == 0
     assert out.read_bytes().startswith(PNG)
     data = np.load(tmp_path / "cells-2.npz")
@@ -173,9 +190,22 @@ def test_line_command_draws_and_saves(tmp_path, capsys):
 def test_point_command_writes_a_png(tmp_path):
     out = tmp_path / "orbit.png"
     done = subprocess.run(
-        [sys.executable, "-m", "campar.cli", "point", "--omega", "3", "--mu-kn", "0.91",
-         "--plot", str(out)], capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "campar.cli",
+            "point",
+            "--omega",
+            "3",
+            "--mu-kn",
+            "0.91",
+            "--plot",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 0, done.stderr
     assert "2-2" in done.stdout
     assert out.read_bytes().startswith(PNG)
@@ -190,10 +220,23 @@ def test_importing_the_views_stays_light():
     assert done.stdout.split() == ["False", "False"], done.stderr
 
 
-STEMS = ("fig2_omega_f0_labels", "fig2_omega_f0_dc", "fig2_omega_f0_lyapunov",
-         "fig4_mu_kn_labels", "fig4_mu_kn_dc", "fig4_mu_kn_lyapunov", "fig7_mu_cn_labels",
-         "fig7_mu_cn_dc", "fig7_mu_cn_lyapunov", "fig5_lines", "fig6_phase_portraits",
-         "fig3_gap_preload", "fig8_gap_stiffness_damping", "fig9_force", "orbit_point")  # fmt: skip
+STEMS = (
+    "fig2_omega_f0_labels",
+    "fig2_omega_f0_dc",
+    "fig2_omega_f0_lyapunov",
+    "fig4_mu_kn_labels",
+    "fig4_mu_kn_dc",
+    "fig4_mu_kn_lyapunov",
+    "fig7_mu_cn_labels",
+    "fig7_mu_cn_dc",
+    "fig7_mu_cn_lyapunov",
+    "fig5_lines",
+    "fig6_phase_portraits",
+    "fig3_gap_preload",
+    "fig8_gap_stiffness_damping",
+    "fig9_force",
+    "orbit_point",
+)
 
 
 @pytest.fixture(scope="module")

@@ -20,8 +20,14 @@ CELLS = [
 def test_multipliers_obey_liouville_and_match_finite_differences(cell):
     r = simulate_point(**cell, rtol=1e-10, multipliers=True, lyapunov=True)
     assert r.kind == "periodic"
-    model = Model(cell["omega"], cell.get("f0", 0.5), cell.get("mu_kn", 0.8),
-                  cell.get("mu_cn", 0.8), 0.2, True)  # fmt: skip
+    model = Model(
+        cell["omega"],
+        cell.get("f0", 0.5),
+        cell.get("mu_kn", 0.8),
+        cell.get("mu_cn", 0.8),
+        0.2,
+        True,
+    )
     state = np.array(r.state)
     # Liouville: det DP^n = exp(∮ div f dt) along the orbit (SciPy integrates div f)
     _, _, integral = integrate(model, state, r.n, rtol=1e-11, atol=1e-13, with_divergence=True)

@@ -48,8 +48,9 @@ def dip(t, y, f, p, mode, g, dg):
 
 def run(rhs, events, y0, t_end, p, opt, max_steps):
     """Step to t_end; returns the final state and the times of events (stopping at each)."""
-    return run_compiled(rhs, events, y0.copy(), t_end, p, opt, max_steps,
-                        I.make_work(y0.shape[0], 2, 1e-3))  # fmt: skip
+    return run_compiled(
+        rhs, events, y0.copy(), t_end, p, opt, max_steps, I.make_work(y0.shape[0], 2, 1e-3)
+    )
 
 
 @njit
@@ -93,8 +94,9 @@ def test_tableau_invariants():
 def test_dp54_error_tracks_rtol_on_an_oscillator(rtol):
     p = Omega(2.0)
     # to t = 1 the solution crosses y = 0 once (t = π/4): an event on the way
-    y, _, counts = run(oscillator, y_positive, np.array([1.0, 0.0]), 1.0, p, options(rtol=rtol),
-                       10**6)  # fmt: skip
+    y, _, counts = run(
+        oscillator, y_positive, np.array([1.0, 0.0]), 1.0, p, options(rtol=rtol), 10**6
+    )
     exact = np.array([math.cos(2.0), -2.0 * math.sin(2.0)])
     assert np.max(np.abs(y - exact)) < 10 * rtol
     assert counts[0] < 2000
@@ -112,8 +114,9 @@ def test_rk4_fixed_step_error_is_fourth_order():
     p = Omega(1.0)
     errs = []
     for h in (0.1, 0.05):
-        y, _, _ = run(oscillator, y_positive, np.array([1.0, 0.0]), 1.4, p,
-                      options(I.RK4, h_fixed=h), 10**6)  # fmt: skip
+        y, _, _ = run(
+            oscillator, y_positive, np.array([1.0, 0.0]), 1.4, p, options(I.RK4, h_fixed=h), 10**6
+        )
         errs.append(abs(y[0] - math.cos(1.4)))
     assert 12 < errs[0] / errs[1] < 20
 

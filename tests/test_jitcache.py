@@ -32,8 +32,9 @@ CHECK = textwrap.dedent("""
 def test_stale_entries_are_cleared_under_numba_cache_dir(tmp_path):
     # numba keeps entries in NUMBA_CACHE_DIR/<source dir>_<hash>/, not at its top
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
-    run = subprocess.run([sys.executable, "-c", CHECK], env=env, capture_output=True,
-                         text=True, timeout=120)  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-c", CHECK], env=env, capture_output=True, text=True, timeout=120
+    )
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip() == "ok"
 

@@ -10,40 +10,75 @@ GOOD_SWEEP = "sweep: {omega: {from: 6, to: 1, points: 4}, mu_cn: {from: 0.9, to:
 
 # (case, file text, what the message must say)
 CASES = [
-    ("unknown key", f"name: x\n{GOOD_SWEEP}\nintegrater: {{rtol: 1.0e-9}}\n",
-     ["integrater: unknown key; allowed here: name, sweep, fixed"]),
-    ("unknown nested key", f"name: x\n{GOOD_SWEEP}\nintegrator: {{rtols: 1.0e-9}}\n",
-     ["integrator.rtols: unknown key; allowed here: method, rtol, atol"]),
-    ("unknown axis key", "name: x\nsweep: {omega: {from: 6, to: 1, step: 1}, "
-     "mu_cn: {from: 0.9, to: 0.5, points: 3}}\n",
-     ["sweep.omega.step: unknown key; allowed here: from, to, points"]),
-    ("wrong type", f"name: x\n{GOOD_SWEEP}\ntiles: {{rows: many}}\n",
-     ["tiles.rows:", "integer", "'many'"]),
-    ("a section that is not a mapping", f"name: x\n{GOOD_SWEEP}\nintegrator: 5\n",
-     ["integrator: must be a mapping of keys", "got 5"]),
-    ("out of range sweep end",
-     "name: x\nsweep: {omega: {from: 6, to: 1, points: 4}, "
-     "mu_cn: {from: 0.9, to: 1.5, points: 3}}\n",
-     ["sweep: mu_cn.to: must be in (0, 1), got 1.5"]),
-    ("out of range setting", f"name: x\n{GOOD_SWEEP}\nintegrator: {{rtol: -1}}\n",
-     ["integrator.rtol:", "greater than", "got -1"]),
-    ("no points", "name: x\nsweep: {omega: {from: 6, to: 1, points: 0}, "
-     "mu_cn: {from: 0.9, to: 0.5, points: 3}}\n", ["sweep.omega.points:", "got 0"]),
-    ("not a choice", f"name: x\n{GOOD_SWEEP}\ntransient: {{mode: forever}}\n",
-     ["transient.mode:", "'converged' or 'fixed'", "'forever'"]),
-    ("unknown output", f"name: x\n{GOOD_SWEEP}\noutputs: [label, colour]\n",
-     ["outputs: unknown output 'colour'; allowed: label"]),
+    (
+        "unknown key",
+        f"name: x\n{GOOD_SWEEP}\nintegrater: {{rtol: 1.0e-9}}\n",
+        ["integrater: unknown key; allowed here: name, sweep, fixed"],
+    ),
+    (
+        "unknown nested key",
+        f"name: x\n{GOOD_SWEEP}\nintegrator: {{rtols: 1.0e-9}}\n",
+        ["integrator.rtols: unknown key; allowed here: method, rtol, atol"],
+    ),
+    (
+        "unknown axis key",
+        "name: x\nsweep: {omega: {from: 6, to: 1, step: 1}, "
+        "mu_cn: {from: 0.9, to: 0.5, points: 3}}\n",
+        ["sweep.omega.step: unknown key; allowed here: from, to, points"],
+    ),
+    (
+        "wrong type",
+        f"name: x\n{GOOD_SWEEP}\ntiles: {{rows: many}}\n",
+        ["tiles.rows:", "integer", "'many'"],
+    ),
+    (
+        "a section that is not a mapping",
+        f"name: x\n{GOOD_SWEEP}\nintegrator: 5\n",
+        ["integrator: must be a mapping of keys", "got 5"],
+    ),
+    (
+        "out of range sweep end",
+        "name: x\nsweep: {omega: {from: 6, to: 1, points: 4}, "
+        "mu_cn: {from: 0.9, to: 1.5, points: 3}}\n",
+        ["sweep: mu_cn.to: must be in (0, 1), got 1.5"],
+    ),
+    (
+        "out of range setting",
+        f"name: x\n{GOOD_SWEEP}\nintegrator: {{rtol: -1}}\n",
+        ["integrator.rtol:", "greater than", "got -1"],
+    ),
+    (
+        "no points",
+        "name: x\nsweep: {omega: {from: 6, to: 1, points: 0}, "
+        "mu_cn: {from: 0.9, to: 0.5, points: 3}}\n",
+        ["sweep.omega.points:", "got 0"],
+    ),
+    (
+        "not a choice",
+        f"name: x\n{GOOD_SWEEP}\ntransient: {{mode: forever}}\n",
+        ["transient.mode:", "'converged' or 'fixed'", "'forever'"],
+    ),
+    (
+        "unknown output",
+        f"name: x\n{GOOD_SWEEP}\noutputs: [label, colour]\n",
+        ["outputs: unknown output 'colour'; allowed: label"],
+    ),
     ("missing key", "name: x\n", ["sweep: required key is missing"]),
-    ("omega not first",
-     "name: x\nsweep: {mu_cn: {from: 0.9, to: 0.5, points: 3}, "
-     "omega: {from: 6, to: 1, points: 4}}\n",
-     ["sweep: must list omega", "first"]),
-    ("swept and fixed", f"name: x\n{GOOD_SWEEP}\nfixed: {{mu_cn: 0.5}}\n",
-     ["mu_cn is both swept and fixed"]),
+    (
+        "omega not first",
+        "name: x\nsweep: {mu_cn: {from: 0.9, to: 0.5, points: 3}, "
+        "omega: {from: 6, to: 1, points: 4}}\n",
+        ["sweep: must list omega", "first"],
+    ),
+    (
+        "swept and fixed",
+        f"name: x\n{GOOD_SWEEP}\nfixed: {{mu_cn: 0.5}}\n",
+        ["mu_cn is both swept and fixed"],
+    ),
     ("not YAML", "name: [x\n", ["not valid YAML", "line"]),
     ("not a mapping", "- name\n- x\n", ["a job is a mapping of keys", "got a list"]),
     ("empty file", "", ["a job is a mapping of keys", "got an empty file"]),
-]  # fmt: skip
+]
 
 
 @pytest.mark.parametrize("text,expected", [c[1:] for c in CASES], ids=[c[0] for c in CASES])
@@ -144,49 +179,90 @@ ALIAS_BOMB = (
     + "]\n"
 )
 HOSTILE = [
-    ("a billion rows a tile", f"name: x\n{GOOD_SWEEP}\ntiles: {{rows: 1000000000}}\n",
-     ["tiles.rows:", "100000"]),
-    ("31-digit rows", f"name: x\n{GOOD_SWEEP}\ntiles: {{rows: {'1' * 31}}}\n",
-     ["line 3", "31 digits"]),
-    ("5000-digit integer", f"name: x\n{GOOD_SWEEP}\nclassify: {{n_max: {'9' * 5000}}}\n",
-     ["5000 digits"]),
-    ("max_steps beyond 64 bits", f"name: x\n{GOOD_SWEEP}\n"
-     "integrator: {max_steps: 100000000000000000000}\n", ["integrator.max_steps:"]),
+    (
+        "a billion rows a tile",
+        f"name: x\n{GOOD_SWEEP}\ntiles: {{rows: 1000000000}}\n",
+        ["tiles.rows:", "100000"],
+    ),
+    (
+        "31-digit rows",
+        f"name: x\n{GOOD_SWEEP}\ntiles: {{rows: {'1' * 31}}}\n",
+        ["line 3", "31 digits"],
+    ),
+    (
+        "5000-digit integer",
+        f"name: x\n{GOOD_SWEEP}\nclassify: {{n_max: {'9' * 5000}}}\n",
+        ["5000 digits"],
+    ),
+    (
+        "max_steps beyond 64 bits",
+        f"name: x\n{GOOD_SWEEP}\nintegrator: {{max_steps: 100000000000000000000}}\n",
+        ["integrator.max_steps:"],
+    ),
     ("store /", f"name: x\n{GOOD_SWEEP}\nstore: /\n", ["store:", "names a folder"]),
     ("store ''", f"name: x\n{GOOD_SWEEP}\nstore: ''\n", ["store: an empty path"]),
     ("store ..", f"name: x\n{GOOD_SWEEP}\nstore: ..\n", ["store:", "names a folder"]),
     ("store with NUL", f'name: x\n{GOOD_SWEEP}\nstore: "a\\0b.zarr"\n', ["store:", "NUL"]),
     ("complex key", f"name: x\n{GOOD_SWEEP}\n? [1, 2]\n: 3\n", ["line 3", "a key must be a name"]),
     ("alias bomb", f"name: x\n{GOOD_SWEEP}\n{ALIAS_BOMB}", ["aliases expand to over"]),
-    ("alias bomb as name", "name: " + ALIAS_BOMB.removeprefix("outputs: ") + GOOD_SWEEP + "\n",
-     ["aliases expand"]),
-    ("recursive alias", f"name: x\n{GOOD_SWEEP}\noutputs: &a [label, *a]\n",
-     ["contains itself"]),
-    ("basin from NaN", "name: x\nsweep: {y0: {from: .nan, to: 1, points: 3}, "
-     "ydot0: {from: -1, to: 1, points: 2}}\nfixed: {omega: 3}\n", ["sweep.y0.from:", "finite"]),
-    ("basin to infinity", "name: x\nsweep: {y0: {from: 0, to: .inf, points: 3}, "
-     "ydot0: {from: -1, to: 1, points: 2}}\nfixed: {omega: 3}\n", ["sweep.y0.to:", "finite"]),
-    ("basin out of range", "name: x\nsweep: {y0: {from: 0, to: 1, points: 3}, "
-     "ydot0: {from: -1.0e300, to: 1.0e300, points: 2}}\nfixed: {omega: 3}\n",
-     ["ydot0.from", "1000"]),
-    ("points as text", "name: x\nsweep: {omega: {from: 6, to: 1, points: '4'}, "
-     "mu_cn: {from: 0.9, to: 0.5, points: 3}}\n", ["sweep.omega.points:", "not text"]),
-    ("rtol as text", f"name: x\n{GOOD_SWEEP}\nintegrator: {{rtol: '1e-9'}}\n",
-     ["integrator.rtol:", "not text"]),
-    ("a fixed parameter as text", f"name: x\n{GOOD_SWEEP}\nfixed: {{zeta: '0.1'}}\n",
-     ["fixed:", "not text"]),
-    ("an empty axis", "name: x\nsweep: {omega: {}, mu_cn: {from: 0.9, to: 0.5, points: 3}}\n",
-     ["sweep.omega: required keys are missing: from, to, points"]),
+    (
+        "alias bomb as name",
+        "name: " + ALIAS_BOMB.removeprefix("outputs: ") + GOOD_SWEEP + "\n",
+        ["aliases expand"],
+    ),
+    ("recursive alias", f"name: x\n{GOOD_SWEEP}\noutputs: &a [label, *a]\n", ["contains itself"]),
+    (
+        "basin from NaN",
+        "name: x\nsweep: {y0: {from: .nan, to: 1, points: 3}, "
+        "ydot0: {from: -1, to: 1, points: 2}}\nfixed: {omega: 3}\n",
+        ["sweep.y0.from:", "finite"],
+    ),
+    (
+        "basin to infinity",
+        "name: x\nsweep: {y0: {from: 0, to: .inf, points: 3}, "
+        "ydot0: {from: -1, to: 1, points: 2}}\nfixed: {omega: 3}\n",
+        ["sweep.y0.to:", "finite"],
+    ),
+    (
+        "basin out of range",
+        "name: x\nsweep: {y0: {from: 0, to: 1, points: 3}, "
+        "ydot0: {from: -1.0e300, to: 1.0e300, points: 2}}\nfixed: {omega: 3}\n",
+        ["ydot0.from", "1000"],
+    ),
+    (
+        "points as text",
+        "name: x\nsweep: {omega: {from: 6, to: 1, points: '4'}, "
+        "mu_cn: {from: 0.9, to: 0.5, points: 3}}\n",
+        ["sweep.omega.points:", "not text"],
+    ),
+    (
+        "rtol as text",
+        f"name: x\n{GOOD_SWEEP}\nintegrator: {{rtol: '1e-9'}}\n",
+        ["integrator.rtol:", "not text"],
+    ),
+    (
+        "a fixed parameter as text",
+        f"name: x\n{GOOD_SWEEP}\nfixed: {{zeta: '0.1'}}\n",
+        ["fixed:", "not text"],
+    ),
+    (
+        "an empty axis",
+        "name: x\nsweep: {omega: {}, mu_cn: {from: 0.9, to: 0.5, points: 3}}\n",
+        ["sweep.omega: required keys are missing: from, to, points"],
+    ),
     ("YAML syntax", "name: x\nsweep: [\n", ["not valid YAML: line 4, column 1:"]),
-    ("infinite setting", f"name: x\n{GOOD_SWEEP}\ntransient: {{jump_cap: .inf}}\n",
-     ["transient.jump_cap:", "finite"]),
-]  # fmt: skip
+    (
+        "infinite setting",
+        f"name: x\n{GOOD_SWEEP}\ntransient: {{jump_cap: .inf}}\n",
+        ["transient.jump_cap:", "finite"],
+    ),
+]
 HOSTILE_BYTES = [
     ("Latin-1", f"name: café\n{GOOD_SWEEP}\n".encode("latin-1"), ["not UTF-8", "0xe9"]),
     ("binary", bytes(range(256)) * 4, ["not UTF-8"]),
     ("NUL bytes", b"name: x\0\0\n", ["not valid YAML"]),
     ("huge", b"name: x\n#" + b"x" * (2 << 20) + b"\n", ["bytes; a job file is at most"]),
-]  # fmt: skip
+]
 
 
 @pytest.mark.parametrize(
@@ -203,8 +279,9 @@ def test_hostile_job_files_are_one_line_exit_2_and_write_nothing(
     work.mkdir()
     monkeypatch.chdir(work)  # a store path of '' or . would land here
     job = tmp_path / "bad.yaml"
-    job.write_bytes(data if b"store:" in data or not data.startswith(b"name") else
-                    data + b"store: out.zarr\n")  # fmt: skip
+    job.write_bytes(
+        data if b"store:" in data or not data.startswith(b"name") else data + b"store: out.zarr\n"
+    )
     start = time.monotonic()
     assert main(["run", str(job)]) == 2
     assert time.monotonic() - start < 5
@@ -239,9 +316,11 @@ def test_the_memory_estimate_counts_a_tile_chunk_past_the_grid(tmp_path, capsys)
     """rows far beyond the grid's rows: each chunk still spans them (zarr fills a whole
     chunk in memory), so the estimate refuses what would exhaust memory."""
     path = tmp_path / "j.yaml"
-    path.write_text(f"name: x\n{GOOD_SWEEP}\ntiles: {{rows: 100000}}\n"
-                    "outputs: [label, sections]\nclassify: {n_max: 256}\n"
-                    f"store: {tmp_path / 'x.zarr'}\n")  # fmt: skip
+    path.write_text(
+        f"name: x\n{GOOD_SWEEP}\ntiles: {{rows: 100000}}\n"
+        "outputs: [label, sections]\nclassify: {n_max: 256}\n"
+        f"store: {tmp_path / 'x.zarr'}\n"
+    )
     assert main(["run", str(path), "--max-memory", "1G"]) == 2
     err = capsys.readouterr().err
     assert "each rank would need" in err and err.count("\n") == 1, err

@@ -82,7 +82,7 @@ NOT_NUMBERS = st.one_of(
             "0x",
             "1.0.0",
         ]
-    ),  # fmt: skip
+    ),
     st.integers(31, 400).map(lambda digits: "7" * digits),
     st.integers(5, 9).map(bomb),
 )

@@ -23,18 +23,32 @@ OMEGA = np.linspace(4.8, 0.6, 43)
 MU_CN = 0.9
 
 
-def run(omega, *, f0=0.5, mu_kn=0.8, mu_cn=0.8, zeta=0.2, clamp=True, x_init=(0.0, 0.0),
-        outputs=OUTPUT_NAMES, **sections) -> CellOutputs:  # fmt: skip
+def run(
+    omega,
+    *,
+    f0=0.5,
+    mu_kn=0.8,
+    mu_cn=0.8,
+    zeta=0.2,
+    clamp=True,
+    x_init=(0.0, 0.0),
+    outputs=OUTPUT_NAMES,
+    **sections,
+) -> CellOutputs:
     """run_chain over the cells ``omega`` with a job's settings (``sections``: its
     transient, classify, … mappings); the other parameters are numbers or per-cell
     arrays. Argument types as run_tile's, so the cached kernel serves."""
-    job = Job.from_dict({
-        "name": "kernel",
-        "sweep": {"omega": {"from": 1.0, "to": 1.0, "points": 1},
-                  "mu_cn": {"from": 0.8, "to": 0.8, "points": 1}},
-        "outputs": list(outputs),
-        **sections,
-    })  # fmt: skip
+    job = Job.from_dict(
+        {
+            "name": "kernel",
+            "sweep": {
+                "omega": {"from": 1.0, "to": 1.0, "points": 1},
+                "mu_cn": {"from": 0.8, "to": 0.8, "points": 1},
+            },
+            "outputs": list(outputs),
+            **sections,
+        }
+    )
     settings = cell_settings(job)
     omega = np.array(omega, dtype=float)
 
@@ -43,9 +57,17 @@ def run(omega, *, f0=0.5, mu_kn=0.8, mu_cn=0.8, zeta=0.2, clamp=True, x_init=(0.
 
     out = allocate_outputs(omega.shape[0], settings.output_bits, job.n_sections)
     run_chain(
-        omega, per_cell(zeta), per_cell(f0), per_cell(mu_kn), per_cell(mu_cn), clamp,
-        np.array(x_init, dtype=float), solver_options(job), settings, out,
-    )  # fmt: skip
+        omega,
+        per_cell(zeta),
+        per_cell(f0),
+        per_cell(mu_kn),
+        per_cell(mu_cn),
+        clamp,
+        np.array(x_init, dtype=float),
+        solver_options(job),
+        settings,
+        out,
+    )
     return out
 
 
@@ -98,8 +120,16 @@ def test_a_failed_cell_leaves_nans_and_the_next_one_restarts_as_if_it_began_the_
     alone = run([2.0])
     assert out.status[0] == Status.OK and out.status[1] != Status.OK
     assert out.kind[1] == Kind.FAILED
-    for name in ("dc", "eps_min", "eps_max", "pn_max", "state", "lyapunov", "multipliers",
-                 "sections"):  # fmt: skip
+    for name in (
+        "dc",
+        "eps_min",
+        "eps_max",
+        "pn_max",
+        "state",
+        "lyapunov",
+        "multipliers",
+        "sections",
+    ):
         assert np.isnan(getattr(out, name)[1]).all(), name
     # from x_init with a fresh step size: bit for bit the cell computed on its own
     assert out.flags[2] == alone.flags[0] | Flag.RESTARTED

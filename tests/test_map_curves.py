@@ -21,13 +21,15 @@ from campar.views.map_curves import agreement, curves_job, read_curves, store_se
 # doubles at both ends
 TONGUE = {
     "name": "tongue",
-    "sweep": {"omega": {"from": 4.2, "to": 2.2, "points": 28},
-              "mu_kn": {"from": 0.93, "to": 0.85, "points": 10}},
+    "sweep": {
+        "omega": {"from": 4.2, "to": 2.2, "points": 28},
+        "mu_kn": {"from": 0.93, "to": 0.85, "points": 10},
+    },
     "fixed": {"zeta": 0.2, "mu_cn": 0.8, "f0": 0.5},
     "chains": {"start": "continue"},
     "outputs": ["label", "dc", "eps", "pn", "multipliers"],
     "tiles": {"rows": 2},
-}  # fmt: skip
+}
 
 
 @pytest.fixture(scope="module")
@@ -53,8 +55,10 @@ def test_the_pd_curves_are_made_of_pd_points(tongue):
     """The window cuts the tongue's PD curve above its bottom (μkn ≈ 0.843): two curves of
     1-cycles, the tongue's two sides. At points along each the 1-cycle, solved for afresh
     by Newton at the point's parameters, has the multiplier −1 to 1e-7."""
-    pd = sorted((c for c in read_curves(tongue) if c.type == "PD" and c.n == 1),
-                key=lambda c: c.values[:, 0].mean())  # fmt: skip
+    pd = sorted(
+        (c for c in read_curves(tongue) if c.type == "PD" and c.n == 1),
+        key=lambda c: c.values[:, 0].mean(),
+    )
     assert len(pd) == 2 and all(len(c.values) > 20 for c in pd)
     assert pd[0].values[:, 0].max() < 2.5 < 2.7 < pd[1].values[:, 0].min()
     for curve in pd:
@@ -72,8 +76,12 @@ def test_the_maps_pd_edges_lie_on_the_curve(tongue):
     shares: campar bench continuation, benchmarks/RESULTS.md)."""
     found = store_boundaries(tongue)
     with open_store(tongue) as ds:
-        grid = {"omega": ds["omega"].values, "second": ds["mu_kn"].values,
-                "kind": ds["kind"].values, "n": ds["n"].values}  # fmt: skip
+        grid = {
+            "omega": ds["omega"].values,
+            "second": ds["mu_kn"].values,
+            "kind": ds["kind"].values,
+            "n": ds["n"].values,
+        }
     a = agreement(found, read_curves(tongue), grid, "PD")
     assert a.edges_near >= 0.95, a
     assert a.length_near >= 0.75, a
@@ -100,10 +108,25 @@ def test_the_curves_store_is_verified_and_resumes_to_the_same_bytes(tongue):
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
 def test_curves_under_mpirun_equal_the_serial_ones(tongue, tmp_path):
     out = subprocess.run(
-        [str(MPIRUN), "-n", "2", *CAMPAR, "curves", str(tongue), "--types", "PD",
-         "--points", "200", "--store", str(tmp_path / "mpi.zarr")],
-        capture_output=True, text=True, timeout=900, env=subprocess_env(),
-    )  # fmt: skip
+        [
+            str(MPIRUN),
+            "-n",
+            "2",
+            *CAMPAR,
+            "curves",
+            str(tongue),
+            "--types",
+            "PD",
+            "--points",
+            "200",
+            "--store",
+            str(tmp_path / "mpi.zarr"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env=subprocess_env(),
+    )
     assert out.returncode == 0, out.stderr
     assert out.stdout.count("tasks") == 1  # rank 0 reports
     serial, parallel = stored(tongue.with_name("tongue-curves.zarr")), stored(tmp_path / "mpi.zarr")
@@ -123,9 +146,14 @@ def test_bad_curves_requests_are_one_line(tongue, tmp_path):
         out = run_campar("curves", tongue, *argv)
         assert out.returncode == 2 and message in out.stderr, out.stderr
         assert len(out.stderr.strip().splitlines()) == 1
-    basin = {"name": "basin", "sweep": {"y0": {"from": -1, "to": 1, "points": 3},
-                                        "ydot0": {"from": -1, "to": 1, "points": 2}},
-             "fixed": {"omega": 3.0}}  # fmt: skip
+    basin = {
+        "name": "basin",
+        "sweep": {
+            "y0": {"from": -1, "to": 1, "points": 3},
+            "ydot0": {"from": -1, "to": 1, "points": 2},
+        },
+        "fixed": {"omega": 3.0},
+    }
     run_job(Job.from_dict(basin), tmp_path / "basin.zarr")
     out = run_campar("curves", tmp_path / "basin.zarr")
     assert out.returncode == 2 and "basin store" in out.stderr

@@ -76,8 +76,13 @@ def test_mpi_map_equals_the_serial_one_and_every_rank_computes(write_job, ranks)
 @pytest.mark.parametrize(("suffix", "env"), [(".zarr", {"CAMPAR_WRITER": "master"}), (".h5", {})])
 def test_where_the_master_writes_every_tile_the_map_is_the_same(write_job, tmp_path, suffix, env):
     path, job = write_job(slow=True, store=str(tmp_path / f"m{suffix}"))
-    result = subprocess.run([*mpirun(2), *CAMPAR, "run", str(path)], capture_output=True,
-                            text=True, timeout=300, env={**subprocess_env(), **env})  # fmt: skip
+    result = subprocess.run(
+        [*mpirun(2), *CAMPAR, "run", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**subprocess_env(), **env},
+    )
     assert result.returncode == 0, result.stderr
     with read_store(job.store) as reader:
         assert_same_map(reader, job)
@@ -145,9 +150,13 @@ def test_a_stop_takes_back_the_tiles_queued_on_lanes(write_job, tmp_path):
         sys.exit(main(["run", {str(path)!r}]))
     """)
     proc = subprocess.Popen(
-        [*mpirun(2), sys.executable, "-c", script], stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE, text=True, env=subprocess_env(), start_new_session=True,
-    )  # fmt: skip
+        [*mpirun(2), sys.executable, "-c", script],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=subprocess_env(),
+        start_new_session=True,
+    )
     wait_for_tiles(job.store, 1, proc)  # ~1.5 s: two tiles run, two are queued
     time.sleep(0.5)
     signalled = time.monotonic()
@@ -257,11 +266,17 @@ COLD_RUN = textwrap.dedent("""
 def test_ranks_of_a_node_split_a_cold_compile_and_load_each_others_half(write_job, tmp_path):
     path, job = write_job()
     env = {**subprocess_env(), "NUMBA_CACHE_DIR": str(tmp_path / "empty cache")}
-    result = subprocess.run([*mpirun(2), sys.executable, "-c", COLD_RUN, str(path)],
-                            capture_output=True, text=True, timeout=300, env=env)  # fmt: skip
+    result = subprocess.run(
+        [*mpirun(2), sys.executable, "-c", COLD_RUN, str(path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+    )
     assert result.returncode == 0, result.stderr
-    ranks = sorted((json.loads(line) for line in result.stdout.splitlines()),
-                   key=lambda r: r["rank"])  # fmt: skip
+    ranks = sorted(
+        (json.loads(line) for line in result.stdout.splitlines()), key=lambda r: r["rank"]
+    )
     # rank 0 compiled the chain and loaded rank 1's revolution; rank 1 the other way round
     assert ranks[0]["chain"] == [0, 1] and ranks[0]["revolution"] == [1, 0], ranks
     assert ranks[1]["chain"] == [1, 0] and ranks[1]["revolution"] == [0, 1], ranks
@@ -304,8 +319,11 @@ def test_every_rank_of_an_spmd_caller_sees_the_masters_error(write_job):
     result = run_mpi(2, "-c", script, command=[sys.executable])
     assert result.returncode == 0, result.stderr
     assert sorted(result.stdout.splitlines()) == [
-        "rank 0 overwrote", "rank 0 refused 0", "rank 1 overwrote", "rank 1 refused 1",
-    ]  # fmt: skip
+        "rank 0 overwrote",
+        "rank 0 refused 0",
+        "rank 1 overwrote",
+        "rank 1 refused 1",
+    ]
     with read_store(job.store) as reader:
         assert reader.attrs["job"]["integrator"]["rtol"] == 1e-9
         assert_same_map(reader, changed)
@@ -343,10 +361,16 @@ def test_no_rank_spins_while_waiting(write_job):
 
 @slow
 def test_auto_tile_rows_are_chosen_for_the_ranks_and_kept_by_a_resume(write_job):
-    grid = {"omega": {"from": 6.0, "to": 1.0, "points": 12},
-            "mu_cn": {"from": 0.9, "to": 0.6, "points": 24}}  # fmt: skip
-    path, job = write_job(slow=True, sweep=grid, tiles={"rows": "auto"},
-                          transient={"mode": "fixed", "max_revolutions": 400})  # fmt: skip
+    grid = {
+        "omega": {"from": 6.0, "to": 1.0, "points": 12},
+        "mu_cn": {"from": 0.9, "to": 0.6, "points": 24},
+    }
+    path, job = write_job(
+        slow=True,
+        sweep=grid,
+        tiles={"rows": "auto"},
+        transient={"mode": "fixed", "max_revolutions": 400},
+    )
     three, serial = auto_tile_rows(job, 3, True)[0], auto_tile_rows(job, 1, False)[0]
     assert (three, serial) == (2, 4)  # 24 chains: 4 tiles a lane for 3 ranks, else the default
     proc = start_campar("run", path, launcher=mpirun(3))

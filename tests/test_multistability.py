@@ -222,8 +222,11 @@ def test_status_and_the_set_map_count_each_set_of_coexisting_attractors(census, 
     path, _ = census
     expected = Counter()
     with campar.open(path) as ds:
-        for labels, count in zip(ds.attractor_label.values.reshape(-1, CAP),
-                                 ds.n_attractors.values.reshape(-1), strict=True):  # fmt: skip
+        for labels, count in zip(
+            ds.attractor_label.values.reshape(-1, CAP),
+            ds.n_attractors.values.reshape(-1),
+            strict=True,
+        ):
             if count >= 2:
                 more = {"…"} if count > CAP else set()
                 expected[frozenset({str(x) for x in labels if x} | more)] += 1
@@ -242,8 +245,9 @@ def test_the_set_map_ignores_the_order_of_the_slots_and_marks_sets_beyond_the_ca
     from campar.views.plot import plot_map
 
     job = Job.from_dict(merge(GRID, {"sweep": {"mu_kn": {"points": 2}}}))
-    kind = np.array([[[0, 0, -1], [0, 0, -1], [0, -1, -1]],
-                     [[0, 0, 0], [0, 1, -1], [0, 0, 0]]], np.int8)  # fmt: skip
+    kind = np.array(
+        [[[0, 0, -1], [0, 0, -1], [0, -1, -1]], [[0, 0, 0], [0, 1, -1], [0, 0, 0]]], np.int8
+    )
     n = np.array([[[1, 3, -1], [3, 1, -1], [1, -1, -1]], [[1, 3, 2], [1, 0, -1], [1, 3, 2]]])
     p = np.array([[[1, 2, -1], [2, 1, -1], [1, -1, -1]], [[1, 2, 2], [1, 0, -1], [1, 2, 2]]])
     count = np.array([[2, 2, 1], [3, 2, 5]], np.int16)
@@ -270,8 +274,13 @@ def test_the_map_s_categories_are_1_2_3_4_or_more_and_not_computed():
     counts = np.array([[1, 1, 2], [3, 7, -1]], np.int16)  # -1: a tile not computed
     figure = plot_map(job, {"n_attractors": counts}, "multistability")
     entries = [t.get_text() for t in figure.axes[0].get_legend().get_texts()]
-    assert entries == ["1 attractor (2)", "2 attractors (1)", "3 attractors (1)",
-                       "4 or more (1)", "not computed (1)"]  # fmt: skip
+    assert entries == [
+        "1 attractor (2)",
+        "2 attractors (1)",
+        "3 attractors (1)",
+        "4 or more (1)",
+        "not computed (1)",
+    ]
 
 
 # -- resume, ranks, directions ---------------------------------------------------------------

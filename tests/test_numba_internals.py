@@ -84,8 +84,13 @@ def test_a_cold_compile_without_the_internals_gives_the_same_cell(tmp_path):
     """A numba whose cache campar cannot ask: a cold ``simulate_point`` forks no helper,
     compiles everything itself, and gives the cell this process gives."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
-    run = subprocess.run([sys.executable, "-c", COLD_POINT, ANOTHER_NUMBA], env=env,
-                         text=True, capture_output=True, timeout=600)  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-c", COLD_POINT, ANOTHER_NUMBA],
+        env=env,
+        text=True,
+        capture_output=True,
+        timeout=600,
+    )
     assert run.returncode == 0, run.stderr
     without = json.loads(run.stdout)
     assert without["forked"] == [False]

@@ -46,21 +46,43 @@ REGIMES = [
 
 def campar_orbit(omega, f0, mu_kn, mu_cn, tensile, x0, revolutions, cam_velocity):
     """Final state and events of campar's integration (DP54 at RTOL) from x0 at θ = 0."""
-    job = point_job(omega=omega, f0=f0, mu_kn=mu_kn, mu_cn=mu_cn, tensile=tensile,
-                    cam_velocity=cam_velocity, y0=x0[0], v0=x0[1], rtol=RTOL,
-                    atol=RTOL * 1e-2, method="dp54", outputs=["label"])  # fmt: skip
+    job = point_job(
+        omega=omega,
+        f0=f0,
+        mu_kn=mu_kn,
+        mu_cn=mu_cn,
+        tensile=tensile,
+        cam_velocity=cam_velocity,
+        y0=x0[0],
+        v0=x0[1],
+        rtol=RTOL,
+        atol=RTOL * 1e-2,
+        method="dp54",
+        outputs=["label"],
+    )
     rec = make_trace(1, 1000, 1)  # one sample slot: recording on, so events are kept
-    status, y, v = trace_orbit(omega, 0.2, f0, mu_kn, mu_cn, job.model.law,
-                               np.array(x0, float), solver_options(job), cell_settings(job),
-                               revolutions, rec)  # fmt: skip
+    status, y, v = trace_orbit(
+        omega,
+        0.2,
+        f0,
+        mu_kn,
+        mu_cn,
+        job.model.law,
+        np.array(x0, float),
+        solver_options(job),
+        cell_settings(job),
+        revolutions,
+        rec,
+    )
     assert status == 0
     events = rec.events[: rec.count[1]]
     return np.array([y, v]), [(t, EVENT_NAMES[int(code)]) for t, _, _, code in events]
 
 
 def scipy_orbit(omega, f0, mu_kn, mu_cn, tensile, x0, revolutions, cam_velocity):
-    model = Model(omega, f0, mu_kn, mu_cn, zeta=0.2, clamp=tensile == "clamp",
-                  cam_velocity=cam_velocity)  # fmt: skip
+    model = Model(
+        omega, f0, mu_kn, mu_cn, zeta=0.2, clamp=tensile == "clamp", cam_velocity=cam_velocity
+    )
     state, events, _ = integrate(model, x0, revolutions)
     return state, events
 
@@ -112,13 +134,14 @@ def test_duty_cycle_by_force_and_by_separation_match_scipy(cell):
     found = {
         by: simulate_point(
             omega, mu_cn=mu_cn, tensile=tensile, cam_velocity=cam_velocity, duty_cycle=by, rtol=RTOL
-        )  # fmt: skip
+        )
         for by in ("separation", "force")
     }
     sep, force = found["separation"], found["force"]
     assert sep.kind == "periodic" and (sep.label, sep.state) == (force.label, force.state)
-    model = Model(omega, 0.5, 0.8, mu_cn, zeta=0.2, clamp=tensile == "clamp",
-                  cam_velocity=cam_velocity)  # fmt: skip
+    model = Model(
+        omega, 0.5, 0.8, mu_cn, zeta=0.2, clamp=tensile == "clamp", cam_velocity=cam_velocity
+    )
     for by, result in found.items():
         # SciPy over the cycle's n revolutions from campar's state on it
         assert abs(duty_cycle(model, result.state, result.n, by=by) - result.dc) < 1e-7, by
@@ -133,8 +156,13 @@ def test_law_bits_and_job_settings():
     assert law_flags("allow", "force", "literal") == LAW_DC_FORCE | LAW_CAM_LITERAL
     with pytest.raises(ValueError, match="separation, force"):
         law_flags(duty_cycle="time")
-    base = {"name": "x", "sweep": {"omega": {"from": 1, "to": 2, "points": 2},
-                                   "f0": {"from": 1, "to": 2, "points": 2}}}  # fmt: skip
+    base = {
+        "name": "x",
+        "sweep": {
+            "omega": {"from": 1, "to": 2, "points": 2},
+            "f0": {"from": 1, "to": 2, "points": 2},
+        },
+    }
     job = Job.from_dict(base)
     literal = Job.from_dict({**base, "model": {"cam_velocity": "literal"}})
     by_force = Job.from_dict({**base, "model": {"duty_cycle": "force"}})

@@ -122,13 +122,21 @@ def test_designed_table_and_pool_are_pairwise_distinct():
 
 def arrays_of(cells, shape):
     a = np.array(cells, dtype=np.int64).reshape(*shape, 3)
-    return {"kind": a[..., 0].astype(np.int8), "n": a[..., 1].astype(np.int32),
-            "p": a[..., 2].astype(np.int32)}  # fmt: skip
+    return {
+        "kind": a[..., 0].astype(np.int8),
+        "n": a[..., 1].astype(np.int32),
+        "p": a[..., 2].astype(np.int32),
+    }
 
 
 def grid_of(rows, cols):
-    return MapGrid(np.linspace(6.0, 0.02, cols), np.linspace(0.95, 0.5, rows), "mu_cn", 7,
-                   {"f0": 0.5, "mu_kn": 0.8, "zeta": 0.2})  # fmt: skip
+    return MapGrid(
+        np.linspace(6.0, 0.02, cols),
+        np.linspace(0.95, 0.5, rows),
+        "mu_cn",
+        7,
+        {"f0": 0.5, "mu_kn": 0.8, "zeta": 0.2},
+    )
 
 
 def drawn_palette(figure):
@@ -141,18 +149,51 @@ def drawn_palette(figure):
 # The labels of the committed Fig. 7 (the (ω, μcn) plane) with their cell counts, where
 # 8-p̃ and 14-p̃ were drawn alike and 3-2, 7-5, 11-p̃ all olive.
 FIG7_LABELS = {
-    (1, 0): 16551, (1, 1): 107643, (1, 2): 7375, (1, 3): 43, (2, 1): 6242, (2, 2): 11372,
-    (3, 1): 3275, (3, 2): 1625, (4, 2): 87, (4, 3): 461, (4, 4): 93, (5, 4): 326,
-    (7, 4): 56, (7, 5): 56, (8, 6): 196, (8, 9): 26, (9, 6): 31, (11, 8): 29, (14, 9): 32,
-    (16, 12): 47, (5, 3): 9, (6, 4): 8, (6, 5): 7, (9, 7): 6, (10, 7): 5, (10, 8): 5,
-    (12, 9): 4, (13, 9): 4, (6, 3): 4, (7, 6): 3, (8, 5): 3, (9, 5): 2, (10, 6): 2,
-    (12, 8): 2, (15, 10): 2, (3, 3): 2,
-}  # fmt: skip
+    (1, 0): 16551,
+    (1, 1): 107643,
+    (1, 2): 7375,
+    (1, 3): 43,
+    (2, 1): 6242,
+    (2, 2): 11372,
+    (3, 1): 3275,
+    (3, 2): 1625,
+    (4, 2): 87,
+    (4, 3): 461,
+    (4, 4): 93,
+    (5, 4): 326,
+    (7, 4): 56,
+    (7, 5): 56,
+    (8, 6): 196,
+    (8, 9): 26,
+    (9, 6): 31,
+    (11, 8): 29,
+    (14, 9): 32,
+    (16, 12): 47,
+    (5, 3): 9,
+    (6, 4): 8,
+    (6, 5): 7,
+    (9, 7): 6,
+    (10, 7): 5,
+    (10, 8): 5,
+    (12, 9): 4,
+    (13, 9): 4,
+    (6, 3): 4,
+    (7, 6): 3,
+    (8, 5): 3,
+    (9, 5): 2,
+    (10, 6): 2,
+    (12, 8): 2,
+    (15, 10): 2,
+    (3, 3): 2,
+}
 
 
 def fig7_like_map():
-    cells = [(PERIODIC, n, p) for (n, p), count in FIG7_LABELS.items()
-             for _ in range(max(1, count // 25))]  # fmt: skip
+    cells = [
+        (PERIODIC, n, p)
+        for (n, p), count in FIG7_LABELS.items()
+        for _ in range(max(1, count // 25))
+    ]
     cells += [(CHAOTIC, 0, 0)] * 160 + [(QUASIPERIODIC, 0, 0)] * 7 + [(UNCONVERGED, 0, 0)] * 2
     cells += [(FAILED, 0, 0)] * 3
     side = int(np.ceil(np.sqrt(len(cells))))
@@ -188,8 +229,9 @@ def test_any_map_shows_pairwise_distinct_colours_and_lists_its_rare_labels(seed)
     p = rng.integers(0, 14, size=(rows, cols))
     common = rng.random((rows, cols)) < 0.5  # half the cells in a few common labels
     n[common], p[common] = 1, rng.integers(0, 3, size=common.sum())
-    kind = rng.choice([PERIODIC] * 12 + [QUASIPERIODIC, CHAOTIC, UNCONVERGED, FAILED],
-                      size=(rows, cols))  # fmt: skip
+    kind = rng.choice(
+        [PERIODIC] * 12 + [QUASIPERIODIC, CHAOTIC, UNCONVERGED, FAILED], size=(rows, cols)
+    )
     arrays = {"kind": kind.astype(np.int8), "n": n.astype(np.int32), "p": p.astype(np.int32)}
     arrays["computed"] = np.ones((rows, cols), bool)
     arrays["computed"][-2:] = False
@@ -219,8 +261,9 @@ def test_other_class_is_hatched_over_exactly_its_cells_and_listed_in_the_legend(
     other = next(e for e in grouped.entries if e.label == OTHER)
     assert len(other.members) >= 66 - LEGEND_MAX
     ax = figure.axes[0]
-    hatched = [r for r in ax.patches if isinstance(r, Rectangle)
-               and r.get_hatch() == OTHER_STYLE["hatch"]]  # fmt: skip
+    hatched = [
+        r for r in ax.patches if isinstance(r, Rectangle) and r.get_hatch() == OTHER_STYLE["hatch"]
+    ]
     area = sum(r.get_width() * r.get_height() for r in hatched)
     cell_area = abs(np.diff(grid_of(8, 9).omega)[0] * np.diff(grid_of(8, 9).second)[0])
     assert area == pytest.approx(other.count * cell_area, rel=1e-9)

@@ -44,11 +44,14 @@ def jobs(draw):
         "omega": drawn_axis(draw, st.floats(0.1, 6.0), 30),
         second: drawn_axis(draw, ends, 60),
     }
-    chains = {"direction": draw(st.sampled_from(["down", "up"])),
-              "start": draw(st.sampled_from(["rest", "continue"]))}  # fmt: skip
+    chains = {
+        "direction": draw(st.sampled_from(["down", "up"])),
+        "start": draw(st.sampled_from(["rest", "continue"])),
+    }
     rows = draw(st.integers(1, 12))
-    return Job.from_dict({"name": "plan", "sweep": sweep, "tiles": {"rows": rows},
-                          "chains": chains})  # fmt: skip
+    return Job.from_dict(
+        {"name": "plan", "sweep": sweep, "tiles": {"rows": rows}, "chains": chains}
+    )
 
 
 def axis(spec: dict) -> np.ndarray:
@@ -102,9 +105,16 @@ def test_pending_tiles_are_the_unset_ones_in_index_order(job, data):
 
 
 def test_a_done_mask_of_another_job_is_refused():
-    job = Job.from_dict({"name": "x", "sweep": {"omega": {"from": 6, "to": 1, "points": 3},
-                         "mu_cn": {"from": 0.9, "to": 0.5, "points": 10}},
-                         "tiles": {"rows": 4}})  # fmt: skip
+    job = Job.from_dict(
+        {
+            "name": "x",
+            "sweep": {
+                "omega": {"from": 6, "to": 1, "points": 3},
+                "mu_cn": {"from": 0.9, "to": 0.5, "points": 10},
+            },
+            "tiles": {"rows": 4},
+        }
+    )
     assert len(plan_tiles(job)) == 3  # ⌈10 / 4⌉
     for shape in [(2,), (4,), (3, 1)]:
         with pytest.raises(ValueError, match="the job has 3 tiles"):
@@ -146,8 +156,9 @@ def test_the_first_column_runs_along_the_second_axis_where_every_chain_starts(jo
     start = omega.max() if job.chains.direction == "down" else omega.min()
     assert par["omega"].shape == (job.shape[0],)
     np.testing.assert_allclose(par["omega"], start, rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(par[job.second], axis(data_in["sweep"][job.second]),
-                               rtol=1e-12, atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(
+        par[job.second], axis(data_in["sweep"][job.second]), rtol=1e-12, atol=1e-12
+    )
     for name in SECONDS:
         if name != job.second:
             assert (par[name] == BASE[name]).all(), name
@@ -188,9 +199,16 @@ def test_auto_tile_rows_keep_the_master_paced_and_balance_where_the_grid_allows(
 ):
     from campar.sweep.plan import COMMITS_PER_SECOND, TILES_PER_LANE, WRITER_HEADROOM
 
-    job = Job.from_dict({"name": "auto", "tiles": {"rows": "auto"}, "sweep": {
-        "omega": {"from": 6.0, "to": 1.0, "points": columns},
-        "mu_cn": {"from": 0.9, "to": 0.6, "points": rows}}})  # fmt: skip
+    job = Job.from_dict(
+        {
+            "name": "auto",
+            "tiles": {"rows": "auto"},
+            "sweep": {
+                "omega": {"from": 6.0, "to": 1.0, "points": columns},
+                "mu_cn": {"from": 0.9, "to": 0.6, "points": rows},
+            },
+        }
+    )
     chosen, why = auto_tile_rows(job, lanes, direct)
     assert 1 <= chosen <= rows
     tile_seconds = chosen * columns * cell_seconds(job)
@@ -206,9 +224,16 @@ def test_auto_tile_rows_keep_the_master_paced_and_balance_where_the_grid_allows(
 
 
 def test_auto_tile_rows_keep_the_default_where_it_works_and_grow_for_many_ranks():
-    job = Job.from_dict({"name": "plane", "tiles": {"rows": "auto"}, "sweep": {
-        "omega": {"from": 6.0, "to": 0.02, "points": 400},
-        "mu_cn": {"from": 0.95, "to": 0.70, "points": 400}}})  # fmt: skip
+    job = Job.from_dict(
+        {
+            "name": "plane",
+            "tiles": {"rows": "auto"},
+            "sweep": {
+                "omega": {"from": 6.0, "to": 0.02, "points": 400},
+                "mu_cn": {"from": 0.95, "to": 0.70, "points": 400},
+            },
+        }
+    )
     assert auto_tile_rows(job, 2, True)[0] == 4  # the layout of jobs/mu_cn.yaml
     assert auto_tile_rows(job, 64, False)[0] > auto_tile_rows(job, 64, True)[0] > 4
     with pytest.raises(ValueError, match="chosen when its store is created"):

@@ -53,16 +53,22 @@ P, QP, CH, FA = PERIODIC, QUASIPERIODIC, CHAOTIC, KIND_FAILED
 def grid_of(rows, cols, second_name="mu_cn"):
     """Axes in the paper's order: ω 6.0 → 0.02, the second parameter decreasing too."""
     return MapGrid(
-        np.linspace(6.0, 0.02, cols), np.linspace(0.99, 0.50, rows), second_name, 7,
+        np.linspace(6.0, 0.02, cols),
+        np.linspace(0.99, 0.50, rows),
+        second_name,
+        7,
         {"f0": 0.5, "mu_kn": 0.8, "zeta": 0.2},
-    )  # fmt: skip
+    )
 
 
 def arrays_of(cells):
     """Arrays from a nested list of (kind, n, p) per cell, shaped (second, omega)."""
     a = np.array(cells, dtype=np.int64)
-    return {"kind": a[..., 0].astype(np.int8), "n": a[..., 1].astype(np.int32),
-            "p": a[..., 2].astype(np.int32)}  # fmt: skip
+    return {
+        "kind": a[..., 0].astype(np.int8),
+        "n": a[..., 1].astype(np.int32),
+        "p": a[..., 2].astype(np.int32),
+    }
 
 
 def random_map(rows, cols, seed=0):
@@ -117,7 +123,7 @@ def test_legend_entries_are_the_labels_present_with_their_counts():
         category_of(cell_label(k, n, p, 7))
         for k, n, p in zip(
             arrays["kind"].ravel(), arrays["n"].ravel(), arrays["p"].ravel(), strict=True
-        )  # fmt: skip
+        )
     )
     assert {e.label: e.count for e in cells.entries} == dict(naive)
     assert sum(e.count for e in cells.entries) == arrays["kind"].size
@@ -137,11 +143,37 @@ def test_drawn_legend_lists_exactly_the_labels_present():
 
 
 def test_legend_is_ordered_by_n_then_p_and_chattering_after_its_n():
-    arrays = arrays_of([[(P, 2, 1), (CH, 0, 3), (P, 1, 9), (P, 10, 2), (P, 1, 0), (QP, 0, 0),
-                         (P, 2, 0), (P, 1, 2), (FA, 0, 0), (P, 2, 7), (P, 1, 6)]])  # fmt: skip
+    arrays = arrays_of(
+        [
+            [
+                (P, 2, 1),
+                (CH, 0, 3),
+                (P, 1, 9),
+                (P, 10, 2),
+                (P, 1, 0),
+                (QP, 0, 0),
+                (P, 2, 0),
+                (P, 1, 2),
+                (FA, 0, 0),
+                (P, 2, 7),
+                (P, 1, 6),
+            ]
+        ]
+    )
     order = [e.label for e in map_labels(arrays).entries]
-    assert order == ["1-0", "1-2", "1-6", "1-p~", "2-0", "2-1", "2-p~", "10-2",
-                     "QP", "chaos", "failed"]  # fmt: skip
+    assert order == [
+        "1-0",
+        "1-2",
+        "1-6",
+        "1-p~",
+        "2-0",
+        "2-1",
+        "2-p~",
+        "10-2",
+        "QP",
+        "chaos",
+        "failed",
+    ]
 
 
 def test_a_label_has_the_same_colour_in_maps_with_different_label_sets():
@@ -349,8 +381,14 @@ def test_every_view_renders_headless(what):
 
 
 def test_views_and_quantities_agree():
-    assert set(MAP_VIEWS) == {"labels", "kind", "hysteresis", "multistability", "attractor_sets",
-                              *QUANTITIES}  # fmt: skip
+    assert set(MAP_VIEWS) == {
+        "labels",
+        "kind",
+        "hysteresis",
+        "multistability",
+        "attractor_sets",
+        *QUANTITIES,
+    }
     with pytest.raises(PlotError, match="choose one of"):
         plot_map(grid_of(2, 2), random_map(2, 2), "steps")
     with pytest.raises(PlotError, match="needs the arrays n, p"):
@@ -398,10 +436,13 @@ def test_parse_range():
 
 
 SMOKE = {
-    "name": "t", "tiles": {"rows": 2},
-    "sweep": {"omega": {"from": 6.0, "to": 0.02, "points": 5},
-              "mu_cn": {"from": 0.99, "to": 0.5, "points": 4}},
-}  # fmt: skip
+    "name": "t",
+    "tiles": {"rows": 2},
+    "sweep": {
+        "omega": {"from": 6.0, "to": 0.02, "points": 5},
+        "mu_cn": {"from": 0.99, "to": 0.5, "points": 4},
+    },
+}
 
 
 def test_computed_mask_marks_the_rows_of_done_tiles():

@@ -24,9 +24,18 @@ box = dict(
 @settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 def test_valid_results_are_finite_and_physical(omega, f0, mu_kn, mu_cn, zeta, tensile, y0, v0):
     r = simulate_point(
-        omega, f0=f0, mu_kn=mu_kn, mu_cn=mu_cn, zeta=zeta, tensile=tensile, y0=y0, v0=v0,
-        revolutions=120, rtol=1e-7, trace=True,
-    )  # fmt: skip
+        omega,
+        f0=f0,
+        mu_kn=mu_kn,
+        mu_cn=mu_cn,
+        zeta=zeta,
+        tensile=tensile,
+        y0=y0,
+        v0=v0,
+        revolutions=120,
+        rtol=1e-7,
+        trace=True,
+    )
     if r.status != "ok":
         assert r.kind == "failed" and math.isnan(r.dc)
         return

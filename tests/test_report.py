@@ -95,8 +95,9 @@ def test_every_claim_and_quoted_pair_has_a_row(report):
     for claim in CLAIMS:
         assert len(report[claim.key]) == 6, claim.key
         status = report[claim.key][3]
-        assert status.startswith(("*reproduced*", "*not reproduced*", "*depends on the force "
-                                  "law*", "*not tested*")), claim.key  # fmt: skip
+        assert status.startswith(
+            ("*reproduced*", "*not reproduced*", "*depends on the force law*", "*not tested*")
+        ), claim.key
         if claim.untested:  # listed, with why, never marked
             assert status == f"*not tested*: {claim.untested}", claim.key
 
@@ -141,15 +142,18 @@ def test_multiplier_rows_have_the_determinant_of_the_liouville_rows(report, tens
         lam = multipliers(text)
         assert np.prod(lam).real == pytest.approx(number(via_divergence), rel=2e-3)
         # the claim: within 0.01 of the paper's quoted pair
-        close = np.allclose(sorted(lam, key=abs), sorted(QUOTED[float(report[l_row][0])], key=abs),
-                            atol=0.01)  # fmt: skip
+        close = np.allclose(
+            sorted(lam, key=abs), sorted(QUOTED[float(report[l_row][0])], key=abs), atol=0.01
+        )
         assert match == mark(close)
 
 
 def series(text: str) -> dict[str, list[float]]:
     """ "f0=0.5: 0.0987/0.48/0.494; f0=1.5: …" → {"f0=0.5": [0.0987, 0.48, 0.494], …}"""
-    return {head: [number(v) for v in values.split(" ")[0].split("/")]
-            for head, values in (part.split(": ") for part in text.split("; "))}  # fmt: skip
+    return {
+        head: [number(v) for v in values.split(" ")[0].split("/")]
+        for head, values in (part.split(": ") for part in text.split("; "))
+    }
 
 
 @pytest.mark.parametrize("tensile", ["clamp", "allow"])
@@ -185,8 +189,9 @@ def test_point_rows_from_rest_agree_with_scipy(report, tensile):
     neighbourhood), from SciPy orbits from rest (and P5 under the clamp from reference
     cell 112)."""
     labels = {}
-    for key, (omega, _) in zip(("P1", "P2", "P3", "P4", "P5", "P6"), paper.FIG6_CLAIMS,
-                               strict=True):  # fmt: skip
+    for key, (omega, _) in zip(
+        ("P1", "P2", "P3", "P4", "P5", "P6"), paper.FIG6_CLAIMS, strict=True
+    ):
         labels[key] = re.search(r"^path \S+, rest ([^;]+);", report[key][FOUND[tensile]]).group(1)
         n, p, _, _ = steady_from_rest(omega, tensile, mu_kn=paper.FIG6_MU_KN)
         if re.fullmatch(r"\d+-\d+", labels[key]):  # a cycle: SciPy reaches the same n-p
@@ -203,8 +208,7 @@ def test_point_rows_from_rest_agree_with_scipy(report, tensile):
 @pytest.mark.parametrize("omega", [1.162, 1.4301, 3.0])
 def test_divergence_integral_gives_the_multipliers_determinant(tensile, omega):
     """Liouville on campar's own orbits: exp(∮ div f dt) = λ1 λ2 ≤ exp(−2ζ n T)."""
-    r = simulate_point(omega, mu_kn=0.9, tensile=tensile, rtol=1e-10, multipliers=True,
-                       trace=True)  # fmt: skip
+    r = simulate_point(omega, mu_kn=0.9, tensile=tensile, rtol=1e-10, multipliers=True, trace=True)
     det = np.prod(r.multipliers).real
     assert math.exp(divergence_integral(r)) == pytest.approx(det, rel=1e-3)
     assert det <= liouville_bound(omega, n=r.n)

@@ -20,20 +20,39 @@ REGIMES = [
 ]
 
 
-def campar_orbit(omega, f0, mu_kn, mu_cn, clamp, x0, revolutions, rtol, method="dp54",
-                 rk4_steps=600):  # fmt: skip
+def campar_orbit(
+    omega, f0, mu_kn, mu_cn, clamp, x0, revolutions, rtol, method="dp54", rk4_steps=600
+):
     """Final state and events of campar's integration of whole revolutions from x0."""
     job = point_job(
-        omega=omega, f0=f0, mu_kn=mu_kn, mu_cn=mu_cn, zeta=0.2,
-        tensile="clamp" if clamp else "allow", y0=x0[0], v0=x0[1], rtol=rtol,
-        atol=rtol * 1e-2, method=method, outputs=["label"],
-    )  # fmt: skip
+        omega=omega,
+        f0=f0,
+        mu_kn=mu_kn,
+        mu_cn=mu_cn,
+        zeta=0.2,
+        tensile="clamp" if clamp else "allow",
+        y0=x0[0],
+        v0=x0[1],
+        rtol=rtol,
+        atol=rtol * 1e-2,
+        method=method,
+        outputs=["label"],
+    )
     settings = cell_settings(job)._replace(rk4_steps=rk4_steps)
     rec = make_trace(1, 1000, 1)  # one sample slot: recording on, so events are kept
     status, y, v = trace_orbit(
-        omega, 0.2, f0, mu_kn, mu_cn, clamp, np.array(x0, float), solver_options(job),
-        settings, revolutions, rec,
-    )  # fmt: skip
+        omega,
+        0.2,
+        f0,
+        mu_kn,
+        mu_cn,
+        clamp,
+        np.array(x0, float),
+        solver_options(job),
+        settings,
+        revolutions,
+        rec,
+    )
     assert status == 0
     events = rec.events[: rec.count[1]]
     return np.array([y, v]), [(t, EVENT_NAMES[int(code)]) for t, _, _, code in events]

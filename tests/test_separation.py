@@ -15,9 +15,14 @@ from campar.sweep.plan import Tile, chain_parameters
 from campar.sweep.separation import OMEGA_TOL
 from campar.sweep.tile import allocate_outputs, cell_settings, run_tile, solver_options
 
-ROW = {"name": "row", "sweep": {"omega": {"from": 3.0, "to": 0.1, "points": 59},
-                                "mu_cn": {"from": 0.8, "to": 0.8, "points": 1}},
-       "outputs": ["label", "eps", "pn", "separation"]}  # fmt: skip
+ROW = {
+    "name": "row",
+    "sweep": {
+        "omega": {"from": 3.0, "to": 0.1, "points": 59},
+        "mu_cn": {"from": 0.8, "to": 0.8, "points": 1},
+    },
+    "outputs": ["label", "eps", "pn", "separation"],
+}
 
 
 def one_cell(job, omega, state):
@@ -25,9 +30,15 @@ def one_cell(job, omega, state):
 
     par = chain_parameters(job, 0)
     out = allocate_outputs(1, cell_settings(job).output_bits, job.n_sections)
-    run_chain(np.array([omega]), *(par[k][:1] for k in ("zeta", "f0", "mu_kn", "mu_cn")),
-              job.law(), np.array(state, float), solver_options(job), cell_settings(job),
-              out)  # fmt: skip
+    run_chain(
+        np.array([omega]),
+        *(par[k][:1] for k in ("zeta", "f0", "mu_kn", "mu_cn")),
+        job.law(),
+        np.array(state, float),
+        solver_options(job),
+        cell_settings(job),
+        out,
+    )
     return out
 
 
@@ -93,21 +104,29 @@ def test_a_row_detaching_everywhere_has_no_separation_speed_on_its_grid():
 
 
 def test_campar_open_gives_one_separation_speed_a_row(tmp_path):
-    data = {**ROW, "sweep": {"omega": {"from": 1.2, "to": 0.3, "points": 10},
-                             "phi1": {"from": 0.9, "to": 1.2, "points": 2}},
-            "store": str(tmp_path / "s.zarr")}  # fmt: skip
+    data = {
+        **ROW,
+        "sweep": {
+            "omega": {"from": 1.2, "to": 0.3, "points": 10},
+            "phi1": {"from": 0.9, "to": 1.2, "points": 2},
+        },
+        "store": str(tmp_path / "s.zarr"),
+    }
     path = tmp_path / "s.yaml"
     path.write_text(yaml.safe_dump(data))
-    run = subprocess.run([*CAMPAR, "run", str(path)], capture_output=True, text=True,
-                         timeout=600)  # fmt: skip
+    run = subprocess.run([*CAMPAR, "run", str(path)], capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr
     with campar.open(tmp_path / "s.zarr") as ds:
         assert ds["separation_speed"].dims == ("phi1",)
         assert ds["phi1"].attrs["long_name"] == "cam rise angle"
         speeds = ds["separation_speed"].values
         assert np.all(np.isfinite(speeds)) and np.all((speeds > 0.3) & (speeds < 1.2))
-    shown = subprocess.run([*CAMPAR, "separation", str(tmp_path / "s.zarr")],
-                           capture_output=True, text=True, timeout=300)  # fmt: skip
+    shown = subprocess.run(
+        [*CAMPAR, "separation", str(tmp_path / "s.zarr")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert shown.returncode == 0 and "separation speed" in shown.stdout
 
 
@@ -115,6 +134,14 @@ def test_a_basin_has_no_separation_output():
     from campar.errors import JobError
 
     with pytest.raises(JobError, match="separation: a basin job"):
-        Job.from_dict({"name": "b", "sweep": {"y0": {"from": 0, "to": 1, "points": 2},
-                       "ydot0": {"from": 0, "to": 1, "points": 2}}, "fixed": {"omega": 3.0},
-                       "outputs": ["label", "separation"]})  # fmt: skip
+        Job.from_dict(
+            {
+                "name": "b",
+                "sweep": {
+                    "y0": {"from": 0, "to": 1, "points": 2},
+                    "ydot0": {"from": 0, "to": 1, "points": 2},
+                },
+                "fixed": {"omega": 3.0},
+                "outputs": ["label", "separation"],
+            }
+        )

@@ -26,8 +26,9 @@ def test_free_flight_jacobian_is_the_damped_oscillators_exponential(smap):
     assert np.abs(shot.residual).max() < 1e-14  # the rest point
     exact = np.exp(2 * math.pi / omega * complex(-zeta, math.sqrt(1 - zeta**2)))
     got = sorted(np.linalg.eigvals(shot.jacobian), key=lambda z: z.imag)
-    np.testing.assert_allclose(got, sorted([exact.conjugate(), exact], key=lambda z: z.imag),
-                               rtol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(
+        got, sorted([exact.conjugate(), exact], key=lambda z: z.imag), rtol=1e-9
+    )
     assert shot.detachments == 0 and shot.time_free == pytest.approx(2 * math.pi)
 
 
@@ -74,8 +75,9 @@ def test_cycles_agree_with_an_independent_scipy_shooting(smap, parameters, guess
     assert orbit.label == label and orbit.residual <= 1e-10
     x, m = scipy_shooting.fixed_point(parameters, guess, n)  # from the guess, not campar's x
     assert np.abs(x - np.array(orbit.state)).max() < 1e-8
-    np.testing.assert_allclose(np.array(orbit.multipliers), scipy_shooting.multipliers(m),
-                               atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        np.array(orbit.multipliers), scipy_shooting.multipliers(m), atol=1e-6
+    )
 
 
 def test_an_unstable_cycle_past_a_period_doubling_has_a_multiplier_below_minus_one(smap):

@@ -56,8 +56,13 @@ COLD_POINT = textwrap.dedent("""
 
 def cold_point(mode: str, cache) -> dict:
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
-    run = subprocess.run([sys.executable, "-c", COLD_POINT, mode], env=env, text=True,
-                         capture_output=True, timeout=300)  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-c", COLD_POINT, mode],
+        env=env,
+        text=True,
+        capture_output=True,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr
     return json.loads(run.stdout)
 
@@ -113,8 +118,13 @@ def test_a_loaded_chain_serves_every_job_of_its_method():
     # differ between jobs' chains, so other outputs, transients and laws add no signature
     compile_kernel(point_job(omega=3.0))
     signatures = len(chain_compiled.signatures)
-    other = point_job(omega=2.0, outputs=("label", "dc", "sections", "multipliers", "lyapunov"),
-                      transient="fixed", revolutions=20, tensile="allow")  # fmt: skip
+    other = point_job(
+        omega=2.0,
+        outputs=("label", "dc", "sections", "multipliers", "lyapunov"),
+        transient="fixed",
+        revolutions=20,
+        tensile="allow",
+    )
     assert chain_loaded(solver_options(other), other.law())
     run_tile(other, Tile(0, 0, 1))
     assert len(chain_compiled.signatures) == signatures
@@ -145,8 +155,9 @@ IN_CACHE = textwrap.dedent("""
 
 def in_cache_run(cache, mode: str) -> list[str]:
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
-    run = subprocess.run([sys.executable, "-c", IN_CACHE, mode], env=env, text=True,
-                         capture_output=True, timeout=300)  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-c", IN_CACHE, mode], env=env, text=True, capture_output=True, timeout=300
+    )
     assert run.returncode == 0, run.stderr
     return run.stdout.split()
 

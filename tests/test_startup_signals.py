@@ -51,8 +51,13 @@ def assert_one_line_stop(code: int, err: str, expected: tuple[int, ...]) -> None
 def test_a_signal_while_campar_imports_is_one_line(write_job, imported, signame, code):
     path, _ = write_job()
     env = {**subprocess_env(), "IMPORT": imported, "SIGNAL": signame}
-    done = subprocess.run([sys.executable, "-c", PROGRAM, "run", str(path)], env=env,
-                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-c", PROGRAM, "run", str(path)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert_one_line_stop(done.returncode, done.stderr, (code,))
     assert not Path(write_job()[1].store).exists()  # nothing computed, nothing written
 
@@ -65,9 +70,12 @@ def test_a_signal_while_one_rank_imports_stops_every_rank_together(write_job):
     path, job = write_job()
     env = {**subprocess_env(), "IMPORT": "argparse", "SIGNAL": "SIGINT"}
     done = subprocess.run(
-        [str(MPIRUN), "-n", "2", sys.executable, "-c", PROGRAM, "run", str(path)], env=env,
-        capture_output=True, text=True, timeout=180,
-    )  # fmt: skip
+        [str(MPIRUN), "-n", "2", sys.executable, "-c", PROGRAM, "run", str(path)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=180,
+    )
     assert_one_line_stop(done.returncode, done.stderr, (130,))
 
 

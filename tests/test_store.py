@@ -400,8 +400,9 @@ class TestZarrStore(StoreSuite):
         with read_store(path) as reader:
             assert reader.done.all()
             for tile in tiles:
-                assert np.array_equal(reader.read_rows("n", tile.rows),
-                                      fake_tile(job, tile, tile.index)["n"])  # fmt: skip
+                assert np.array_equal(
+                    reader.read_rows("n", tile.rows), fake_tile(job, tile, tile.index)["n"]
+                )
 
     @pytest.mark.parametrize("failing_write", [8, 20])
     def test_a_creation_that_fails_leaves_nothing_though_zarr_still_writes(

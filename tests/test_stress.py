@@ -14,8 +14,9 @@ from campar.bench import stress
 
 @pytest.fixture(scope="module")
 def rows():
-    return stress.measure(stress.QUICK_CELLS, (1e-8, 1e-10), budget=200_000, timeout=60.0,
-                          check_max=4)  # fmt: skip
+    return stress.measure(
+        stress.QUICK_CELLS, (1e-8, 1e-10), budget=200_000, timeout=60.0, check_max=4
+    )
 
 
 def test_no_hang_no_crash_no_invalid_result(rows):
@@ -41,8 +42,18 @@ def test_labels_disagree_with_scipy_only_where_flagged_grazing(rows):
 
 
 def valid_cell(**changes):
-    cell = {"n": 1, "p": 0, "kind": 0, "status": 0, "flags": 0, "dc": 0.0, "eps_min": 0.1,
-            "eps_max": 0.3, "pn_max": 1.0, "state": np.array([0.1, 0.0])}  # fmt: skip
+    cell = {
+        "n": 1,
+        "p": 0,
+        "kind": 0,
+        "status": 0,
+        "flags": 0,
+        "dc": 0.0,
+        "eps_min": 0.1,
+        "eps_max": 0.3,
+        "pn_max": 1.0,
+        "state": np.array([0.1, 0.0]),
+    }
     return {**cell, **changes}
 
 
@@ -68,7 +79,7 @@ def valid_cell(**changes):
             },
             True,
             None,
-        ),  # fmt: skip
+        ),
     ],
 )
 def test_validity_check(changes, clamp, problem):

@@ -28,10 +28,17 @@ from campar.views.transitions import (
 
 
 def side(label="1-1", kind="periodic", n=1, p=1, multipliers=(0.3, 0.1), farther=None, **extra):
-    return Side(index=0, omega=1.0, label=label, kind=kind, n=n, p=p,
-                multipliers=None if multipliers is None else tuple(map(complex, multipliers)),
-                farther=None if farther is None else tuple(map(complex, farther)),
-                **extra)  # fmt: skip
+    return Side(
+        index=0,
+        omega=1.0,
+        label=label,
+        kind=kind,
+        n=n,
+        p=p,
+        multipliers=None if multipliers is None else tuple(map(complex, multipliers)),
+        farther=None if farther is None else tuple(map(complex, farther)),
+        **extra,
+    )
 
 
 def test_distances_to_the_critical_values():
@@ -93,11 +100,13 @@ def test_boundaries_are_typed_by_what_approaches_its_critical_value(before, afte
 
 
 def test_chaos_names_its_route_and_a_doubled_cycles_plus_one_is_not_a_fold():
-    kind, reason, evidence = classify_boundary(side(multipliers=(-0.99, 0.1)),
-                                               side("chaos", "chaotic", 0, 40, None))  # fmt: skip
+    kind, reason, evidence = classify_boundary(
+        side(multipliers=(-0.99, 0.1)), side("chaos", "chaotic", 0, 40, None)
+    )
     assert "route PD" in reason and evidence.type == "PD"
-    kind, reason, _ = classify_boundary(side("2-2", n=2, p=2, multipliers=(0.99, 0.01)),
-                                        side(multipliers=(-0.8, 0.1)))  # fmt: skip
+    kind, reason, _ = classify_boundary(
+        side("2-2", n=2, p=2, multipliers=(0.99, 0.01)), side(multipliers=(-0.8, 0.1))
+    )
     assert kind == "unknown" and "daughter" in reason
 
 
@@ -123,13 +132,22 @@ def test_graze_distance_refines_the_extremum_nearest_zero():
 
 def test_boundaries_of_a_line_without_job_use_its_labels_and_multipliers():
     nan = np.full((2, 2), np.nan)
-    mult = [[[0.9, 0], [0.01, 0]], [[0.97, 0], [0.01, 0]], [[-0.96, 0], [0.1, 0]],
-            [[-0.9, 0], [0.1, 0]], nan]  # fmt: skip
+    mult = [
+        [[0.9, 0], [0.01, 0]],
+        [[0.97, 0], [0.01, 0]],
+        [[-0.96, 0], [0.1, 0]],
+        [[-0.9, 0], [0.1, 0]],
+        nan,
+    ]
     line = SimpleNamespace(
-        omega=np.array([2.4, 2.39, 2.38, 2.37, 2.36]), labels=["2-2", "2-2", "1-1", "1-1", "QP"],
-        kind=np.array([0, 0, 0, 0, 1]), n=np.array([2, 2, 1, 1, 0]), p=np.array([2, 2, 1, 1, 3]),
-        multipliers=np.array(mult), sections=np.full((5, 4, 2), np.nan),
-    )  # fmt: skip
+        omega=np.array([2.4, 2.39, 2.38, 2.37, 2.36]),
+        labels=["2-2", "2-2", "1-1", "1-1", "QP"],
+        kind=np.array([0, 0, 0, 0, 1]),
+        n=np.array([2, 2, 1, 1, 0]),
+        p=np.array([2, 2, 1, 1, 3]),
+        multipliers=np.array(mult),
+        sections=np.full((5, 4, 2), np.nan),
+    )
     transitions = find_transitions(line)
     assert [(t.before.index, t.after.index) for t in transitions] == [(1, 2), (3, 4)]
     first = transitions[0]
@@ -192,8 +210,9 @@ def test_a_grazing_has_the_shallow_flight_scipy_finds_on_one_side_only():
     flights = []
     for side in (graze.before, graze.after):
         model = Model(side.omega, mu_kn=0.91)
-        _, events, _ = integrate(model, line.state[side.index], 1, rtol=1e-11, atol=1e-13,
-                                 max_step=0.05)  # fmt: skip
+        _, events, _ = integrate(
+            model, line.state[side.index], 1, rtol=1e-11, atol=1e-13, max_step=0.05
+        )
         flights.append([t for t, kind in events if kind in ("detachment", "impact")])
     (t_off, t_on), none = flights
     assert none == [] and 0 < t_on - t_off < 0.01 * 2 * np.pi / graze.before.omega
@@ -206,8 +225,18 @@ def test_the_line_figure_labels_its_transitions(pd_line):
 
 
 def test_line_json_lists_each_transition_with_its_evidence(tmp_path, capsys):
-    argv = ["line", "--omega", "2.2:2.5", "--points", "100", "--mu-kn", "0.91", "--json",
-            "-o", str(tmp_path / "line.png")]  # fmt: skip
+    argv = [
+        "line",
+        "--omega",
+        "2.2:2.5",
+        "--points",
+        "100",
+        "--mu-kn",
+        "0.91",
+        "--json",
+        "-o",
+        str(tmp_path / "line.png"),
+    ]
     assert main(argv) == 0
     data = json.loads(capsys.readouterr().out)
     (line,) = data["lines"]

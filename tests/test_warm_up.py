@@ -19,8 +19,9 @@ def test_warm_up_leaves_nothing_for_a_point_or_a_map_to_compile(tmp_path):
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
 
     def campar(*args):
-        done = subprocess.run([*CAMPAR, *args], env=env, capture_output=True, text=True,
-                              timeout=600, cwd=tmp_path)  # fmt: skip
+        done = subprocess.run(
+            [*CAMPAR, *args], env=env, capture_output=True, text=True, timeout=600, cwd=tmp_path
+        )
         assert done.returncode == 0, done.stderr
         return done.stdout
 

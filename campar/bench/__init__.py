@@ -95,35 +95,51 @@ def names(text: str) -> list[str]:
 # -- the benchmarks ----------------------------------------------------------
 
 
-@benchmark("continuation", "periodic-orbit continuation: speed of a branch, PD and fold "
-           "points against SciPy, the hysteresis bands' folds, a map's curves",
-           needs=("scipy",))  # fmt: skip
+@benchmark(
+    "continuation",
+    "periodic-orbit continuation: speed of a branch, PD and fold "
+    "points against SciPy, the hysteresis bands' folds, a map's curves",
+    needs=("scipy",),
+)
 def _continuation_arguments(p):
-    p.add_argument("--points", type=int, default=1000,
-                   help="points of the speed branch (1000)")  # fmt: skip
-    p.add_argument("--hysteresis-job", default="jobs/mu_kn_both.yaml",
-                   help="a chains.direction: both job (jobs/mu_kn_both.yaml)")  # fmt: skip
+    p.add_argument("--points", type=int, default=1000, help="points of the speed branch (1000)")
+    p.add_argument(
+        "--hysteresis-job",
+        default="jobs/mu_kn_both.yaml",
+        help="a chains.direction: both job (jobs/mu_kn_both.yaml)",
+    )
     p.add_argument("--store", help="a map store whose curves to compute and compare")
     p.add_argument("--quick", action="store_true", help="the speed branch only")
 
 
-@benchmark("precision", "wall time and steps against error: DP5(4) tolerances, RK4 steps",
-           needs=("scipy",))  # fmt: skip
+@benchmark(
+    "precision", "wall time and steps against error: DP5(4) tolerances, RK4 steps", needs=("scipy",)
+)
 def _precision_arguments(p):
     p.add_argument("--cells", type=names, help="comma-separated cell names (default: all)")
     p.add_argument("--rtols", type=floats, help="DP5(4) rtols (default 1e-4 … 1e-12)")
     p.add_argument("--rk4-steps", type=ints, help="RK4 steps per revolution (default 60 … 7680)")
     p.add_argument("--reference-rtol", type=float, default=1e-13, help="SciPy reference (1e-13)")
-    p.add_argument("--scipy-rtols", type=floats, help="SciPy DOP853 peers on the figure "
-                   "(default 1e-6,1e-8,1e-10; '' for none)")  # fmt: skip
-    p.add_argument("--min-seconds", type=float, default=0.3,
-                   help="repeat each timing this long at least; keep the fastest")  # fmt: skip
+    p.add_argument(
+        "--scipy-rtols",
+        type=floats,
+        help="SciPy DOP853 peers on the figure (default 1e-6,1e-8,1e-10; '' for none)",
+    )
+    p.add_argument(
+        "--min-seconds",
+        type=float,
+        default=0.3,
+        help="repeat each timing this long at least; keep the fastest",
+    )
     p.add_argument("--plot", metavar="FILE.png", help="log-log figure (default: none)")
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
-@benchmark("peers", "campar against SciPy DOP853 and the paper's RK4 recipe at equal agreement",
-           needs=("scipy",))  # fmt: skip
+@benchmark(
+    "peers",
+    "campar against SciPy DOP853 and the paper's RK4 recipe at equal agreement",
+    needs=("scipy",),
+)
 def _peers_arguments(p):
     from ..sweep.job import DEFAULT_CLASSIFY, DEFAULT_INTEGRATOR, DEFAULT_TRANSIENT
 
@@ -131,16 +147,30 @@ def _peers_arguments(p):
     window = DEFAULT_CLASSIFY.window_revolutions
     rtol = DEFAULT_INTEGRATOR.rtol
     p.add_argument("--cells", type=names, help="comma-separated cell names (default: all)")
-    p.add_argument("--revolutions", type=int, default=revolutions,
-                   help=f"transient of the RK4 recipe and of SciPy ({revolutions})")  # fmt: skip
-    p.add_argument("--window", type=int, default=window,
-                   help=f"read window, revolutions ({window})")  # fmt: skip
-    p.add_argument("--scipy-cells", type=int, default=-1,
-                   help="run SciPy on the first N cells only (default: all)")  # fmt: skip
-    p.add_argument("--scipy-rtol", type=float, default=rtol,
-                   help=f"SciPy rtol (campar's, {rtol:g}; atol /100)")  # fmt: skip
-    p.add_argument("--min-seconds", type=float, default=0.3,
-                   help="repeat each campar timing at least this long")  # fmt: skip
+    p.add_argument(
+        "--revolutions",
+        type=int,
+        default=revolutions,
+        help=f"transient of the RK4 recipe and of SciPy ({revolutions})",
+    )
+    p.add_argument(
+        "--window", type=int, default=window, help=f"read window, revolutions ({window})"
+    )
+    p.add_argument(
+        "--scipy-cells",
+        type=int,
+        default=-1,
+        help="run SciPy on the first N cells only (default: all)",
+    )
+    p.add_argument(
+        "--scipy-rtol", type=float, default=rtol, help=f"SciPy rtol (campar's, {rtol:g}; atol /100)"
+    )
+    p.add_argument(
+        "--min-seconds",
+        type=float,
+        default=0.3,
+        help="repeat each campar timing at least this long",
+    )
     p.add_argument(
         "--no-row",
         action="store_true",
@@ -157,16 +187,23 @@ def _outputs_arguments(p):
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
-@benchmark("stress", "extreme parameters and states: no crash, no hang, valid or failed",
-           needs=("scipy",))  # fmt: skip
+@benchmark(
+    "stress", "extreme parameters and states: no crash, no hang, valid or failed", needs=("scipy",)
+)
 def _stress_arguments(p):
     p.add_argument("--budget", type=int, default=1_000_000, help="step budget per cell (1e6)")
-    p.add_argument("--timeout", type=float, default=120.0,
-                   help="seconds before a cell counts as hung (120)")  # fmt: skip
-    p.add_argument("--rtols", type=floats, default=[1e-8, 1e-10],
-                   help="labels compared between these (1e-8,1e-10)")  # fmt: skip
-    p.add_argument("--check", type=int, default=40,
-                   help="label changes checked against SciPy, at most (40)")  # fmt: skip
+    p.add_argument(
+        "--timeout", type=float, default=120.0, help="seconds before a cell counts as hung (120)"
+    )
+    p.add_argument(
+        "--rtols",
+        type=floats,
+        default=[1e-8, 1e-10],
+        help="labels compared between these (1e-8,1e-10)",
+    )
+    p.add_argument(
+        "--check", type=int, default=40, help="label changes checked against SciPy, at most (40)"
+    )
     p.add_argument("--quick", action="store_true", help="the fast subset of tests/test_stress.py")
 
 
@@ -196,43 +233,71 @@ def _directions_arguments(p):
 
 @benchmark("master", "the master's capacity: tiles/s, latency to disk, idle ranks, per writer")
 def _master_arguments(p):
-    p.add_argument("--ranks", type=ints, default=[16, 64, 128],
-                   help="launches, oversubscribed beyond the cores (16,64,128)")  # fmt: skip
+    p.add_argument(
+        "--ranks",
+        type=ints,
+        default=[16, 64, 128],
+        help="launches, oversubscribed beyond the cores (16,64,128)",
+    )
     p.add_argument("--rows", type=int, default=400, help="values of the second parameter (400)")
     p.add_argument("--omegas", type=int, default=400, help="ω values per chain (400)")
     p.add_argument("--tile-rows", type=int, default=4, help="chains per tile (4)")
-    p.add_argument("--tile-seconds", type=float, default=0.15,
-                   help="stand-in tile time (0.15 s: 4 chains of the μcn plane)")  # fmt: skip
+    p.add_argument(
+        "--tile-seconds",
+        type=float,
+        default=0.15,
+        help="stand-in tile time (0.15 s: 4 chains of the μcn plane)",
+    )
     p.add_argument("--suffix", default=".zarr", help="store type: .zarr (default) or .h5")
-    p.add_argument("--writer", type=names, default=["workers", "master"],
-                   help="who writes the workers' tiles: workers (each its own; Zarr only), "
-                   "master (rank 0 writes every tile); default both, side by side")  # fmt: skip
+    p.add_argument(
+        "--writer",
+        type=names,
+        default=["workers", "master"],
+        help="who writes the workers' tiles: workers (each its own; Zarr only), "
+        "master (rank 0 writes every tile); default both, side by side",
+    )
     p.add_argument("--tmp", help="directory for the stores (default: the system's)")
     p.add_argument("--keep-stores", action="store_true", help="keep the stores")
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
-@benchmark("map", "map agreement with a 500-revolution rtol 1e-11 reference against run time",
-           module="maps")  # fmt: skip
+@benchmark(
+    "map",
+    "map agreement with a 500-revolution rtol 1e-11 reference against run time",
+    module="maps",
+)
 def _map_arguments(p):
-    p.add_argument("--planes", type=names, default=["mu_cn", "mu_kn", "omega_f0"],
-                   help="planes, as jobs/NAME.yaml (mu_cn,mu_kn,omega_f0)")  # fmt: skip
+    p.add_argument(
+        "--planes",
+        type=names,
+        default=["mu_cn", "mu_kn", "omega_f0"],
+        help="planes, as jobs/NAME.yaml (mu_cn,mu_kn,omega_f0)",
+    )
     p.add_argument("--size", type=int, default=100, help="N of the N × N sub-plane (100)")
     p.add_argument("--candidates", type=names, help="comma-separated (default: all)")
-    p.add_argument("--references", default="results/bench-map",
-                   help="reference stores and verdicts (results/bench-map)")  # fmt: skip
+    p.add_argument(
+        "--references",
+        default="results/bench-map",
+        help="reference stores and verdicts (results/bench-map)",
+    )
     p.add_argument("--ranks", type=int, default=2, help="ranks computing a reference (2)")
-    p.add_argument("--no-adjudication", action="store_true",
-                   help="skip the long runs of disagreeing cells")  # fmt: skip
+    p.add_argument(
+        "--no-adjudication", action="store_true", help="skip the long runs of disagreeing cells"
+    )
     p.add_argument("--list", action="store_true", help="print the disagreeing cells")
-    p.add_argument("--audit", action="store_true",
-                   help="audit long runs that found twice campar's period")  # fmt: skip
+    p.add_argument(
+        "--audit", action="store_true", help="audit long runs that found twice campar's period"
+    )
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
 @benchmark("cells", "one cell against ω (cold, warm), warm-started rows, compile and start-up")
 def _cells_arguments(p):
     p.add_argument("--rtol", type=float, default=1e-9, help="integrator rtol (1e-9)")
-    p.add_argument("--min-seconds", type=float, default=0.3,
-                   help="repeat each timing this long at least; keep the fastest")  # fmt: skip
+    p.add_argument(
+        "--min-seconds",
+        type=float,
+        default=0.3,
+        help="repeat each timing this long at least; keep the fastest",
+    )
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")

@@ -44,8 +44,17 @@ def cell_costs(omegas, rtol: float, min_seconds: float) -> list[list]:
         t_cold = best_time(lambda o=omega: simulate_point(o, rtol=rtol), min_seconds)
         start = {"y0": y0, "v0": v0}
         t_warm = best_time(lambda o=omega, s=start: simulate_point(o, rtol=rtol, **s), min_seconds)
-        rows.append([omega, warm.label, 1e3 * t_cold.cpu, cold.revolutions,
-                     1e3 * t_warm.cpu, warm.revolutions, warm.steps])  # fmt: skip
+        rows.append(
+            [
+                omega,
+                warm.label,
+                1e3 * t_cold.cpu,
+                cold.revolutions,
+                1e3 * t_warm.cpu,
+                warm.revolutions,
+                warm.steps,
+            ]
+        )
     return rows
 
 
@@ -75,8 +84,9 @@ def row_costs(mu_cns, points: int, rtol: float) -> list[list]:
         arrays = run_tile(job, tile)
         seconds = time.process_time() - start
         periodic = float(np.mean(arrays["n"] > 0))
-        rows.append([mu_cn, 1e3 * seconds / points, float(arrays["revolutions"].mean()),
-                     100 * periodic])  # fmt: skip
+        rows.append(
+            [mu_cn, 1e3 * seconds / points, float(arrays["revolutions"].mean()), 100 * periodic]
+        )
     return rows
 
 
@@ -103,15 +113,22 @@ def startup_costs() -> list[list]:
 
 
 def run(args) -> int:
-    settings = {"omegas": OMEGAS, "rows": ROW_MU_CN, "row_points": ROW_POINTS,
-                "rtol": args.rtol, "startup": True}  # fmt: skip
+    settings = {
+        "omegas": OMEGAS,
+        "rows": ROW_MU_CN,
+        "row_points": ROW_POINTS,
+        "rtol": args.rtol,
+        "startup": True,
+    }
     if args.quick:
         settings.update(QUICK)
     print(machine_line())
     rtol = settings["rtol"]
     base = ", ".join(f"{name} {value:g}" for name, value in PAPER_VALUES.items())
-    print(f"\nOne cell ({base}) at rtol {rtol:g}; CPU ms, fastest run;"
-          f" warm = from the steady state at ω + {DELTA_OMEGA:.4f}\n")  # fmt: skip
+    print(
+        f"\nOne cell ({base}) at rtol {rtol:g}; CPU ms, fastest run;"
+        f" warm = from the steady state at ω + {DELTA_OMEGA:.4f}\n"
+    )
     cells = cell_costs(settings["omegas"], rtol, args.min_seconds)
     headers = ["ω", "label", "cold ms", "cold revs", "warm ms", "warm revs", "warm steps"]
     print(format_table(headers, cells))
@@ -119,8 +136,10 @@ def run(args) -> int:
     rows = row_costs(settings["rows"], settings["row_points"], rtol)
     print(format_table(["μcn", "ms/cell", "rev/cell", "periodic %"], rows))
     mean = np.mean([r[2] for r in rows])
-    print(f"\nmean over the rows: {np.mean([r[1] for r in rows]):.3f} ms and {mean:.2f} "
-          "revolutions per cell")  # fmt: skip
+    print(
+        f"\nmean over the rows: {np.mean([r[1] for r in rows]):.3f} ms and {mean:.2f} "
+        "revolutions per cell"
+    )
     if settings["startup"]:
         print()
         print(format_table(["start-up", "wall s"], startup_costs()))

@@ -54,8 +54,11 @@ class Cell:
 
     def describe(self) -> str:
         base = Cell("", 1.0)
-        diff = [f"{k}={v}" for k, v in asdict(self).items()
-                if k not in ("name", "omega") and v != getattr(base, k)]  # fmt: skip
+        diff = [
+            f"{k}={v}"
+            for k, v in asdict(self).items()
+            if k not in ("name", "omega") and v != getattr(base, k)
+        ]
         return " ".join([f"ω={self.omega}", *diff])
 
 

@@ -39,12 +39,16 @@ SPAN = (6.0, 0.5)
 def speed(points: int) -> dict:
     smap = SectionMap()
     orbit = find_cycle(1, (0.6, -0.6), section_map=smap, omega=SPAN[0], mu_kn=MU_KN)
-    settings = BranchSettings(step=0.005, max_step=(SPAN[0] - SPAN[1]) / points,
-                              max_points=10 * points)  # fmt: skip
+    settings = BranchSettings(
+        step=0.005, max_step=(SPAN[0] - SPAN[1]) / points, max_points=10 * points
+    )
     continue_branch(orbit, "omega", (0.9, 6.0), section_map=smap, settings=settings)  # warm
     shots0 = smap.shots
-    took, branch = timed(lambda: continue_branch(orbit, "omega", (SPAN[1], SPAN[0]),
-                                                 section_map=smap, settings=settings))  # fmt: skip
+    took, branch = timed(
+        lambda: continue_branch(
+            orbit, "omega", (SPAN[1], SPAN[0]), section_map=smap, settings=settings
+        )
+    )
     from ..views.line import compute_line, line_job
 
     job = line_job(SPAN[::-1], len(branch.values), mu_kn=MU_KN)
@@ -52,9 +56,15 @@ def speed(points: int) -> dict:
     cells, _ = timed(lambda: compute_line(job, transitions=False))
     per_point = took.cpu / len(branch.values)
     per_cell = cells.cpu / len(branch.values)
-    return {"points": len(branch.values), "wall": took.wall, "cpu": took.cpu,
-            "shots": smap.shots - shots0, "per_point": per_point, "per_cell": per_cell,
-            "special": [(sp.type, sp.value) for sp in branch.special]}  # fmt: skip
+    return {
+        "points": len(branch.values),
+        "wall": took.wall,
+        "cpu": took.cpu,
+        "shots": smap.shots - shots0,
+        "per_point": per_point,
+        "per_cell": per_cell,
+        "special": [(sp.type, sp.value) for sp in branch.special],
+    }
 
 
 def accuracy() -> list[tuple[str, float]]:
@@ -68,17 +78,23 @@ def accuracy() -> list[tuple[str, float]]:
     rows.append(("unstable 1-cycle state, ω 3.54", float(np.abs(x - np.array(one.state)).max())))
     difference = np.abs(np.array(one.multipliers) - scipy_shooting.multipliers(m)).max()
     rows.append(("its multipliers", float(difference)))
-    branch = continue_branch(find_cycle(1, (0.6, -0.6), section_map=smap, omega=4.0,
-                                        mu_kn=MU_KN), "omega", (3.0, 4.0), direction=-1.0,
-                             section_map=smap)  # fmt: skip
+    branch = continue_branch(
+        find_cycle(1, (0.6, -0.6), section_map=smap, omega=4.0, mu_kn=MU_KN),
+        "omega",
+        (3.0, 4.0),
+        direction=-1.0,
+        section_map=smap,
+    )
     pd = branch.special[0]
-    value, _ = scipy_shooting.bifurcation_point("PD", {"omega": pd.value, "mu_kn": MU_KN},
-                                                "omega", pd.state, 1)  # fmt: skip
+    value, _ = scipy_shooting.bifurcation_point(
+        "PD", {"omega": pd.value, "mu_kn": MU_KN}, "omega", pd.state, 1
+    )
     rows.append((f"PD point ω = {pd.value:.8f}", abs(value - pd.value)))
     three = continue_from_cell("omega", (6.0, 5.0), {"mu_kn": MU_KN}, section_map=smap)
     fold = [sp for sp in three.root.special if sp.type == "SN"][0]
-    value, _ = scipy_shooting.bifurcation_point("SN", {"omega": fold.value, "mu_kn": MU_KN},
-                                                "omega", fold.state, fold.n)  # fmt: skip
+    value, _ = scipy_shooting.bifurcation_point(
+        "SN", {"omega": fold.value, "mu_kn": MU_KN}, "omega", fold.state, fold.n
+    )
     rows.append((f"fold of the 3-2 cycle ω = {fold.value:.8f}", abs(value - fold.value)))
     return rows
 
@@ -107,9 +123,11 @@ def hysteresis(job_path: Path) -> dict:
     explained_rows, rows, edges, explained = 0, 0, 0, 0
     kinds_found: dict[str, int] = {}
     for i in range(label.shape[0]):
-        jumps = [j for j in range(len(omega) - 1)
-                 if kind[i, j] == 0 and label[i, j] != label[i, j + 1]
-                 and (band[i, j] or band[i, j + 1])]  # fmt: skip
+        jumps = [
+            j
+            for j in range(len(omega) - 1)
+            if kind[i, j] == 0 and label[i, j] != label[i, j + 1] and (band[i, j] or band[i, j + 1])
+        ]
         if not jumps:
             continue
         rows += 1
@@ -118,13 +136,17 @@ def hysteresis(job_path: Path) -> dict:
             edges += 1
             parameters = {**job.fixed, job.second: float(second[i])}
             try:
-                orbit = find_cycle(int(n[i, j]), state[i, j], section_map=smap,
-                                   omega=float(omega[j]), **parameters)  # fmt: skip
+                orbit = find_cycle(
+                    int(n[i, j]), state[i, j], section_map=smap, omega=float(omega[j]), **parameters
+                )
                 branch = continue_branch(
-                    orbit, "omega", (omega[j + 1] - h, omega[j] + h), direction=-1.0,
-                    section_map=smap, settings=BranchSettings(step=h / 4, max_step=h / 4,
-                                                              max_points=80),
-                )  # fmt: skip
+                    orbit,
+                    "omega",
+                    (omega[j + 1] - h, omega[j] + h),
+                    direction=-1.0,
+                    section_map=smap,
+                    settings=BranchSettings(step=h / 4, max_step=h / 4, max_points=80),
+                )
                 near = [sp for sp in branch.special if sp.type in ("SN", "PD", "G", "BP")]
             except Exception:  # noqa: BLE001 (a failed seed counts as unexplained)
                 near = []
@@ -134,8 +156,13 @@ def hysteresis(job_path: Path) -> dict:
             else:
                 ok = False
         explained_rows += ok
-    return {"rows": rows, "explained_rows": explained_rows, "edges": edges,
-            "explained": explained, "kinds": kinds_found}  # fmt: skip
+    return {
+        "rows": rows,
+        "explained_rows": explained_rows,
+        "edges": edges,
+        "explained": explained,
+        "kinds": kinds_found,
+    }
 
 
 def map_agreement(store: Path) -> dict:
@@ -157,8 +184,12 @@ def map_agreement(store: Path) -> dict:
         with open_store(curves_store_path(copy)) as ds:
             tasks = ds.sizes["task"]
         with open_store(copy) as ds:
-            grid = {"omega": ds["omega"].values, "second": ds[boundaries.second_name].values,
-                    "kind": ds["kind"].values, "n": ds["n"].values}  # fmt: skip
+            grid = {
+                "omega": ds["omega"].values,
+                "second": ds[boundaries.second_name].values,
+                "kind": ds["kind"].values,
+                "n": ds["n"].values,
+            }
     shares = {t: agreement(boundaries, curves, grid, t) for t in ("PD", "SN", "G")}
     return {"seconds": seconds, "curves": len(curves), "tasks": tasks, "agreement": shares}
 
@@ -166,30 +197,64 @@ def map_agreement(store: Path) -> dict:
 def run(args) -> int:
     print(machine_line())
     s = speed(args.points)
-    print(format_table(
-        ["branch", "points", "wall s", "CPU s", "shots", "ms/point", "ms/map cell", "ratio"],
-        [[f"1-1, μkn {MU_KN}, ω {SPAN[0]} → {SPAN[1]}", s["points"], f"{s['wall']:.2f}",
-          f"{s['cpu']:.2f}", s["shots"], f"{1e3 * s['per_point']:.2f}",
-          f"{1e3 * s['per_cell']:.3f}", f"{s['per_point'] / s['per_cell']:.1f}"]],
-    ))  # fmt: skip
+    print(
+        format_table(
+            ["branch", "points", "wall s", "CPU s", "shots", "ms/point", "ms/map cell", "ratio"],
+            [
+                [
+                    f"1-1, μkn {MU_KN}, ω {SPAN[0]} → {SPAN[1]}",
+                    s["points"],
+                    f"{s['wall']:.2f}",
+                    f"{s['cpu']:.2f}",
+                    s["shots"],
+                    f"{1e3 * s['per_point']:.2f}",
+                    f"{1e3 * s['per_cell']:.3f}",
+                    f"{s['per_point'] / s['per_cell']:.1f}",
+                ]
+            ],
+        )
+    )
     print("special points:", ", ".join(f"{t} {v:.8f}" for t, v in s["special"]) or "none")
     if not args.quick:
-        print(format_table(["against SciPy shooting", "|difference|"],
-                           [[name, f"{d:.2e}"] for name, d in accuracy()]))  # fmt: skip
+        print(
+            format_table(
+                ["against SciPy shooting", "|difference|"],
+                [[name, f"{d:.2e}"] for name, d in accuracy()],
+            )
+        )
         h = hysteresis(Path(args.hysteresis_job))
         share = h["explained_rows"] / h["rows"] if h["rows"] else math.nan
-        print(f"hysteresis ({args.hysteresis_job}): {h['explained_rows']} of {h['rows']} rows "
-              f"({100 * share:.1f} %) have every jump off a cycle inside a band within one "
-              f"cell of a special point of its branch; edges {h['explained']}/{h['edges']}; "
-              f"types {h['kinds']}")  # fmt: skip
+        print(
+            f"hysteresis ({args.hysteresis_job}): {h['explained_rows']} of {h['rows']} rows "
+            f"({100 * share:.1f} %) have every jump off a cycle inside a band within one "
+            f"cell of a special point of its branch; edges {h['explained']}/{h['edges']}; "
+            f"types {h['kinds']}"
+        )
     if args.store:
         m = map_agreement(Path(args.store))
-        print(f"curves of {args.store}: {m['curves']} curves from {m['tasks']} tasks in "
-              f"{m['seconds']:.1f} s (one process)")  # fmt: skip
-        print(format_table(
-            ["type", "edges", "edges within a cell of a curve", "curve points judged",
-             "with an edge beside them"],
-            [[t, a.counts[0], f"{100 * a.edges_near:.1f} %", a.counts[1],
-              f"{100 * a.length_near:.1f} %"] for t, a in m["agreement"].items()],
-        ))  # fmt: skip
+        print(
+            f"curves of {args.store}: {m['curves']} curves from {m['tasks']} tasks in "
+            f"{m['seconds']:.1f} s (one process)"
+        )
+        print(
+            format_table(
+                [
+                    "type",
+                    "edges",
+                    "edges within a cell of a curve",
+                    "curve points judged",
+                    "with an edge beside them",
+                ],
+                [
+                    [
+                        t,
+                        a.counts[0],
+                        f"{100 * a.edges_near:.1f} %",
+                        a.counts[1],
+                        f"{100 * a.length_near:.1f} %",
+                    ]
+                    for t, a in m["agreement"].items()
+                ],
+            )
+        )
     return 0

@@ -79,10 +79,16 @@ def run(args) -> int:
     r = measure(Path(args.job), **config)
     best, cells = r["best"], r["cells"]
     rows = [
-        [d, cells * (2 if d == "both" else 1), best[d].cpu, best[d].wall,
-         best[d].cpu / best["down"].cpu, best[d].wall / best["down"].wall]
+        [
+            d,
+            cells * (2 if d == "both" else 1),
+            best[d].cpu,
+            best[d].wall,
+            best[d].cpu / best["down"].cpu,
+            best[d].wall / best["down"].wall,
+        ]
         for d in RUNS
-    ]  # fmt: skip
+    ]
     headers = ["direction", "cells", "CPU s", "wall s", "CPU / down", "wall / down"]
     print(format_table(headers, rows))
     ratio = best["both"].cpu / best["down"].cpu

@@ -61,9 +61,12 @@ def subplane_job(job: Job, size: int, name: str, overrides: dict, outputs=None) 
 
 def reference_job(job: Job, size: int) -> Job:
     return subplane_job(
-        job, size, f"{job.name}_{size}_reference", REFERENCE,
+        job,
+        size,
+        f"{job.name}_{size}_reference",
+        REFERENCE,
         outputs=["label", "dc", "eps", "pn", "lyapunov"],
-    )  # fmt: skip
+    )
 
 
 def compute(job: Job) -> tuple[dict[str, np.ndarray], float]:
@@ -129,8 +132,11 @@ def long_run_job(ref_job: Job, ref: dict, i: int, j: int, outputs: list[str]) ->
     cell of its chain (the state the reference itself started from)."""
     data = ref_job.to_dict()
     data["name"] = f"{ref_job.name}_adjudication"
-    data["sweep"]["omega"] = {"from": float(ref_job.omega[j]), "to": float(ref_job.omega[j]),
-                              "points": 1}  # fmt: skip
+    data["sweep"]["omega"] = {
+        "from": float(ref_job.omega[j]),
+        "to": float(ref_job.omega[j]),
+        "points": 1,
+    }
     value = float(ref_job.second_values[i])
     data["sweep"][ref_job.second] = {"from": value, "to": value, "points": 1}
     if j > 0 and np.all(np.isfinite(ref["state"][i, j - 1])):
@@ -159,8 +165,9 @@ def period_of_label(label: str | None) -> int:
     return int(label.split("-")[0]) if label and label[0].isdigit() else 0
 
 
-def audit_doubled_periods(candidate: Job, ref_job: Job, ref: dict, comparison: Comparison,
-                          out) -> int:  # fmt: skip
+def audit_doubled_periods(
+    candidate: Job, ref_job: Job, ref: dict, comparison: Comparison, out
+) -> int:
     """Audit the disagreeing cells whose long run found twice campar's period.
 
     The long run reads its period with the plain repeat test, which takes a
@@ -180,9 +187,12 @@ def audit_doubled_periods(candidate: Job, ref_job: Job, ref: dict, comparison: C
         long, _ = compute(long_job)
         y, v = (float(x) for x in long["state"][0, 0])
         data = long_job.to_dict()
-        data.update(transient=candidate.transient.model_dump(), initial={"y": y, "v": v},
-                    integrator=candidate.integrator.model_dump(),
-                    classify=candidate.classify.model_dump())  # fmt: skip
+        data.update(
+            transient=candidate.transient.model_dump(),
+            initial={"y": y, "v": v},
+            integrator=candidate.integrator.model_dump(),
+            classify=candidate.classify.model_dump(),
+        )
         again, _ = compute(Job.from_dict(data))
         lead = float(np.hypot(*long["multipliers"][0, 0, 0]))
         points = long["sections"][0, 0]
@@ -190,10 +200,14 @@ def audit_doubled_periods(candidate: Job, ref_job: Job, ref: dict, comparison: C
         same = label_of(again, 0, 0) == mine
         misread += same and lead > 0.99
         restart_lead = float(np.hypot(*again["multipliers"][0, 0, 0]))
-        print(f"  cell ({i}, {j}): campar {mine}; long run {verdict}, multiplier {lead:.4f}, "
-              f"its two points {spread:.1e} apart; from its end campar's test gives "
-              f"{label_of(again, 0, 0)} in {int(again['revolutions'][0, 0])} revolutions "
-              f"(|multiplier| {restart_lead:.4f})", file=out, flush=True)  # fmt: skip
+        print(
+            f"  cell ({i}, {j}): campar {mine}; long run {verdict}, multiplier {lead:.4f}, "
+            f"its two points {spread:.1e} apart; from its end campar's test gives "
+            f"{label_of(again, 0, 0)} in {int(again['revolutions'][0, 0])} revolutions "
+            f"(|multiplier| {restart_lead:.4f})",
+            file=out,
+            flush=True,
+        )
     return misread
 
 
@@ -232,7 +246,7 @@ CANDIDATES = {
             ("dop853", 1e-7, 80),
             ("dop853", 1e-8, 128),
         ]
-    },  # fmt: skip
+    },
     "no Newton": {"transient": {"newton": False}},
     "QP at 150 no agree jumps": {  # the defaults before jumps on agreeing estimates
         "transient": {"jump_agree": 0.0, "quasiperiodic_after": 150}
@@ -294,8 +308,17 @@ def run_reference(job: Job, path: Path, ranks: int) -> None:
     subprocess.run(command, check=True)
 
 
-def bench_map(planes, size, candidates, directory: Path, *, ranks: int, long_runs: bool, out,
-              audit: bool = False):  # fmt: skip
+def bench_map(
+    planes,
+    size,
+    candidates,
+    directory: Path,
+    *,
+    ranks: int,
+    long_runs: bool,
+    out,
+    audit: bool = False,
+):
     """Run every candidate on every plane; print one table row per (plane, candidate),
     and with ``audit`` the audit of its doubled-period cells (audit_doubled_periods)."""
     results = {}
@@ -331,9 +354,12 @@ def bench_map(planes, size, candidates, directory: Path, *, ranks: int, long_run
             if audit and long_runs:
                 misread = audit_doubled_periods(job, ref_job, ref, c, out)
                 right = c.adjudicated * c.cells + misread
-                print(f"  audit: {misread} long-run verdicts are slow cycles of campar's period "
-                      f"read as twice it; adjudicated with them {100 * right / c.cells:.2f} %",
-                      file=out, flush=True)  # fmt: skip
+                print(
+                    f"  audit: {misread} long-run verdicts are slow cycles of campar's period "
+                    f"read as twice it; adjudicated with them {100 * right / c.cells:.2f} %",
+                    file=out,
+                    flush=True,
+                )
     return results
 
 
@@ -358,12 +384,20 @@ def run(args) -> int:
     with tempfile.TemporaryDirectory(prefix="campar-bench-map-") as tmp:
         directory = Path(tmp) if args.quick else Path(args.references)
         results = bench_map(
-            args.planes, args.size, candidates, directory, ranks=args.ranks,
-            long_runs=not args.no_adjudication, out=sys.stdout, audit=args.audit,
-        )  # fmt: skip
+            args.planes,
+            args.size,
+            candidates,
+            directory,
+            ranks=args.ranks,
+            long_runs=not args.no_adjudication,
+            out=sys.stdout,
+            audit=args.audit,
+        )
     if args.list:
         for (plane, name), (c, _, _) in results.items():
             for i, j, ref, mine, verdict, flags in c.disagreements:
-                print(f"{plane} {name}: cell ({i}, {j}) reference {ref}, campar {mine}, "
-                      f"long run {verdict}, flags {flags}")  # fmt: skip
+                print(
+                    f"{plane} {name}: cell ({i}, {j}) reference {ref}, campar {mine}, "
+                    f"long run {verdict}, flags {flags}"
+                )
     return 0

@@ -109,17 +109,20 @@ def serve(job_path: str, store: str, seconds: float, report: str) -> None:
             steps = reader.read("steps")
         tiles = plan_tiles(job)
         latency = [(end - int(steps[tiles[i].row_start, 0])) / 1e9 for i, end in committed.items()]
-        Path(report).write_text(json.dumps({"entry": summary.entry, "latency": latency,
-                                            "write": writes}))  # fmt: skip
+        Path(report).write_text(
+            json.dumps({"entry": summary.entry, "latency": latency, "write": writes})
+        )
 
 
 def write_job(directory: Path, rows: int, omegas: int, tile_rows: int) -> Path:
     data = {
         "name": f"master_{rows}x{omegas}",
-        "sweep": {"omega": {"from": 6.0, "to": 0.02, "points": omegas},
-                  "mu_cn": {"from": 0.95, "to": 0.70, "points": rows}},
+        "sweep": {
+            "omega": {"from": 6.0, "to": 0.02, "points": omegas},
+            "mu_cn": {"from": 0.95, "to": 0.70, "points": rows},
+        },
         "tiles": {"rows": tile_rows},
-    }  # fmt: skip
+    }
     path = directory / "job.yaml"
     path.write_text(yaml.safe_dump(data, sort_keys=False))
     return path
@@ -127,10 +130,22 @@ def write_job(directory: Path, rows: int, omegas: int, tile_rows: int) -> Path:
 
 def launch(job: Path, store: Path, ranks: int, seconds: float, writer: str) -> dict:
     report = store.with_suffix(".json")
-    code = "import sys; from campar.bench.master import serve; serve(*sys.argv[1:3], " \
-        "float(sys.argv[3]), sys.argv[4])"  # fmt: skip
-    command = [str(MPIRUN), "-n", str(ranks), sys.executable, "-c", code,
-               str(job), str(store), str(seconds), str(report)]  # fmt: skip
+    code = (
+        "import sys; from campar.bench.master import serve; serve(*sys.argv[1:3], "
+        "float(sys.argv[3]), sys.argv[4])"
+    )
+    command = [
+        str(MPIRUN),
+        "-n",
+        str(ranks),
+        sys.executable,
+        "-c",
+        code,
+        str(job),
+        str(store),
+        str(seconds),
+        str(report),
+    ]
     env = {**os.environ, "CAMPAR_WRITER": writer}  # workers: each its own tiles (Zarr only)
     done = subprocess.run(command, capture_output=True, text=True, env=env)
     if done.returncode != 0:
@@ -164,25 +179,48 @@ def run(args) -> int:
             rss = [mb for mb in entry["peak_rss_mb"] if mb is not None]
             master_cpu = entry["cpu_seconds"][0] / entry["tiles"]  # its compute lane sleeps
             all_cpu = sum(c for c in entry["cpu_seconds"] if c is not None) / entry["tiles"]
-            rows.append([
-                f"{ranks}", entry.get("writer", writer), f"{sustained:.1f}", f"{ideal:.1f}",
-                f"{100 * idle:.1f} %",
-                f"{1e3 * statistics.median(latency):.1f}",
-                f"{1e3 * latency[int(0.95 * (len(latency) - 1))]:.1f}",
-                f"{1e3 * statistics.median(result['write']):.2f}",
-                f"{1e3 * master_cpu:.1f}", f"{1 / master_cpu:.0f}", f"{1e3 * all_cpu:.1f}",
-                f"{rss[0]:.0f} / {max(rss[1:], default=0):.0f}",
-                f"{store_bytes(store) / 2**20:.1f}",
-            ])  # fmt: skip
+            rows.append(
+                [
+                    f"{ranks}",
+                    entry.get("writer", writer),
+                    f"{sustained:.1f}",
+                    f"{ideal:.1f}",
+                    f"{100 * idle:.1f} %",
+                    f"{1e3 * statistics.median(latency):.1f}",
+                    f"{1e3 * latency[int(0.95 * (len(latency) - 1))]:.1f}",
+                    f"{1e3 * statistics.median(result['write']):.2f}",
+                    f"{1e3 * master_cpu:.1f}",
+                    f"{1 / master_cpu:.0f}",
+                    f"{1e3 * all_cpu:.1f}",
+                    f"{rss[0]:.0f} / {max(rss[1:], default=0):.0f}",
+                    f"{store_bytes(store) / 2**20:.1f}",
+                ]
+            )
             if not args.keep_stores:
                 subprocess.run(["rm", "-rf", str(store)], check=False)
-    print(f"\n{args.rows} × {args.omegas} cells, {args.tile_rows} chains a tile ({n_tiles} tiles), "
-          f"stand-in tile {args.tile_seconds:g} s, {args.suffix} store, {os.cpu_count()} cores "
-          "(ranks beyond them oversubscribed: they sleep)\n")  # fmt: skip
-    print(format_table(
-        ["ranks", "writer", "tiles/s", "ideal", "idle", "result→disk ms (median)", "p95 ms",
-         "write ms", "master CPU ms/tile", "capacity tiles/s", "all ranks CPU ms/tile",
-         "RSS MB rank 0 / worker max",
-         "store MiB"], rows,
-    ))  # fmt: skip
+    print(
+        f"\n{args.rows} × {args.omegas} cells, {args.tile_rows} chains a tile ({n_tiles} tiles), "
+        f"stand-in tile {args.tile_seconds:g} s, {args.suffix} store, {os.cpu_count()} cores "
+        "(ranks beyond them oversubscribed: they sleep)\n"
+    )
+    print(
+        format_table(
+            [
+                "ranks",
+                "writer",
+                "tiles/s",
+                "ideal",
+                "idle",
+                "result→disk ms (median)",
+                "p95 ms",
+                "write ms",
+                "master CPU ms/tile",
+                "capacity tiles/s",
+                "all ranks CPU ms/tile",
+                "RSS MB rank 0 / worker max",
+                "store MiB",
+            ],
+            rows,
+        )
+    )
     return 0

@@ -29,9 +29,14 @@ QUICK = {"rows": 2, "omegas": 6, "repeat": 1, "min_seconds": 0.0}
 LABEL_ARRAYS = ("n", "p", "kind", "status")
 
 
-def make_job(rows: int, omegas: int, transient: str, outputs,
-             revolutions=DEFAULT_TRANSIENT.max_revolutions,
-             window=DEFAULT_CLASSIFY.window_revolutions) -> Job:  # fmt: skip
+def make_job(
+    rows: int,
+    omegas: int,
+    transient: str,
+    outputs,
+    revolutions=DEFAULT_TRANSIENT.max_revolutions,
+    window=DEFAULT_CLASSIFY.window_revolutions,
+) -> Job:
     return Job.from_dict(
         {
             "name": "bench_outputs",
@@ -81,19 +86,21 @@ def measure(rows=20, omegas=40, repeat=4, min_seconds=2.0) -> list[dict]:
             runs += 1
         pairs = [b / a for a, b in zip(cpu["label"], cpu["all"], strict=True)]
         same = all(np.array_equal(maps["label"][n], maps["all"][n]) for n in LABEL_ARRAYS)
-        results.append({
-            "transient": transient,
-            "cells": rows * omegas,
-            "label_s": best["label"].cpu,
-            "all_s": best["all"].cpu,
-            "label_wall": best["label"].wall,
-            "all_wall": best["all"].wall,
-            "ratio": best["all"].cpu / best["label"].cpu,
-            "wall_ratio": best["all"].wall / best["label"].wall,
-            "same_labels": same,
-            "runs": runs,
-            "pair_ratios": (min(pairs), max(pairs)),
-        })  # fmt: skip
+        results.append(
+            {
+                "transient": transient,
+                "cells": rows * omegas,
+                "label_s": best["label"].cpu,
+                "all_s": best["all"].cpu,
+                "label_wall": best["label"].wall,
+                "all_wall": best["all"].wall,
+                "ratio": best["all"].cpu / best["label"].cpu,
+                "wall_ratio": best["all"].wall / best["label"].wall,
+                "same_labels": same,
+                "runs": runs,
+                "pair_ratios": (min(pairs), max(pairs)),
+            }
+        )
     return results
 
 
@@ -131,16 +138,38 @@ def run(args) -> int:
     results = measure(**config)
     plain, variational = variational_cost(config["rows"], config["omegas"])
     rows = [
-        [r["transient"], r["cells"], r["label_s"], r["all_s"], r["cells"] / r["label_s"],
-         r["cells"] / r["all_s"], r["ratio"],
-         f"{r['pair_ratios'][0]:.3f}–{r['pair_ratios'][1]:.3f} ({r['runs']})",
-         r["label_wall"], r["all_wall"], r["wall_ratio"], "yes" if r["same_labels"] else "NO",
-         verdict(r)]
+        [
+            r["transient"],
+            r["cells"],
+            r["label_s"],
+            r["all_s"],
+            r["cells"] / r["label_s"],
+            r["cells"] / r["all_s"],
+            r["ratio"],
+            f"{r['pair_ratios'][0]:.3f}–{r['pair_ratios'][1]:.3f} ({r['runs']})",
+            r["label_wall"],
+            r["all_wall"],
+            r["wall_ratio"],
+            "yes" if r["same_labels"] else "NO",
+            verdict(r),
+        ]
         for r in results
-    ]  # fmt: skip
-    headers = ["transient", "cells", "labels CPU s", "all CPU s", "labels cells/s",
-               "all cells/s", "all/labels", "run pairs (n)", "labels wall s", "all wall s",
-               "wall ratio", "same labels", "verdict"]  # fmt: skip
+    ]
+    headers = [
+        "transient",
+        "cells",
+        "labels CPU s",
+        "all CPU s",
+        "labels cells/s",
+        "all cells/s",
+        "all/labels",
+        "run pairs (n)",
+        "labels wall s",
+        "all wall s",
+        "wall ratio",
+        "same labels",
+        "verdict",
+    ]
     print(format_table(headers, rows))
     print(
         f"\nvariational equations (6 instead of 2): {DEFAULT_TRANSIENT.max_revolutions} fixed "

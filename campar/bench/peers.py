@@ -60,8 +60,14 @@ CELLS = (
 ROW_GRID = {"omega": (6.0, 0.02, 400), "mu_cn": (0.99, 0.50, 400)}
 ROW_CHAIN = 155
 ROW_OMEGA = (299, 315)
-QUICK = {"cells": ["1-0 ω0.3", "1-2 ω1.2 f0.01"], "revolutions": 20, "window": 8,
-         "scipy_cells": 1, "min_seconds": 0.02, "row_omega": (299, 302)}  # fmt: skip
+QUICK = {
+    "cells": ["1-0 ω0.3", "1-2 ω1.2 f0.01"],
+    "revolutions": 20,
+    "window": 8,
+    "scipy_cells": 1,
+    "min_seconds": 0.02,
+    "row_omega": (299, 302),
+}
 DC_AGREEMENT = 0.002
 OUTPUTS = ["label", "dc", "eps", "pn"]
 
@@ -76,8 +82,9 @@ class Outcome(NamedTuple):
 
 
 def with_window(job: Job, window: int) -> Job:
-    return job.model_copy(update={"classify": job.classify.model_copy(
-        update={"window_revolutions": window})})  # fmt: skip
+    return job.model_copy(
+        update={"classify": job.classify.model_copy(update={"window_revolutions": window})}
+    )
 
 
 def campar_outcomes(job: Job, min_seconds: float) -> tuple[list[Outcome], Timing]:
@@ -89,15 +96,30 @@ def campar_outcomes(job: Job, min_seconds: float) -> tuple[list[Outcome], Timing
     for j in range(out["kind"].size):
         kind = int(out["kind"][j])
         label = cell_label(kind, int(out["n"][j]), int(out["p"][j]), job.classify.chatter_p)
-        cells.append(Outcome(label, kind == Kind.PERIODIC, float(out["dc"][j]),
-                             int(out["revolutions"][j]), took.cpu, took.wall))  # fmt: skip
+        cells.append(
+            Outcome(
+                label,
+                kind == Kind.PERIODIC,
+                float(out["dc"][j]),
+                int(out["revolutions"][j]),
+                took.cpu,
+                took.wall,
+            )
+        )
     return cells, took
 
 
-def campar_outcome(cell: Cell, method: str, transient: str, revolutions: int, window: int,
-                   min_seconds: float) -> Outcome:  # fmt: skip
-    job = point_job(omega=cell.omega, **cell.parameters, transient=transient,
-                    revolutions=revolutions, method=method, outputs=OUTPUTS)  # fmt: skip
+def campar_outcome(
+    cell: Cell, method: str, transient: str, revolutions: int, window: int, min_seconds: float
+) -> Outcome:
+    job = point_job(
+        omega=cell.omega,
+        **cell.parameters,
+        transient=transient,
+        revolutions=revolutions,
+        method=method,
+        outputs=OUTPUTS,
+    )
     return campar_outcomes(with_window(job, window), min_seconds)[0][0]
 
 
@@ -121,15 +143,21 @@ class PeerRow(NamedTuple):
     agree: bool
 
 
-def measure(cells=None, revolutions=DEFAULT_TRANSIENT.max_revolutions,
-            window=DEFAULT_CLASSIFY.window_revolutions, scipy_cells=None,
-            scipy_rtol=DEFAULT_INTEGRATOR.rtol, min_seconds=0.3) -> list[PeerRow]:  # fmt: skip
+def measure(
+    cells=None,
+    revolutions=DEFAULT_TRANSIENT.max_revolutions,
+    window=DEFAULT_CLASSIFY.window_revolutions,
+    scipy_cells=None,
+    scipy_rtol=DEFAULT_INTEGRATOR.rtol,
+    min_seconds=0.3,
+) -> list[PeerRow]:
     """Every peer on every chosen cell; SciPy only on the first scipy_cells (None: all)."""
     chosen = [c for c in CELLS if cells is None or c.name in cells]
     rows = []
     for i, cell in enumerate(chosen):
-        a = campar_outcome(cell, DEFAULT_INTEGRATOR.method, "converged", revolutions, window,
-                           min_seconds)  # fmt: skip
+        a = campar_outcome(
+            cell, DEFAULT_INTEGRATOR.method, "converged", revolutions, window, min_seconds
+        )
         c = campar_outcome(cell, "rk4", "fixed", revolutions, window, min_seconds)
         b = None
         if scipy_cells is None or i < scipy_cells:
@@ -139,8 +167,9 @@ def measure(cells=None, revolutions=DEFAULT_TRANSIENT.max_revolutions,
     return rows
 
 
-def row_job(first: int, stop: int, method: str, transient: str, revolutions: int,
-            window: int) -> Job:  # fmt: skip
+def row_job(
+    first: int, stop: int, method: str, transient: str, revolutions: int, window: int
+) -> Job:
     """ω points first … stop−1 of chain ROW_CHAIN of the map row's grid, as one chain."""
     omega = np.linspace(*ROW_GRID["omega"])
     mu_cn = float(np.linspace(*ROW_GRID["mu_cn"])[ROW_CHAIN])
@@ -173,9 +202,13 @@ class RowResult(NamedTuple):
     agree: list[bool]
 
 
-def measure_row(row_omega=ROW_OMEGA, revolutions=DEFAULT_TRANSIENT.max_revolutions,
-                window=DEFAULT_CLASSIFY.window_revolutions, scipy_rtol=DEFAULT_INTEGRATOR.rtol,
-                min_seconds=0.3) -> RowResult:  # fmt: skip
+def measure_row(
+    row_omega=ROW_OMEGA,
+    revolutions=DEFAULT_TRANSIENT.max_revolutions,
+    window=DEFAULT_CLASSIFY.window_revolutions,
+    scipy_rtol=DEFAULT_INTEGRATOR.rtol,
+    min_seconds=0.3,
+) -> RowResult:
     """The map row by every peer, each cell warm-started from the one before."""
     first, stop = row_omega
     job = row_job(first, stop, DEFAULT_INTEGRATOR.method, "converged", revolutions, window)
@@ -187,23 +220,38 @@ def measure_row(row_omega=ROW_OMEGA, revolutions=DEFAULT_TRANSIENT.max_revolutio
     x = np.zeros(2)
     for omega in job.omega:
         cell = Cell("", float(omega), mu_cn=mu_cn)
-        took, r = timed(partial(scipy_cell, cell.scipy_model(), x, revolutions, window,
-                                rtol=scipy_rtol))  # fmt: skip
+        took, r = timed(
+            partial(scipy_cell, cell.scipy_model(), x, revolutions, window, rtol=scipy_rtol)
+        )
         scipy.append(Outcome(r.label, r.n > 0, r.dc, revolutions + window, took.cpu, took.wall))
         x = r.sections[-1]  # the next cell starts where this one ended
-    ok = [agree(a, b) and agree(a, c) and agree(b, c)
-          for a, b, c in zip(campar, scipy, paper, strict=True)]  # fmt: skip
+    ok = [
+        agree(a, b) and agree(a, c) and agree(b, c)
+        for a, b, c in zip(campar, scipy, paper, strict=True)
+    ]
     return RowResult(job.omega, mu_cn, campar, paper, scipy, campar_time, paper_time, ok)
 
 
 def format_row(row: RowResult) -> str:
-    headers = ["ω", "campar", "DC", "revs", "RK4 500", "DC", "SciPy 500", "DC", "CPU s",
-               "agree"]  # fmt: skip
+    headers = ["ω", "campar", "DC", "revs", "RK4 500", "DC", "SciPy 500", "DC", "CPU s", "agree"]
     lines = []
-    for omega, a, c, b, ok in zip(row.omega, row.campar, row.paper, row.scipy, row.agree,
-                                  strict=True):  # fmt: skip
-        lines.append([float(omega), a.label, a.dc, a.revolutions, c.label, c.dc, b.label, b.dc,
-                      b.seconds, "yes" if ok else "NO"])  # fmt: skip
+    for omega, a, c, b, ok in zip(
+        row.omega, row.campar, row.paper, row.scipy, row.agree, strict=True
+    ):
+        lines.append(
+            [
+                float(omega),
+                a.label,
+                a.dc,
+                a.revolutions,
+                c.label,
+                c.dc,
+                b.label,
+                b.dc,
+                b.seconds,
+                "yes" if ok else "NO",
+            ]
+        )
     return format_table(headers, lines)
 
 
@@ -221,8 +269,10 @@ def row_summary(row: RowResult) -> str:
         f"revolutions per cell); RK4 recipe {paper:.2f} s; SciPy {scipy:.1f} s",
     ]
     if agreeing == cells:
-        lines.append(f"  map row: RK4 recipe / campar {paper / campar:.0f}×, SciPy / campar "
-                     f"{scipy / campar:.0f}×")  # fmt: skip
+        lines.append(
+            f"  map row: RK4 recipe / campar {paper / campar:.0f}×, SciPy / campar "
+            f"{scipy / campar:.0f}×"
+        )
     else:
         lines.append("  map row: no ratio (the peers disagree on some cells)")
     return "\n".join(lines)
@@ -234,14 +284,38 @@ def geometric_mean(values) -> float:
 
 
 def format_rows(rows: list[PeerRow]) -> str:
-    headers = ["cell", "campar", "DC", "revs", "CPU ms", "RK4 500", "DC", "CPU ms", "SciPy 500",
-               "DC", "CPU s", "wall s", "ms/rev", "agree", "RK4/campar", "SciPy/campar",
-               "SciPy@revs/campar"]  # fmt: skip
+    headers = [
+        "cell",
+        "campar",
+        "DC",
+        "revs",
+        "CPU ms",
+        "RK4 500",
+        "DC",
+        "CPU ms",
+        "SciPy 500",
+        "DC",
+        "CPU s",
+        "wall s",
+        "ms/rev",
+        "agree",
+        "RK4/campar",
+        "SciPy/campar",
+        "SciPy@revs/campar",
+    ]
     out = []
     for r in rows:
         a, c, b = r.campar, r.paper, r.scipy
-        line = [r.cell.name, a.label, a.dc, a.revolutions, a.seconds * 1e3, c.label, c.dc,
-                c.seconds * 1e3]  # fmt: skip
+        line = [
+            r.cell.name,
+            a.label,
+            a.dc,
+            a.revolutions,
+            a.seconds * 1e3,
+            c.label,
+            c.dc,
+            c.seconds * 1e3,
+        ]
         if b is None:
             line += ["not run", math.nan, math.nan, math.nan, math.nan]
         else:
@@ -263,16 +337,20 @@ def summary(rows: list[PeerRow]) -> str:
     for name, sel in (("periodic cells", periodic), ("all agreeing cells", ok)):
         paper = [r.paper.seconds / r.campar.seconds for r in sel]
         if paper:
-            lines.append(f"RK4 recipe / campar, {name}: geometric mean "
-                         f"{geometric_mean(paper):.0f}×, min {min(paper):.0f}×, "
-                         f"max {max(paper):.0f}×")  # fmt: skip
+            lines.append(
+                f"RK4 recipe / campar, {name}: geometric mean "
+                f"{geometric_mean(paper):.0f}×, min {min(paper):.0f}×, "
+                f"max {max(paper):.0f}×"
+            )
     sel = [r for r in scipy if r.campar.periodic]
     if sel:
         per_cell = np.mean([r.scipy.seconds for r in sel])
         per_rev = np.mean([r.scipy.seconds / r.scipy.revolutions for r in sel])
         ratio = [r.scipy.seconds / r.campar.seconds for r in sel]
-        at_revs = [r.scipy.seconds / r.scipy.revolutions * r.campar.revolutions / r.campar.seconds
-                   for r in sel]  # fmt: skip
+        at_revs = [
+            r.scipy.seconds / r.scipy.revolutions * r.campar.revolutions / r.campar.seconds
+            for r in sel
+        ]
         campar_cell = np.mean([r.campar.seconds for r in sel])
         lines += [
             f"SciPy / campar, periodic cells timed ({len(sel)}): geometric mean "
@@ -305,8 +383,13 @@ def run(args) -> int:
     print()
     print(summary(rows))
     if not args.no_row:
-        row = measure_row(row_omega, config["revolutions"], config["window"], args.scipy_rtol,
-                          config["min_seconds"])  # fmt: skip
+        row = measure_row(
+            row_omega,
+            config["revolutions"],
+            config["window"],
+            args.scipy_rtol,
+            config["min_seconds"],
+        )
         print()
         print(format_row(row))
         print()

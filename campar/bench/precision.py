@@ -54,8 +54,13 @@ CELLS = (
 RTOLS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
 RK4_STEPS = (60, 120, 240, 480, 960, 1920, 3840, 7680)
 SCIPY_RTOLS = (1e-6, 1e-8, 1e-10)
-QUICK = {"cells": ["1-0 contact", "1-2 impacts"], "rtols": [1e-4, 1e-6, 1e-8, 1e-10],
-         "rk4_steps": [120, 480], "scipy_rtols": [], "min_seconds": 0.02}  # fmt: skip
+QUICK = {
+    "cells": ["1-0 contact", "1-2 impacts"],
+    "rtols": [1e-4, 1e-6, 1e-8, 1e-10],
+    "rk4_steps": [120, 480],
+    "scipy_rtols": [],
+    "min_seconds": 0.02,
+}
 FLOOR_FACTOR = 3.0  # fit only errors above this multiple of the reference's own error
 MAX_SAMPLES = 2_000_000  # trace rows: one per accepted step (enough for RK4 at 7680/rev × 4)
 
@@ -105,18 +110,36 @@ def event_error(events, ref_events) -> float:
 
 def campar_call(cell: Cell, x0, revolutions: int, method: str, rtol: float, rk4_steps: int):
     """A function f(rec) running trace_orbit once; rec = make_trace(0, 0, 1) records nothing."""
-    job = point_job(omega=cell.omega, **cell.parameters, y0=x0[0], v0=x0[1], transient="fixed",
-                    revolutions=1, rtol=rtol, atol=rtol * 1e-2, method=method,
-                    outputs=["label"])  # fmt: skip
+    job = point_job(
+        omega=cell.omega,
+        **cell.parameters,
+        y0=x0[0],
+        v0=x0[1],
+        transient="fixed",
+        revolutions=1,
+        rtol=rtol,
+        atol=rtol * 1e-2,
+        method=method,
+        outputs=["label"],
+    )
     settings = cell_settings(job)._replace(rk4_steps=rk4_steps, max_steps=10**9)
     solver = solver_options(job)
     x = np.asarray(x0, float)
 
     def call(rec):
         return trace_orbit(
-            cell.omega, cell.zeta, cell.f0, cell.mu_kn, cell.mu_cn, cell.clamp, x, solver,
-            settings, revolutions, rec,
-        )  # fmt: skip
+            cell.omega,
+            cell.zeta,
+            cell.f0,
+            cell.mu_kn,
+            cell.mu_cn,
+            cell.clamp,
+            x,
+            solver,
+            settings,
+            revolutions,
+            rec,
+        )
 
     return call
 
@@ -150,8 +173,14 @@ def scipy_run(cell, x0, revolutions, ref: Reference, rtol) -> Run:
     return Run(cell.name, "scipy", rtol, -1, took, state_error, err, not math.isnan(err))
 
 
-def measure(cells=None, rtols=RTOLS, rk4_steps=RK4_STEPS, scipy_rtols=SCIPY_RTOLS,
-            reference_rtol=1e-13, min_seconds=0.3):  # fmt: skip
+def measure(
+    cells=None,
+    rtols=RTOLS,
+    rk4_steps=RK4_STEPS,
+    scipy_rtols=SCIPY_RTOLS,
+    reference_rtol=1e-13,
+    min_seconds=0.3,
+):
     """All runs of the benchmark: (list of Run, {cell name: Reference})."""
     chosen = [(c, k) for c, k in CELLS if cells is None or c.name in cells]
     runs, refs = [], {}
@@ -159,11 +188,17 @@ def measure(cells=None, rtols=RTOLS, rk4_steps=RK4_STEPS, scipy_rtols=SCIPY_RTOL
         x0 = start_state(cell)
         ref = refs[cell.name] = reference(cell, x0, revolutions, reference_rtol)
         for rtol in rtols:
-            runs.append(campar_run(cell, x0, revolutions, ref, method="dp54", setting=rtol,
-                                   min_seconds=min_seconds))  # fmt: skip
+            runs.append(
+                campar_run(
+                    cell, x0, revolutions, ref, method="dp54", setting=rtol, min_seconds=min_seconds
+                )
+            )
         for n in rk4_steps:
-            runs.append(campar_run(cell, x0, revolutions, ref, method="rk4", setting=n,
-                                   min_seconds=min_seconds))  # fmt: skip
+            runs.append(
+                campar_run(
+                    cell, x0, revolutions, ref, method="rk4", setting=n, min_seconds=min_seconds
+                )
+            )
         for rtol in scipy_rtols:
             runs.append(scipy_run(cell, x0, revolutions, ref, rtol))
     return runs, refs
@@ -195,8 +230,9 @@ def fits(runs: list[Run], refs: dict) -> list[Fit]:
                 if not keep.any():  # e.g. no events in a contact-only cell
                     continue
                 label = f"{'DP5' if method == 'dp54' else 'RK4'} {quantity} err vs {against}"
-                out.append(Fit(name, label, loglog_slope(x[keep], err[keep]), int(keep.sum()),
-                               expected))  # fmt: skip
+                out.append(
+                    Fit(name, label, loglog_slope(x[keep], err[keep]), int(keep.sum()), expected)
+                )
     return out
 
 
@@ -215,15 +251,34 @@ def format_runs(runs: list[Run], refs: dict) -> str:
     rows = []
     for i, r in enumerate(runs):
         setting = f"rtol {r.setting:.0e}" if r.method != "rk4" else f"{int(r.setting)}/rev"
-        rows.append([
-            r.cell, r.method, setting, r.steps if r.steps >= 0 else "—", r.time.wall * 1e3,
-            r.time.cpu * 1e3,
-            r.state_error, r.event_error if r.events_match else "differ", orders.get(i, math.nan),
-        ])  # fmt: skip
-    headers = ["cell", "method", "setting", "steps", "wall ms", "CPU ms", "state err",
-               "event-time err", "local order"]  # fmt: skip
-    ref_rows = [[name, len(ref.events), ref.time.cpu, ref.state_floor, ref.event_floor]
-                for name, ref in refs.items()]  # fmt: skip
+        rows.append(
+            [
+                r.cell,
+                r.method,
+                setting,
+                r.steps if r.steps >= 0 else "—",
+                r.time.wall * 1e3,
+                r.time.cpu * 1e3,
+                r.state_error,
+                r.event_error if r.events_match else "differ",
+                orders.get(i, math.nan),
+            ]
+        )
+    headers = [
+        "cell",
+        "method",
+        "setting",
+        "steps",
+        "wall ms",
+        "CPU ms",
+        "state err",
+        "event-time err",
+        "local order",
+    ]
+    ref_rows = [
+        [name, len(ref.events), ref.time.cpu, ref.state_floor, ref.event_floor]
+        for name, ref in refs.items()
+    ]
     ref_table = format_table(
         ["cell", "events", "reference CPU s", "reference err (state)", "(event time)"], ref_rows
     )
@@ -245,8 +300,11 @@ def plot(runs: list[Run], refs: dict, fit_list: list[Fit], path: str) -> None:
     fig = new_figure(4.2 * len(names), 7.5)
     fig.subplots(2, len(names), squeeze=False)
     axes = fig.axes
-    styles = {"dp54": ("C0", "o-", "DP5(4)"), "rk4": ("C1", "s-", "RK4 fixed step"),
-              "scipy": ("C2", "^", "SciPy DOP853")}  # fmt: skip
+    styles = {
+        "dp54": ("C0", "o-", "DP5(4)"),
+        "rk4": ("C1", "s-", "RK4 fixed step"),
+        "scipy": ("C2", "^", "SciPy DOP853"),
+    }
     for j, name in enumerate(names):
         top, bottom = axes[j], axes[len(names) + j]
         for method, (color, marker, label) in styles.items():
@@ -257,14 +315,20 @@ def plot(runs: list[Run], refs: dict, fit_list: list[Fit], path: str) -> None:
             top.loglog([r.time.cpu * 1e3 for r in sel], err, marker, color=color, label=label)
             if method != "scipy":
                 fitted = slope.get((name, f"{label[:3]} state err vs steps"), math.nan)
-                bottom.loglog([r.steps for r in sel], err, marker, color=color,
-                              label=f"{label}: fit {fitted:.2f}")  # fmt: skip
+                bottom.loglog(
+                    [r.steps for r in sel],
+                    err,
+                    marker,
+                    color=color,
+                    label=f"{label}: fit {fitted:.2f}",
+                )
         floor = FLOOR_FACTOR * refs[name].state_floor
         for ax in (top, bottom):
             ax.axhline(floor, color="0.75", lw=2, label="3× reference error")
             ax.grid(True, which="major", alpha=0.3)
-        top.set_title(f"{name} ({next(c.describe() for c, _ in CELLS if c.name == name)})",
-                      fontsize=10)  # fmt: skip
+        top.set_title(
+            f"{name} ({next(c.describe() for c, _ in CELLS if c.name == name)})", fontsize=10
+        )
         top.set_xlabel("CPU time per run [ms] (fastest of repeats)")
         bottom.set_xlabel("accepted steps")
         if j == 0:
@@ -276,8 +340,9 @@ def plot(runs: list[Run], refs: dict, fit_list: list[Fit], path: str) -> None:
             x0 = min(r.steps for r in sel)
             e0 = max(r.state_error for r in sel)
             xs = np.array([x0, x0 * 10 ** (8 / (order + 2))])
-            bottom.loglog(xs, e0 * (xs / x0) ** -order, ls, color="0.3", lw=0.8,
-                          label=f"slope −{order}")  # fmt: skip
+            bottom.loglog(
+                xs, e0 * (xs / x0) ** -order, ls, color="0.3", lw=0.8, label=f"slope −{order}"
+            )
         bottom.legend(fontsize=7)
         for ax in (top, bottom):  # after every loglog call, which resets the formatters
             ax.xaxis.set_minor_formatter(NullFormatter())

@@ -111,9 +111,13 @@ def run(args) -> int:
                 runs[ranks].append((*launch(job, store, ranks), store))
         rows, first = [], runs[args.ranks[0]]
         first_best = max(first, key=lambda run: run[0]["cells_per_s"])
-        by_round = {ranks: [r[0]["cells_per_s"] / f[0]["cells_per_s"]
-                            for r, f in zip(runs[ranks], first, strict=True)]
-                    for ranks in args.ranks}  # fmt: skip
+        by_round = {
+            ranks: [
+                r[0]["cells_per_s"] / f[0]["cells_per_s"]
+                for r, f in zip(runs[ranks], first, strict=True)
+            ]
+            for ranks in args.ranks
+        }
         for ranks in args.ranks:
             entry, wall, store = max(runs[ranks], key=lambda run: run[0]["cells_per_s"])
             lanes = entry["ranks"]
@@ -138,13 +142,24 @@ def run(args) -> int:
             )
     cells = args.size * args.size
     chains = args.rows or "the job's"
-    print(f"\n{args.job}: {args.size}×{args.size} = {cells} cells, {chains} chains a tile, "
-          f"{args.suffix}\n")  # fmt: skip
+    print(
+        f"\n{args.job}: {args.size}×{args.size} = {cells} cells, {chains} chains a tile, "
+        f"{args.suffix}\n"
+    )
     header = (
-        "launch", "cells/s", "speed-up", "paired", "run s", "start s", "outside kernel",
+        "launch",
+        "cells/s",
+        "speed-up",
+        "paired",
+        "run s",
+        "start s",
+        "outside kernel",
         "cores busy",
-        "peak RSS MB/rank", "rev/cell", "tiles/rank", "same map",
-    )  # fmt: skip
+        "peak RSS MB/rank",
+        "rev/cell",
+        "tiles/rank",
+        "same map",
+    )
     widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
     for line in (header, *rows):
         print("  ".join(cell.rjust(w) for cell, w in zip(line, widths, strict=True)))

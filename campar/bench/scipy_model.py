@@ -42,12 +42,19 @@ def cam(theta):
 # (u0, u1, α, β, γ, κ) for s'' = α sin(κ (u − u0)) + β cos(κ (u − u0)) + γ.
 W4 = 4 * math.pi
 PIECES = {
-    "modified-trapezoid": [(0, 1 / 8, 1, 0, 0, W4), (1 / 8, 3 / 8, 0, 0, 1, 0),
-                           (3 / 8, 5 / 8, 0, 1, 0, W4), (5 / 8, 7 / 8, 0, 0, -1, 0),
-                           (7 / 8, 1, 0, -1, 0, W4)],
-    "modified-sine": [(0, 1 / 8, 1, 0, 0, W4), (1 / 8, 7 / 8, 0, 1, 0, W4 / 3),
-                      (7 / 8, 1, 0, -1, 0, W4)],
-}  # fmt: skip
+    "modified-trapezoid": [
+        (0, 1 / 8, 1, 0, 0, W4),
+        (1 / 8, 3 / 8, 0, 0, 1, 0),
+        (3 / 8, 5 / 8, 0, 1, 0, W4),
+        (5 / 8, 7 / 8, 0, 0, -1, 0),
+        (7 / 8, 1, 0, -1, 0, W4),
+    ],
+    "modified-sine": [
+        (0, 1 / 8, 1, 0, 0, W4),
+        (1 / 8, 7 / 8, 0, 1, 0, W4 / 3),
+        (7 / 8, 1, 0, -1, 0, W4),
+    ],
+}
 
 
 def piece_values(piece, d, v0, s0):
@@ -84,8 +91,11 @@ class Composite:
 def motion_law(name):
     """s(u), s'(u), s''(u) of a rise law on u ∈ [0, 1]."""
     if name == "cosine":
-        return lambda u: ((1 - math.cos(math.pi * u)) / 2, math.pi / 2 * math.sin(math.pi * u),
-                          math.pi**2 / 2 * math.cos(math.pi * u))  # fmt: skip
+        return lambda u: (
+            (1 - math.cos(math.pi * u)) / 2,
+            math.pi / 2 * math.sin(math.pi * u),
+            math.pi**2 / 2 * math.cos(math.pi * u),
+        )
     if name == "cycloidal":
         return lambda u: (
             u - math.sin(2 * math.pi * u) / (2 * math.pi),
@@ -93,16 +103,33 @@ def motion_law(name):
             2 * math.pi * math.sin(2 * math.pi * u),
         )
     if name == "polynomial-345":
-        return lambda u: (10 * u**3 - 15 * u**4 + 6 * u**5, 30 * u**2 - 60 * u**3 + 30 * u**4,
-                          60 * u - 180 * u**2 + 120 * u**3)  # fmt: skip
+        return lambda u: (
+            10 * u**3 - 15 * u**4 + 6 * u**5,
+            30 * u**2 - 60 * u**3 + 30 * u**4,
+            60 * u - 180 * u**2 + 120 * u**3,
+        )
     return Composite(PIECES[name])
 
 
 class Model:
-    def __init__(self, omega, f0=0.5, mu_kn=0.8, mu_cn=0.8, zeta=0.2, clamp=True,
-                 cam_velocity="chain", rise="cosine", fall="cosine", angles=PAPER_ANGLES,
-                 table=None, contact="hunt-crossley", n=1.5, restitution=0.8,
-                 impact_floor=1e-3):  # fmt: skip
+    def __init__(
+        self,
+        omega,
+        f0=0.5,
+        mu_kn=0.8,
+        mu_cn=0.8,
+        zeta=0.2,
+        clamp=True,
+        cam_velocity="chain",
+        rise="cosine",
+        fall="cosine",
+        angles=PAPER_ANGLES,
+        table=None,
+        contact="hunt-crossley",
+        n=1.5,
+        restitution=0.8,
+        impact_floor=1e-3,
+    ):
         """``table``: (θ, S) arrays over [0, 2π) for a tabulated cam (rise, fall unused)."""
         self.omega, self.f0, self.zeta, self.clamp = omega, f0, zeta, clamp
         self.k = mu_kn / (1 - mu_kn)
@@ -122,8 +149,9 @@ class Model:
         self.spline = None
         if table is not None:
             theta, lift = table
-            self.spline = CubicSpline(np.append(theta, 2 * math.pi), np.append(lift, lift[0]),
-                                      bc_type="periodic")  # fmt: skip
+            self.spline = CubicSpline(
+                np.append(theta, 2 * math.pi), np.append(lift, lift[0]), bc_type="periodic"
+            )
         self.n, self.contact, self.floor = n, contact, impact_floor
         if contact == "lankarani-nikravesh":
             self.chi = 3 * (1 - restitution**2) / 4
@@ -229,8 +257,17 @@ def cam_in_phase(theta, theta_mid):
     return 0.0, 0.0, 0.0
 
 
-def integrate(model, x0, revolutions, *, rtol=1e-12, atol=1e-14, with_divergence=False,
-              max_step=np.inf, mode_time=None):  # fmt: skip
+def integrate(
+    model,
+    x0,
+    revolutions,
+    *,
+    rtol=1e-12,
+    atol=1e-14,
+    with_divergence=False,
+    max_step=np.inf,
+    mode_time=None,
+):
     """Integrate from (y, y') at θ = 0 over whole revolutions.
 
     solve_ivp looks for events only as sign changes between step ends, so a
@@ -258,10 +295,15 @@ def integrate(model, x0, revolutions, *, rtol=1e-12, atol=1e-14, with_divergence
                 mode = model.mode_of(t, x, theta_mid)
             while t < t_end - 1e-14 * max(1.0, t_end):
                 sol = solve_ivp(
-                    model.field(mode, theta_mid, with_divergence), (t, t_end), x,
-                    method="DOP853", rtol=rtol, atol=atol, max_step=max_step,
+                    model.field(mode, theta_mid, with_divergence),
+                    (t, t_end),
+                    x,
+                    method="DOP853",
+                    rtol=rtol,
+                    atol=atol,
+                    max_step=max_step,
                     events=model.events_of(mode, theta_mid),
-                )  # fmt: skip
+                )
                 if sol.status == 1:
                     which = next(j for j, te in enumerate(sol.t_events) if len(te))
                     if mode_time is not None:

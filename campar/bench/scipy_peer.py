@@ -57,9 +57,17 @@ def period_of(sections: np.ndarray, n_max: int, tol: float) -> int:
     return 0
 
 
-def scipy_cell(model, x0, transient: int, window: int, *, rtol: float = 1e-8,
-               atol: float | None = None, n_max: int = 32,
-               period_tol: float = 1e-6) -> ScipyCell:  # fmt: skip
+def scipy_cell(
+    model,
+    x0,
+    transient: int,
+    window: int,
+    *,
+    rtol: float = 1e-8,
+    atol: float | None = None,
+    n_max: int = 32,
+    period_tol: float = 1e-6,
+) -> ScipyCell:
     """Classify one cell from (y, y') = x0 at θ = 0 (see the module docstring)."""
     atol = rtol * 1e-2 if atol is None else atol
     period = 2 * math.pi / model.omega

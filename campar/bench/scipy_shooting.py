@@ -33,13 +33,15 @@ def jacobian(parameters: dict, x, n: int, clamp: bool = True) -> np.ndarray:
     for j in range(2):
         e = np.zeros(2)
         e[j] = STATE_STEP
-        m[:, j] = (section_map(parameters, x + e, n, clamp)
-                   - section_map(parameters, x - e, n, clamp)) / (2 * STATE_STEP)  # fmt: skip
+        m[:, j] = (
+            section_map(parameters, x + e, n, clamp) - section_map(parameters, x - e, n, clamp)
+        ) / (2 * STATE_STEP)
     return m
 
 
-def fixed_point(parameters: dict, guess, n: int, clamp: bool = True,
-                max_iterations: int = 20) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def fixed_point(
+    parameters: dict, guess, n: int, clamp: bool = True, max_iterations: int = 20
+) -> tuple[np.ndarray, np.ndarray]:
     """(x, DPⁿ(x)) with Pⁿ(x) = x to NEWTON_TOL, by Newton with the difference Jacobian."""
     x = np.asarray(guess, dtype=float)
     for _ in range(max_iterations):
@@ -56,8 +58,15 @@ def defining_function(kind: str):
     return lambda m: float(np.linalg.det(np.eye(2) + sign * m))
 
 
-def bifurcation_point(kind: str, parameters: dict, parameter: str, guess, n: int,
-                      clamp: bool = True, max_iterations: int = 12):  # fmt: skip
+def bifurcation_point(
+    kind: str,
+    parameters: dict,
+    parameter: str,
+    guess,
+    n: int,
+    clamp: bool = True,
+    max_iterations: int = 12,
+):
     """The PD or SN point near (guess, parameters[parameter]): Newton's method on the
     augmented system Pⁿ(x; λ) − x = 0, ψ(DPⁿ(x; λ)) = 0 in (y, y', λ), its Jacobian by
     central differences. Returns (λ, x)."""
@@ -95,6 +104,7 @@ def multipliers(m: np.ndarray) -> np.ndarray:
 def liouville_determinant(parameters: dict, x, n: int, clamp: bool = True) -> float:
     """det DPⁿ = exp(∮ div f dt) along the orbit from x (Liouville's formula)."""
     model = Model(clamp=clamp, **parameters)
-    _, _, div = integrate(model, np.asarray(x, float), n, rtol=RTOL, atol=ATOL,
-                          with_divergence=True)  # fmt: skip
+    _, _, div = integrate(
+        model, np.asarray(x, float), n, rtol=RTOL, atol=ATOL, with_divergence=True
+    )
     return math.exp(div)

@@ -54,7 +54,7 @@ QUICK_CELLS = (
     (
         Cell("q6", 50.0, f0=0.0, mu_kn=0.9999, mu_cn=0.9999, zeta=0.0, tensile="allow"),
         (-100.0, 100.0),
-    ),  # fmt: skip
+    ),
     EDGE_CELLS[0],
     EDGE_CELLS[1],
 )
@@ -73,8 +73,10 @@ def grid_cells():
     for kn, cn, omega, f0, zeta, start, tensile in product(
         MU, MU, (0.001, 50.0), (0.0, 100.0), (0.0, 2.0), STARTS, ("clamp", "allow")
     ):
-        name = (f"ω{omega:g} f0={f0:g} μkn={kn} μcn={cn} ζ={zeta:g} {tensile} "
-                f"y0,v0={start[0]:g},{start[1]:g}")  # fmt: skip
+        name = (
+            f"ω{omega:g} f0={f0:g} μkn={kn} μcn={cn} ζ={zeta:g} {tensile} "
+            f"y0,v0={start[0]:g},{start[1]:g}"
+        )
         yield Cell(name, omega, f0=f0, mu_kn=kn, mu_cn=cn, zeta=zeta, tensile=tensile), start
 
 
@@ -89,8 +91,15 @@ class Result(NamedTuple):
 
 def compute_cell(cell: Cell, start, rtol: float, budget: int) -> dict:
     """One cell through run_tile with a step budget: the outputs of the cell."""
-    job = point_job(omega=cell.omega, **cell.parameters, y0=start[0], v0=start[1], rtol=rtol,
-                    atol=rtol * 1e-2, outputs=["label", "dc", "eps", "pn"])  # fmt: skip
+    job = point_job(
+        omega=cell.omega,
+        **cell.parameters,
+        y0=start[0],
+        v0=start[1],
+        rtol=rtol,
+        atol=rtol * 1e-2,
+        outputs=["label", "dc", "eps", "pn"],
+    )
     job = job.model_copy(
         update={"integrator": job.integrator.model_copy(update={"max_steps": budget})}
     )
@@ -235,12 +244,13 @@ class Row(NamedTuple):
     scipy: str
 
 
-def measure(cells, rtols=(1e-8, 1e-10), budget=1_000_000, timeout=120.0,
-            check_max=40) -> list[Row]:  # fmt: skip
+def measure(cells, rtols=(1e-8, 1e-10), budget=1_000_000, timeout=120.0, check_max=40) -> list[Row]:
     worker = Worker(timeout)
     try:
-        rows = [Row(cell, start, [worker.run_cell(cell, start, rtol, budget) for rtol in rtols],
-                    "") for cell, start in cells]  # fmt: skip
+        rows = [
+            Row(cell, start, [worker.run_cell(cell, start, rtol, budget) for rtol in rtols], "")
+            for cell, start in cells
+        ]
         check_with_scipy(worker, rows, rtols, check_max)
     finally:
         worker.stop()
@@ -315,12 +325,19 @@ def summary(rows: list[Row], rtols) -> str:
         f"SciPy checks: {agree} cells agree, {len(disagree)} disagree, of them not flagged "
         f"grazing: {len(unflagged)}",
     ]
-    lines += [f"  DISAGREES: {row.cell.describe()} start {row.start}: "
-              f"{' → '.join(r.label for r in row.results)} [{flags(row.results[-1])}]; "
-              f"{row.scipy}" for row in disagree]  # fmt: skip
+    lines += [
+        f"  DISAGREES: {row.cell.describe()} start {row.start}: "
+        f"{' → '.join(r.label for r in row.results)} [{flags(row.results[-1])}]; "
+        f"{row.scipy}"
+        for row in disagree
+    ]
     bad = [row for row in rows if any(r.outcome in BAD for r in row.results)]
-    lines += [f"  {r.outcome}: {row.cell.describe()} start {row.start}: {r.detail}"
-              for row in bad for r in row.results if r.outcome in BAD]  # fmt: skip
+    lines += [
+        f"  {r.outcome}: {row.cell.describe()} start {row.start}: {r.detail}"
+        for row in bad
+        for r in row.results
+        if r.outcome in BAD
+    ]
     return "\n".join(lines)
 
 
@@ -337,7 +354,9 @@ def run(args) -> int:
     print(format_table(HEADERS, [format_row(r) for r in rows]))
     print()
     print(summary(rows, args.rtols))
-    print(f"total {time.perf_counter() - t0:.0f} s; load average at the end: "
-          f"{machine_line().rsplit('load average ', 1)[1]}")  # fmt: skip
+    print(
+        f"total {time.perf_counter() - t0:.0f} s; load average at the end: "
+        f"{machine_line().rsplit('load average ', 1)[1]}"
+    )
     bad = any(r.outcome in BAD for row in rows for r in row.results)
     return 1 if bad else 0

@@ -46,31 +46,61 @@ def add_continue(sub):
         "NS and G points are located to 1e-10 in the parameter. Exactly one parameter "
         "takes a range A:B (the branch starts at A).",
     )
-    p.add_argument("--omega", type=value_or_range, required=True, metavar="W or A:B",
-                   help=HELP["omega"])  # fmt: skip
+    p.add_argument(
+        "--omega", type=value_or_range, required=True, metavar="W or A:B", help=HELP["omega"]
+    )
     for name, value in PAPER_VALUES.items():
-        p.add_argument(flag_of(name), type=value_or_range, default=value, metavar="X or A:B",
-                       help=f"{HELP[name]} ({value:g})")  # fmt: skip
+        p.add_argument(
+            flag_of(name),
+            type=value_or_range,
+            default=value,
+            metavar="X or A:B",
+            help=f"{HELP[name]} ({value:g})",
+        )
     add_model_options(p)
     p.add_argument("--y0", type=float, default=0.0, help="the start cell's initial y (rest)")
     p.add_argument("--v0", type=float, default=0.0, help="the start cell's initial y' (rest)")
-    p.add_argument("--cycle", type=int, metavar="N",
-                   help="the period to solve for (default: the simulated cell's)")  # fmt: skip
-    p.add_argument("--switch", type=int, default=0, metavar="DEPTH",
-                   help="follow period doublings DEPTH deep from every PD point (0)")  # fmt: skip
+    p.add_argument(
+        "--cycle",
+        type=int,
+        metavar="N",
+        help="the period to solve for (default: the simulated cell's)",
+    )
+    p.add_argument(
+        "--switch",
+        type=int,
+        default=0,
+        metavar="DEPTH",
+        help="follow period doublings DEPTH deep from every PD point (0)",
+    )
     p.add_argument("--max-step", type=float, default=0.02, help="longest arclength step (0.02)")
     p.add_argument("--max-points", type=int, default=5000, help="points per branch (5000)")
-    p.add_argument("--curves", metavar="TYPES", help="continue the curves of these special "
-                   "points in a plane, e.g. PD,SN,G (with --second)")  # fmt: skip
-    p.add_argument("--second", type=named_range, metavar="NAME:A:B",
-                   help="the curves' second parameter and range, e.g. mu_kn:0.7:0.95")  # fmt: skip
-    p.add_argument("--line", type=int, metavar="POINTS",
-                   help="with -o and a range of omega: draw the brute-force bifurcation "
-                   "diagram (campar line, POINTS cells) beneath the branches")  # fmt: skip
+    p.add_argument(
+        "--curves",
+        metavar="TYPES",
+        help="continue the curves of these special points in a plane, e.g. PD,SN,G (with --second)",
+    )
+    p.add_argument(
+        "--second",
+        type=named_range,
+        metavar="NAME:A:B",
+        help="the curves' second parameter and range, e.g. mu_kn:0.7:0.95",
+    )
+    p.add_argument(
+        "--line",
+        type=int,
+        metavar="POINTS",
+        help="with -o and a range of omega: draw the brute-force bifurcation "
+        "diagram (campar line, POINTS cells) beneath the branches",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("-o", "--output", metavar="FILE.png",
-                   help="the branches (stable solid, unstable dashed, special points "
-                   "marked); with --curves a second figure FILE-curves.png")  # fmt: skip
+    p.add_argument(
+        "-o",
+        "--output",
+        metavar="FILE.png",
+        help="the branches (stable solid, unstable dashed, special points "
+        "marked); with --curves a second figure FILE-curves.png",
+    )
     p.set_defaults(handler=run_continue)
 
 
@@ -79,8 +109,9 @@ def split_parameters(args) -> tuple[str, tuple[float, float], dict]:
     values = {name: getattr(args, name) for name in CONTINUATION_PARAMETERS}
     ranged = [name for name, value in values.items() if isinstance(value, tuple)]
     if len(ranged) != 1:
-        raise JobError("give exactly one parameter a range A:B (e.g. --omega 6:2), got "
-                       f"{len(ranged)}")  # fmt: skip
+        raise JobError(
+            f"give exactly one parameter a range A:B (e.g. --omega 6:2), got {len(ranged)}"
+        )
     name = ranged[0]
     fixed = {k: v for k, v in values.items() if k != name}
     return name, values[name], fixed
@@ -102,21 +133,32 @@ def run_continue(args) -> int:
     if args.max_points < 2:
         raise JobError(f"--max-points must be ≥ 2, got {args.max_points}")
     if args.line is not None and (parameter != "omega" or not args.output):
-        raise JobError("--line draws campar line's diagram along omega: it needs a range of "
-                       "--omega and -o")  # fmt: skip
+        raise JobError(
+            "--line draws campar line's diagram along omega: it needs a range of --omega and -o"
+        )
     types = tuple(t.strip().upper() for t in args.curves.split(",")) if args.curves else ()
     second, window = args.second if args.second else (None, None)
     if args.output:
         from ..views.output import figure_file
 
         figure_file(args.output)  # before computing
-    settings = BranchSettings(max_step=args.max_step, max_points=args.max_points,
-                              step=min(0.01, args.max_step))  # fmt: skip
+    settings = BranchSettings(
+        max_step=args.max_step, max_points=args.max_points, step=min(0.01, args.max_step)
+    )
     result = continue_from_cell(
-        parameter, span, fixed, y0=args.y0, v0=args.v0, cycle=args.cycle, switch=args.switch,
-        model=model_options(args), settings=settings, curve_types=types, second=second,
+        parameter,
+        span,
+        fixed,
+        y0=args.y0,
+        v0=args.v0,
+        cycle=args.cycle,
+        switch=args.switch,
+        model=model_options(args),
+        settings=settings,
+        curve_types=types,
+        second=second,
         second_window=window,
-    )  # fmt: skip
+    )
     print(json.dumps(result.to_dict()) if args.json else describe_continuation(result))
     if args.output:
         draw(args, result, parameter, span, fixed)
@@ -133,8 +175,9 @@ def draw(args, result, parameter, span, fixed) -> None:
         from ..views.line import compute_line, line_job
 
         others = {k: v for k, v in fixed.items() if k != "omega"}
-        line = compute_line(line_job(span, args.line, **model_options(args), **others),
-                            transitions=False)  # fmt: skip
+        line = compute_line(
+            line_job(span, args.line, **model_options(args), **others), transitions=False
+        )
     plot_branches(result.root, line=line).savefig(args.output, dpi=200)
     if result.curves:
         path = Path(args.output)
@@ -157,16 +200,25 @@ def add_curves(sub):
         "the map's window as a task of a curves job: run, checksummed, committed and "
         "resumed as a map's tiles are, serially or under mpirun. The curves go into a store "
         "beside the map (MAP-curves.zarr); campar plot MAP --curves draws them.",
-        epilog=RUN_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
-    )  # fmt: skip
+        epilog=RUN_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("map", help="a map store of campar run (with the multipliers output)")
-    p.add_argument("--types", default=",".join(SEED_TYPES),
-                   help=f"curve types to seed ({','.join(SEED_TYPES)})")  # fmt: skip
+    p.add_argument(
+        "--types",
+        default=",".join(SEED_TYPES),
+        help=f"curve types to seed ({','.join(SEED_TYPES)})",
+    )
     p.add_argument("--points", type=int, default=400, help="points of a curve at most (400)")
     p.add_argument("--store", metavar="PATH", help="the curves' store (MAP-curves.zarr)")
     p.add_argument("--overwrite", action="store_true", help="replace a store of another job")
-    p.add_argument("--grace", type=seconds, default=30.0, metavar="SECONDS",
-                   help="after a signal, wait so long for tasks in flight (30)")  # fmt: skip
+    p.add_argument(
+        "--grace",
+        type=seconds,
+        default=30.0,
+        metavar="SECONDS",
+        help="after a signal, wait so long for tasks in flight (30)",
+    )
     p.add_argument("--json", action="store_true", help="print the curves as one JSON object")
     p.set_defaults(handler=run_curves)
 
@@ -183,8 +235,9 @@ def run_curves(args) -> int:
     types = tuple(t.strip().upper() for t in args.types.split(",") if t.strip())
     unknown = [t for t in types if t not in SEED_TYPES]
     if unknown or not types:
-        raise JobError(f"--types: {', '.join(unknown) or 'none given'}; one or more of "
-                       f"{', '.join(SEED_TYPES)}")  # fmt: skip
+        raise JobError(
+            f"--types: {', '.join(unknown) or 'none given'}; one or more of {', '.join(SEED_TYPES)}"
+        )
     if not 2 <= args.points <= 100_000:
         raise JobError(f"--points must be from 2 to 100000, got {args.points}")
     job = curves_job(args.map, types, points=args.points, store=args.store)
@@ -197,6 +250,8 @@ def run_curves(args) -> int:
     if args.json:
         print(json.dumps({"store": str(path), "curves": [c.to_dict() for c in curves]}))
     else:
-        print(f"{path}: {len(job.curves.tasks)} tasks, {len(curves)} curves "
-              f"({describe_curves(curves)})")  # fmt: skip
+        print(
+            f"{path}: {len(job.curves.tasks)} tasks, {len(curves)} curves "
+            f"({describe_curves(curves)})"
+        )
     return 0

@@ -24,11 +24,16 @@ def add_line(sub):
         required=True,
         help="ω range; computed from the larger value down (the paper's direction)",
     )
-    p.add_argument("--points", type=int, default=DEFAULT_POINTS,
-                   help=f"ω values ({DEFAULT_POINTS})")  # fmt: skip
+    p.add_argument(
+        "--points", type=int, default=DEFAULT_POINTS, help=f"ω values ({DEFAULT_POINTS})"
+    )
     add_model_arguments(p, several=True)
-    p.add_argument("--sections", type=int, default=DEFAULT_SECTIONS,
-                   help=f"σn points kept per non-periodic cell ({DEFAULT_SECTIONS})")  # fmt: skip
+    p.add_argument(
+        "--sections",
+        type=int,
+        default=DEFAULT_SECTIONS,
+        help=f"σn points kept per non-periodic cell ({DEFAULT_SECTIONS})",
+    )
     p.add_argument(
         "-o",
         "--output",
@@ -37,9 +42,13 @@ def add_line(sub):
         help="figure; format from the suffix (default line.png)",
     )
     p.add_argument("--npz", metavar="FILE", help="also save the arrays (FILE, or FILE-1.npz, …)")
-    p.add_argument("--json", action="store_true", help="print one JSON object: each line's "
-                   "runs of labels and its transitions (ω, type, multiplier evidence)")  # fmt: skip
-    p.set_defaults(handler=run_line)  # fmt: skip
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON object: each line's "
+        "runs of labels and its transitions (ω, type, multiplier evidence)",
+    )
+    p.set_defaults(handler=run_line)
 
 
 def run_line(args) -> int:
@@ -57,16 +66,21 @@ def run_line(args) -> int:
     if args.npz:
         writable_file(args.npz, "arrays")
     options = {**model_options(args), **transient_options(args), "sections": args.sections}
-    jobs = [line_job(args.omega, args.points, **options, **params)
-            for params in varied_parameters(parameter_values(args))]  # fmt: skip
+    jobs = [
+        line_job(args.omega, args.points, **options, **params)
+        for params in varied_parameters(parameter_values(args))
+    ]
     start = time.perf_counter()
     lines = compute_lines(jobs)
     seconds = time.perf_counter() - start
     if not args.json:
         for line in lines:
             print(describe_line(line))
-            print(f"  transitions (ω decreasing):\n{describe_transitions(line.transitions)}"
-                  if line.transitions else "  no transitions")  # fmt: skip
+            print(
+                f"  transitions (ω decreasing):\n{describe_transitions(line.transitions)}"
+                if line.transitions
+                else "  no transitions"
+            )
         print(f"{sum(len(line.omega) for line in lines)} cells in {seconds:.2f} s")
     if args.npz:
         for i, line in enumerate(lines):
@@ -80,8 +94,11 @@ def run_line(args) -> int:
     if args.json:
         import json
 
-        data = {"lines": [line.to_dict() for line in lines], "seconds": seconds,
-                "figure": str(written)}  # fmt: skip
+        data = {
+            "lines": [line.to_dict() for line in lines],
+            "seconds": seconds,
+            "figure": str(written),
+        }
         print(json.dumps(data))
     else:
         print(f"wrote {written}")

@@ -31,31 +31,56 @@ def seconds(text: str) -> float:
 
 def add_run(sub):
     p = sub.add_parser(
-        "run", help="compute a job's map into its store (resumes; MPI under mpirun)",
+        "run",
+        help="compute a job's map into its store (resumes; MPI under mpirun)",
         description="Compute a job's map into its store: serially, or with every rank\n"
         "computing under mpirun (rank 0 hands out tiles and commits them).",
-        epilog=RUN_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
-    )  # fmt: skip
+        epilog=RUN_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("job", help="job file (YAML)")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="change one key of the job, e.g. sweep.omega.points=200 or "
-                   "model.tensile=allow (repeatable; validated as the file is)")  # fmt: skip
-    p.add_argument("--dry-run", action="store_true", help="print cells, tiles, store size, "
-                   "memory per rank and an estimated time (a few of its chains timed); "
-                   "write nothing")  # fmt: skip
-    p.add_argument("--ranks", type=int, default=1, metavar="N",
-                   help="with --dry-run: plan for N MPI ranks (1)")  # fmt: skip
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="change one key of the job, e.g. sweep.omega.points=200 or "
+        "model.tensile=allow (repeatable; validated as the file is)",
+    )
+    p.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="print cells, tiles, store size, "
+        "memory per rank and an estimated time (a few of its chains timed); "
+        "write nothing",
+    )
+    p.add_argument(
+        "--ranks", type=int, default=1, metavar="N", help="with --dry-run: plan for N MPI ranks (1)"
+    )
     p.add_argument("--store", metavar="PATH", help="result store (default: the job's store:)")
     p.add_argument("--overwrite", action="store_true", help="replace a store of another job")
-    p.add_argument("--grace", type=seconds, default=30.0, metavar="SECONDS",
-                   help="after a signal, wait so long for tiles in flight (30)")  # fmt: skip
+    p.add_argument(
+        "--grace",
+        type=seconds,
+        default=30.0,
+        metavar="SECONDS",
+        help="after a signal, wait so long for tiles in flight (30)",
+    )
     from ..sweep.budget import DEFAULT_MAX_MEMORY, DEFAULT_MAX_STORE, format_size, parse_size
 
     store, memory = format_size(DEFAULT_MAX_STORE), format_size(DEFAULT_MAX_MEMORY)
-    p.add_argument("--max-store", type=parse_size, metavar="SIZE",
-                   help=f"refuse a job whose store exceeds SIZE unpacked ({store})")  # fmt: skip
-    p.add_argument("--max-memory", type=parse_size, metavar="SIZE",
-                   help=f"refuse a job whose ranks each need over SIZE ({memory})")  # fmt: skip
+    p.add_argument(
+        "--max-store",
+        type=parse_size,
+        metavar="SIZE",
+        help=f"refuse a job whose store exceeds SIZE unpacked ({store})",
+    )
+    p.add_argument(
+        "--max-memory",
+        type=parse_size,
+        metavar="SIZE",
+        help=f"refuse a job whose ranks each need over SIZE ({memory})",
+    )
     p.set_defaults(handler=run_run)
 
 
@@ -66,8 +91,7 @@ def run_run(args) -> int:
     job = job_of(args.job, dict(map(parse_assignment, args.set)))  # before the disk is touched
     limits = dict(max_store=args.max_store, max_memory=args.max_memory)
     if args.dry_run:
-        plan = forecast(job, store=args.store, ranks=args.ranks, overwrite=args.overwrite,
-                        **limits)  # fmt: skip
+        plan = forecast(job, store=args.store, ranks=args.ranks, overwrite=args.overwrite, **limits)
         print(plan.describe())
         return 0
     from ..sweep.runner import setup_logging
@@ -95,8 +119,11 @@ def run_status(args) -> int:
 
 
 def add_verify(sub):
-    p = sub.add_parser("verify", help="read every committed tile back and check its checksum; "
-                       "lists damaged tiles (exit 65 if any)")  # fmt: skip
+    p = sub.add_parser(
+        "verify",
+        help="read every committed tile back and check its checksum; "
+        "lists damaged tiles (exit 65 if any)",
+    )
     p.add_argument("store", help="result store (Zarr directory or HDF5 file)")
     p.set_defaults(handler=run_verify)
 

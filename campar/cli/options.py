@@ -75,18 +75,27 @@ def add_model_options(p) -> None:
 
     for name in option_fields():
         default = getattr(DEFAULT_MODEL, name)
-        p.add_argument(flag_of(name), choices=field_choices(ModelSettings, name),
-                       default=default, help=f"{MODEL_OPTION_HELP[name]} ({default})")  # fmt: skip
+        p.add_argument(
+            flag_of(name),
+            choices=field_choices(ModelSettings, name),
+            default=default,
+            help=f"{MODEL_OPTION_HELP[name]} ({default})",
+        )
 
 
 def add_transient_arguments(p) -> None:
     from ..sweep.job import DEFAULT_TRANSIENT, TransientSettings, field_choices
 
     mode, budget = DEFAULT_TRANSIENT.mode, DEFAULT_TRANSIENT.max_revolutions
-    p.add_argument("--transient", choices=field_choices(TransientSettings, "mode"), default=mode,
-                   help=f"converged: until it settles; fixed: as the paper ({mode})")  # fmt: skip
-    p.add_argument("--revolutions", type=int, default=budget,
-                   help=f"transient budget / length ({budget})")  # fmt: skip
+    p.add_argument(
+        "--transient",
+        choices=field_choices(TransientSettings, "mode"),
+        default=mode,
+        help=f"converged: until it settles; fixed: as the paper ({mode})",
+    )
+    p.add_argument(
+        "--revolutions", type=int, default=budget, help=f"transient budget / length ({budget})"
+    )
 
 
 def parameter_values(args) -> dict:

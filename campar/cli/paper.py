@@ -6,9 +6,13 @@ def add_gallery(sub):
     from ..sweep.job import ModelSettings, field_choices
 
     p.add_argument("outdir", help="directory for the PNGs, their job files and index.md")
-    p.add_argument("--tensile", choices=("both", *field_choices(ModelSettings, "tensile")),
-                   default="both", help="force law(s) to draw: both (default; clamp with plain "
-                   "names, allow with '-allow' names), clamp or allow")  # fmt: skip
+    p.add_argument(
+        "--tensile",
+        choices=("both", *field_choices(ModelSettings, "tensile")),
+        default="both",
+        help="force law(s) to draw: both (default; clamp with plain "
+        "names, allow with '-allow' names), clamp or allow",
+    )
     add_plane_arguments(p)
     p.set_defaults(handler=run_gallery)
 

@@ -6,38 +6,73 @@ from ..errors import JobError
 def add_plot(sub):
     from ..views.plot import STORE_VIEWS, parse_range  # cheap: matplotlib loads only to draw
 
-    p = sub.add_parser("plot", help="draw a map of a result store (n-p labels, duty cycle, …), "
-                       "or compare two")  # fmt: skip
-    p.add_argument("stores", nargs="+", metavar="STORE", help="result store of `campar run` "
-                   "(Zarr directory or HDF5 file); two stores of one grid: their maps side "
-                   "by side, or with --diff the cells whose labels differ")  # fmt: skip
-    p.add_argument("--what", choices=STORE_VIEWS, default="labels",
-                   help="default: n-p labels (of a basin store: the basin); n, p: period and "
-                   "detachments of the periodic cells; multistability: how many attractors "
-                   "coexist, attractor_sets: which (census stores)")  # fmt: skip
+    p = sub.add_parser(
+        "plot", help="draw a map of a result store (n-p labels, duty cycle, …), or compare two"
+    )
+    p.add_argument(
+        "stores",
+        nargs="+",
+        metavar="STORE",
+        help="result store of `campar run` "
+        "(Zarr directory or HDF5 file); two stores of one grid: their maps side "
+        "by side, or with --diff the cells whose labels differ",
+    )
+    p.add_argument(
+        "--what",
+        choices=STORE_VIEWS,
+        default="labels",
+        help="default: n-p labels (of a basin store: the basin); n, p: period and "
+        "detachments of the periodic cells; multistability: how many attractors "
+        "coexist, attractor_sets: which (census stores)",
+    )
     p.add_argument(
         "--diff",
         action="store_true",
         help="with two stores: one map of the cells whose n-p labels differ",
     )
-    p.add_argument("-o", "--output", metavar="FILE", help="image; format from the suffix "
-                   "(.png, .pdf, .svg); default STORE-WHAT.png here (with --bifurcations "
-                   "--json: no image unless given)")  # fmt: skip
+    p.add_argument(
+        "-o",
+        "--output",
+        metavar="FILE",
+        help="image; format from the suffix "
+        "(.png, .pdf, .svg); default STORE-WHAT.png here (with --bifurcations "
+        "--json: no image unless given)",
+    )
     p.add_argument("--omega", metavar="A:B", type=parse_range, help="zoom to ω in [A, B]")
-    p.add_argument("--second", metavar="C:D", type=parse_range,
-                   help="zoom to the second parameter in [C, D]")  # fmt: skip
-    p.add_argument("--direction", choices=("down", "up"), help="of a store of a "
-                   "chains.direction: both job, the direction to draw (default down); "
-                   "--what hysteresis compares the two")  # fmt: skip
-    p.add_argument("--bifurcations", action="store_true",
-                   help="overlay every boundary between labels as a cell edge typed PD, SN, "
-                   "NS, G, chaos or jump (from the stored multipliers and ε extremes)")  # fmt: skip
-    p.add_argument("--curves", action="store_true", help="overlay the continued bifurcation "
-                   "curves campar curves stored beside the map (STORE-curves.zarr)")  # fmt: skip
-    p.add_argument("--trace", action="store_true", help="with --bifurcations: tell grazing "
-                   "from the orbits traced from the stored states (loads the kernel)")  # fmt: skip
-    p.add_argument("--json", action="store_true", help="with --bifurcations: print one "
-                   "JSON object: counts per type, each typed segment and its evidence")  # fmt: skip
+    p.add_argument(
+        "--second", metavar="C:D", type=parse_range, help="zoom to the second parameter in [C, D]"
+    )
+    p.add_argument(
+        "--direction",
+        choices=("down", "up"),
+        help="of a store of a "
+        "chains.direction: both job, the direction to draw (default down); "
+        "--what hysteresis compares the two",
+    )
+    p.add_argument(
+        "--bifurcations",
+        action="store_true",
+        help="overlay every boundary between labels as a cell edge typed PD, SN, "
+        "NS, G, chaos or jump (from the stored multipliers and ε extremes)",
+    )
+    p.add_argument(
+        "--curves",
+        action="store_true",
+        help="overlay the continued bifurcation "
+        "curves campar curves stored beside the map (STORE-curves.zarr)",
+    )
+    p.add_argument(
+        "--trace",
+        action="store_true",
+        help="with --bifurcations: tell grazing "
+        "from the orbits traced from the stored states (loads the kernel)",
+    )
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help="with --bifurcations: print one "
+        "JSON object: counts per type, each typed segment and its evidence",
+    )
     p.set_defaults(handler=run_plot)
 
 
@@ -60,8 +95,9 @@ def run_plot(args) -> int:
 
         if args.output:
             figure_file(args.output)  # before typing the boundaries
-        found = store_boundaries(store, omega=args.omega, second=args.second,
-                                 trace=args.trace, direction=args.direction)  # fmt: skip
+        found = store_boundaries(
+            store, omega=args.omega, second=args.second, trace=args.trace, direction=args.direction
+        )
     continued = None
     if args.curves:
         from ..views.map_curves import read_curves
@@ -69,9 +105,16 @@ def run_plot(args) -> int:
         continued = read_curves(store)
     path = None
     if not args.json or args.output:  # --json prints the curves; an image only if asked
-        path = plot_store(store, args.what, args.output, omega=args.omega, second=args.second,
-                          curves=found, direction=args.direction,
-                          continued=continued)  # fmt: skip
+        path = plot_store(
+            store,
+            args.what,
+            args.output,
+            omega=args.omega,
+            second=args.second,
+            curves=found,
+            direction=args.direction,
+            continued=continued,
+        )
     if args.json:
         import json
 
@@ -95,15 +138,20 @@ def run_compare(args) -> int:
     result = plot_compare(a, b, args.what, args.output, difference=args.diff, **zoom)
     if args.diff:
         share = result.differ / max(result.compared, 1)
-        print(f"{result.differ} of {result.compared} cells computed in both differ in their "
-              f"labels ({100 * share:.2g} %)")  # fmt: skip
+        print(
+            f"{result.differ} of {result.compared} cells computed in both differ in their "
+            f"labels ({100 * share:.2g} %)"
+        )
     print(f"wrote {result.figure}")
     return 0
 
 
 def add_separation(sub):
-    p = sub.add_parser("separation", help="separation speed of each row of stores made with the "
-                       "separation output, several laws on one plot (docs/design.md)")  # fmt: skip
+    p = sub.add_parser(
+        "separation",
+        help="separation speed of each row of stores made with the "
+        "separation output, several laws on one plot (docs/design.md)",
+    )
     p.add_argument("stores", nargs="+", metavar="STORE", help="result stores (one curve each)")
     p.add_argument("--plot", metavar="FILE.png", help="draw the curves into this figure")
     p.set_defaults(handler=run_separation)

@@ -20,28 +20,42 @@ def add_point(sub):
     p.add_argument("--v0", type=float, default=DEFAULT_INITIAL.v, help="initial y' at θ = 0")
     rtol, method = DEFAULT_INTEGRATOR.rtol, DEFAULT_INTEGRATOR.method
     p.add_argument("--rtol", type=float, default=rtol, help=f"integrator rtol ({rtol:g})")
-    p.add_argument("--method", choices=field_choices(IntegratorSettings, "method"),
-                   default=method, help=f"integrator ({method})")  # fmt: skip
+    p.add_argument(
+        "--method",
+        choices=field_choices(IntegratorSettings, "method"),
+        default=method,
+        help=f"integrator ({method})",
+    )
     p.add_argument("--multipliers", action="store_true", help="Floquet multipliers")
     p.add_argument("--lyapunov", action="store_true", help="largest Lyapunov exponent")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE.png", help="phase portrait, ε(t), Pn(t) and yc(t)")
-    p.add_argument("--attractors", type=int, metavar="K",
-                   help="run K starts (rest, --y0/--v0, a spread over a box of (y, y')) "
-                   "and list the distinct attractors with basin fractions")  # fmt: skip
-    p.add_argument("--cycle", type=int, metavar="N",
-                   help="solve for the N-cycle by Newton's method on the section map, stable "
-                   "or not, from --y0/--v0 (or, from rest, the simulated cell's end state); "
-                   "its label, multipliers and stability")  # fmt: skip
+    p.add_argument(
+        "--attractors",
+        type=int,
+        metavar="K",
+        help="run K starts (rest, --y0/--v0, a spread over a box of (y, y')) "
+        "and list the distinct attractors with basin fractions",
+    )
+    p.add_argument(
+        "--cycle",
+        type=int,
+        metavar="N",
+        help="solve for the N-cycle by Newton's method on the section map, stable "
+        "or not, from --y0/--v0 (or, from rest, the simulated cell's end state); "
+        "its label, multipliers and stability",
+    )
     p.set_defaults(handler=run_point)
 
 
 # Keys of the one-cell job ``campar point`` builds, and the flags that set them (with the
 # model's, ``model_flags``).
 POINT_FLAGS = {
-    "integrator.rtol": "--rtol", "integrator.method": "--method", "initial.y": "--y0",
+    "integrator.rtol": "--rtol",
+    "integrator.method": "--method",
+    "initial.y": "--y0",
     "initial.v": "--v0",
-}  # fmt: skip
+}
 
 
 def naming_flags(handler):
@@ -65,8 +79,13 @@ def run_point(args) -> int:
 
     from ..views.point import simulate_point
 
-    settings = {**parameter_values(args), **model_options(args), **transient_options(args),
-                "rtol": args.rtol, "method": args.method}  # fmt: skip
+    settings = {
+        **parameter_values(args),
+        **model_options(args),
+        **transient_options(args),
+        "rtol": args.rtol,
+        "method": args.method,
+    }
     if args.attractors is not None:
         return run_attractors(args, settings)
     if args.cycle is not None:
@@ -102,13 +121,17 @@ def run_attractors(args, settings) -> int:
 
     given = [(args.y0, args.v0)] if (args.y0, args.v0) != (0.0, 0.0) else []
     if args.attractors < len(given) + 1:
-        raise JobError(f"--attractors must be ≥ {len(given) + 1} (rest and --y0/--v0), "
-                       f"got {args.attractors}")  # fmt: skip
+        raise JobError(
+            f"--attractors must be ≥ {len(given) + 1} (rest and --y0/--v0), got {args.attractors}"
+        )
     if args.plot:
-        raise JobError("--plot draws one orbit: use it without --attractors, from an "
-                       "attractor's state (--y0 --v0)")  # fmt: skip
-    census = find_attractors(args.omega, count=args.attractors, given=given,
-                             lyapunov=args.lyapunov, **settings)  # fmt: skip
+        raise JobError(
+            "--plot draws one orbit: use it without --attractors, from an "
+            "attractor's state (--y0 --v0)"
+        )
+    census = find_attractors(
+        args.omega, count=args.attractors, given=given, lyapunov=args.lyapunov, **settings
+    )
     print(json.dumps(census.to_dict()) if args.json else describe_attractors(census))
     return 0
 
@@ -138,14 +161,16 @@ def format_cycle(orbit) -> str:
     stability = "stable" if orbit.stable else "unstable"
     mult = ", ".join(f"{m.real:+.8f}{m.imag:+.8f}j (|λ|={abs(m):.8f})" for m in orbit.multipliers)
     points = "  ".join(f"({y:.10f}, {v:.10f})" for y, v in orbit.sections)
-    return "\n".join([
-        f"{orbit.label} cycle ({stability}) at {par}",
-        f"  section points: {points}",
-        f"  Floquet multipliers: {mult}",
-        f"  |P^n(x) - x| ≤ 1e-10 after {orbit.iterations} Newton iterations (--json: "
-        f"its value); duty cycle {orbit.dc:.4f}, ε min {orbit.eps_min:.4f}, "
-        f"ε max {orbit.eps_max:.4f}, Pn max {orbit.pn_max:.4f}",
-    ])  # fmt: skip
+    return "\n".join(
+        [
+            f"{orbit.label} cycle ({stability}) at {par}",
+            f"  section points: {points}",
+            f"  Floquet multipliers: {mult}",
+            f"  |P^n(x) - x| ≤ 1e-10 after {orbit.iterations} Newton iterations (--json: "
+            f"its value); duty cycle {orbit.dc:.4f}, ε min {orbit.eps_min:.4f}, "
+            f"ε max {orbit.eps_max:.4f}, Pn max {orbit.pn_max:.4f}",
+        ]
+    )
 
 
 def format_point(r) -> str:
@@ -154,9 +179,9 @@ def format_point(r) -> str:
         f"{r.label}  ({r.kind}; {r.status})  at {par}",
         f"  duty cycle {r.dc:.4f}   ε min {r.eps_min:.4f}   ε max {r.eps_max:.4f}   "
         f"Pn max {r.pn_max:.4f}",
-        f"  {r.revolutions} revolutions, {r.steps} steps" + (
-            f", flags: {', '.join(r.flags)}" if r.flags else ""),
-    ]  # fmt: skip
+        f"  {r.revolutions} revolutions, {r.steps} steps"
+        + (f", flags: {', '.join(r.flags)}" if r.flags else ""),
+    ]
     if r.multipliers is not None:
         mult = ", ".join(f"{m.real:+.6f}{m.imag:+.6f}j (|λ|={abs(m):.6f})" for m in r.multipliers)
         lines.append(f"  Floquet multipliers: {mult}")

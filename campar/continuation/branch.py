@@ -169,8 +169,15 @@ class Continuation:
     """The continuation of n-cycles along parameter ``name`` at fixed other parameters
     ``par`` (PARAMETER_ORDER vector), inside the window [lo, hi] of that parameter."""
 
-    def __init__(self, smap: SectionMap, par: np.ndarray, name: str, n: int,
-                 window: tuple[float, float], settings: BranchSettings | None = None):  # fmt: skip
+    def __init__(
+        self,
+        smap: SectionMap,
+        par: np.ndarray,
+        name: str,
+        n: int,
+        window: tuple[float, float],
+        settings: BranchSettings | None = None,
+    ):
         self.smap = smap
         self.par = np.array(par, dtype=np.float64)
         self.name = name
@@ -202,13 +209,15 @@ class Continuation:
             t = -t
         return t
 
-    def point(self, u: np.ndarray, shot: Shot, reference: np.ndarray | None,
-              s: float = 0.0) -> BranchPoint:  # fmt: skip
+    def point(
+        self, u: np.ndarray, shot: Shot, reference: np.ndarray | None, s: float = 0.0
+    ) -> BranchPoint:
         column = self.column(u)
         return BranchPoint(u, shot, column, self.tangent(shot, column, reference), s)
 
-    def correct(self, guess: np.ndarray, normal: np.ndarray, anchor: np.ndarray,
-                column: np.ndarray) -> tuple[np.ndarray, Shot, int] | None:  # fmt: skip
+    def correct(
+        self, guess: np.ndarray, normal: np.ndarray, anchor: np.ndarray, column: np.ndarray
+    ) -> tuple[np.ndarray, Shot, int] | None:
         """Newton on Pⁿ(x; λ) − x = 0 with normal·(u − anchor) = 0, from ``guess``.
 
         The parameter column starts as ``column`` (the last point's) and is recomputed at
@@ -249,8 +258,9 @@ class Continuation:
             u = u + step
         return None
 
-    def first_point(self, orbit: PeriodicOrbit, direction: float,
-                    tangent: np.ndarray | None = None) -> BranchPoint:  # fmt: skip
+    def first_point(
+        self, orbit: PeriodicOrbit, direction: float, tangent: np.ndarray | None = None
+    ) -> BranchPoint:
         """The branch point of a converged orbit; the tangent oriented so the parameter
         moves along ``direction`` (±1), or along ``tangent`` when given."""
         u = np.array([*orbit.state, orbit.parameters[self.name]])
@@ -296,8 +306,10 @@ class Continuation:
                 if pt is not None:
                     points.append(pt)
                     self.returned = True
-                    end = (f"returned onto the {self.n // 2}-cycles at their PD point "
-                           f"{self.name}={pt.u[2]:.10g}")  # fmt: skip
+                    end = (
+                        f"returned onto the {self.n // 2}-cycles at their PD point "
+                        f"{self.name}={pt.u[2]:.10g}"
+                    )
                     break
             for kind in crossings(a, b):
                 located = self.locate(a, b, kind)
@@ -344,8 +356,9 @@ class Continuation:
         solved for and its branch continued across [a, b] widened fourfold, with the PD
         point located there (to LOCATE_TOL). None when that fails.
         """
-        half = Continuation(self.smap, self.par, self.name, self.n // 2, (self.lo, self.hi),
-                            self.settings)  # fmt: skip
+        half = Continuation(
+            self.smap, self.par, self.name, self.n // 2, (self.lo, self.hi), self.settings
+        )
         lam_a, lam_b = sorted((a.u[2], b.u[2]))
         width = 4.0 * max(lam_b - lam_a, 1e-4)
         window = (lam_a - width, lam_b + width)
@@ -353,8 +366,9 @@ class Continuation:
             shot, _ = newton(self.smap, a.u[:2], self.parameters_at(a.u[2]), self.n // 2, 12)
             orbit = orbit_at(self.smap, shot, self.parameters_at(a.u[2]), self.n // 2)
             half.lo, half.hi = window
-            half.settings = replace(self.settings, step=width / 8, max_step=width / 8,
-                                    max_points=80)  # fmt: skip
+            half.settings = replace(
+                self.settings, step=width / 8, max_step=width / 8, max_points=80
+            )
             start = half.first_point(orbit, 1.0 if b.u[2] > a.u[2] else -1.0)
             _, special, _ = half.run(start)
             if not any(sp.type == PD for sp in special):
@@ -382,8 +396,9 @@ class Continuation:
         guess[2] = value
         return self.corrected(a, guess, np.array([0.0, 0.0, 1.0]), ds)
 
-    def corrected(self, a: BranchPoint, guess: np.ndarray, normal: np.ndarray,
-                  s: float) -> BranchPoint | None:  # fmt: skip
+    def corrected(
+        self, a: BranchPoint, guess: np.ndarray, normal: np.ndarray, s: float
+    ) -> BranchPoint | None:
         """The branch point Newton finds from ``guess`` on the plane normal·(u − guess) = 0,
         with a's parameter column, oriented along a and at arclength s past it; None where
         the corrector or the new point's column fails."""
@@ -401,8 +416,9 @@ class Continuation:
         """The corrected branch point at arclength s past a (on a's tangent's normal plane)."""
         return self.corrected(a, a.u + s * a.tangent, a.tangent, s)
 
-    def locate(self, a: BranchPoint, b: BranchPoint,
-               kind: str) -> tuple[SpecialPoint, BranchPoint] | None:  # fmt: skip
+    def locate(
+        self, a: BranchPoint, b: BranchPoint, kind: str
+    ) -> tuple[SpecialPoint, BranchPoint] | None:
         """The special point of ``kind`` between a and b, located to LOCATE_TOL in λ, and
         the branch point there."""
         span = b.s - a.s
@@ -442,8 +458,9 @@ class Continuation:
                 s1 = mid
         return s1
 
-    def special_point(self, kind: str, pt: BranchPoint, a: BranchPoint, b: BranchPoint,
-                      accuracy: float) -> SpecialPoint:  # fmt: skip
+    def special_point(
+        self, kind: str, pt: BranchPoint, a: BranchPoint, b: BranchPoint, accuracy: float
+    ) -> SpecialPoint:
         from .orbit import multipliers_of
 
         par = self.parameters_at(pt.u[2])
@@ -496,9 +513,15 @@ def shot_value(t) -> str:
     return ", ".join(f"{v:.6g}" for v in t)
 
 
-def continue_branch(orbit: PeriodicOrbit, parameter: str, window: tuple[float, float], *,
-                    direction: float | None = None, section_map: SectionMap | None = None,
-                    settings: BranchSettings | None = None) -> Branch:  # fmt: skip
+def continue_branch(
+    orbit: PeriodicOrbit,
+    parameter: str,
+    window: tuple[float, float],
+    *,
+    direction: float | None = None,
+    section_map: SectionMap | None = None,
+    settings: BranchSettings | None = None,
+) -> Branch:
     """Continue the branch of ``orbit`` along ``parameter`` inside ``window``.
 
     Parameters
@@ -545,8 +568,14 @@ def continue_branch(orbit: PeriodicOrbit, parameter: str, window: tuple[float, f
     return assemble(engine, points, special, end, shots=smap.shots - shots0)
 
 
-def assemble(engine: Continuation, points: list[BranchPoint], special: list[SpecialPoint],
-             end: str, origin: SpecialPoint | None = None, shots: int = 0) -> Branch:  # fmt: skip
+def assemble(
+    engine: Continuation,
+    points: list[BranchPoint],
+    special: list[SpecialPoint],
+    end: str,
+    origin: SpecialPoint | None = None,
+    shots: int = 0,
+) -> Branch:
     """The Branch of a continuation's points."""
     from .orbit import multipliers_of
 

@@ -97,7 +97,7 @@ class BifurcationCurve:
                 }
                 for v, s, mu, p in zip(
                     self.values, self.states, self.multipliers, self.p, strict=True
-                )  # fmt: skip
+                )
             ],
             "seed": self.seed.to_dict() if self.seed else None,
         }
@@ -120,8 +120,16 @@ class CurveContinuation:
     """The curve of ``kind`` points of n-cycles in the plane of parameters ``names`` within
     ``window`` ((lo1, hi1), (lo2, hi2)), the other parameters as in ``par``."""
 
-    def __init__(self, smap: SectionMap, kind: str, n: int, par: np.ndarray, names,
-                 window, settings: CurveSettings | None = None):  # fmt: skip
+    def __init__(
+        self,
+        smap: SectionMap,
+        kind: str,
+        n: int,
+        par: np.ndarray,
+        names,
+        window,
+        settings: CurveSettings | None = None,
+    ):
         if kind not in CURVE_TYPES:
             raise ContinuationError(f"no curve of {kind} points; one of {', '.join(CURVE_TYPES)}")
         if names[0] == names[1]:
@@ -187,8 +195,7 @@ class CurveContinuation:
             t = -t
         return t
 
-    def correct(self, guess: np.ndarray, normal: np.ndarray, anchor: np.ndarray,
-                jac: np.ndarray):  # fmt: skip
+    def correct(self, guess: np.ndarray, normal: np.ndarray, anchor: np.ndarray, jac: np.ndarray):
         """Newton on G(u) = 0, normal·(u − anchor) = 0 from ``guess`` (the Jacobian's
         difference parts kept from ``jac``); (u, shot, iterates) or None."""
         tol = self.smap.precision.newton_tol
@@ -226,8 +233,10 @@ class CurveContinuation:
         jac = self.jacobian(u, shot)
         found = self.correct(u, np.array([0.0, 0.0, 0.0, 1.0]), u, jac)  # λ2 fixed
         if found is None:
-            raise ContinuationError(f"the {sp.type} point at {sp.parameter}={sp.value:.10g} "
-                                    "does not solve its augmented system")  # fmt: skip
+            raise ContinuationError(
+                f"the {sp.type} point at {sp.parameter}={sp.value:.10g} "
+                "does not solve its augmented system"
+            )
         u, shot, _ = found
         return u, shot, self.jacobian(u, shot)
 
@@ -300,9 +309,14 @@ class CurveContinuation:
         return ", ".join(f"{n}={v:.10g}" for n, v in zip(self.names, values, strict=True))
 
 
-def continue_curve(sp: SpecialPoint, second: str, window, *,
-                   section_map: SectionMap | None = None,
-                   settings: CurveSettings | None = None) -> BifurcationCurve:  # fmt: skip
+def continue_curve(
+    sp: SpecialPoint,
+    second: str,
+    window,
+    *,
+    section_map: SectionMap | None = None,
+    settings: CurveSettings | None = None,
+) -> BifurcationCurve:
     """The curve of the special point ``sp``'s type through it, in the plane of its branch's
     parameter and ``second``, both ways from it, inside ``window``.
 
@@ -362,7 +376,7 @@ def continue_curve(sp: SpecialPoint, second: str, window, *,
         states=np.array([u[:2] for u, _ in points]).reshape(-1, 2),
         multipliers=np.array(
             [multipliers_of(s.jacobian) for _, s in points], dtype=complex
-        ).reshape(-1, 2),  # fmt: skip
+        ).reshape(-1, 2),
         p=np.array([s.detachments for _, s in points], dtype=int),
         end=end,
         seed=sp,

@@ -71,8 +71,12 @@ def group_seeds(seeds: list[Seed]) -> list[list[Seed]]:
     return tasks
 
 
-def curve_from_seed(seed: Seed, *, section_map: SectionMap | None = None,
-                    curve_settings: CurveSettings | None = None) -> BifurcationCurve:  # fmt: skip
+def curve_from_seed(
+    seed: Seed,
+    *,
+    section_map: SectionMap | None = None,
+    curve_settings: CurveSettings | None = None,
+) -> BifurcationCurve:
     """The curve of ``seed``'s type through the edge it stands for (ContinuationError when
     no such point lies between the seed cell and its neighbour)."""
     smap = section_map or SectionMap(seed.model)
@@ -83,9 +87,13 @@ def curve_from_seed(seed: Seed, *, section_map: SectionMap | None = None,
     lo, hi = sorted((start, seed.neighbour))
     window = (lo - 2.0 * h, hi + 2.0 * h)
     branch = continue_branch(
-        orbit, seed.axis, window, direction=1.0 if seed.neighbour > start else -1.0,
-        section_map=smap, settings=BranchSettings(step=h / 4, max_step=h / 4, max_points=60),
-    )  # fmt: skip
+        orbit,
+        seed.axis,
+        window,
+        direction=1.0 if seed.neighbour > start else -1.0,
+        section_map=smap,
+        settings=BranchSettings(step=h / 4, max_step=h / 4, max_points=60),
+    )
     found = [sp for sp in branch.special if sp.type == seed.type]
     if not found:
         seen = ", ".join(f"{sp.type} at {sp.value:.6g}" for sp in branch.special) or "none"
@@ -96,12 +104,21 @@ def curve_from_seed(seed: Seed, *, section_map: SectionMap | None = None,
     sp = min(found, key=lambda s: abs(s.value - 0.5 * (start + seed.neighbour)))
     second = seed.plane[1 - seed.plane.index(sp.parameter)]
     windows = {seed.plane[0]: seed.window[0], seed.plane[1]: seed.window[1]}
-    return continue_curve(sp, second, (windows[sp.parameter], windows[second]),
-                          section_map=smap, settings=curve_settings)  # fmt: skip
+    return continue_curve(
+        sp,
+        second,
+        (windows[sp.parameter], windows[second]),
+        section_map=smap,
+        settings=curve_settings,
+    )
 
 
-def curve_from_task(task: list[Seed], *, section_map: SectionMap | None = None,
-                    curve_settings: CurveSettings | None = None) -> BifurcationCurve:  # fmt: skip
+def curve_from_task(
+    task: list[Seed],
+    *,
+    section_map: SectionMap | None = None,
+    curve_settings: CurveSettings | None = None,
+) -> BifurcationCurve:
     """The curve of the first seed of ``task`` that yields one (ContinuationError naming
     each seed's failure when none does)."""
     smap = section_map or SectionMap(task[0].model)

@@ -80,8 +80,9 @@ def multipliers_of(jacobian: np.ndarray) -> tuple[complex, complex]:
     return complex(values[0]), complex(values[1])
 
 
-def find_cycle(n: int, guess, *, section_map: SectionMap | None = None,
-               model: dict | None = None, **parameters) -> PeriodicOrbit:  # fmt: skip
+def find_cycle(
+    n: int, guess, *, section_map: SectionMap | None = None, model: dict | None = None, **parameters
+) -> PeriodicOrbit:
     """The periodic orbit of period n (or a divisor of it) through a state near ``guess``.
 
     Parameters
@@ -126,8 +127,14 @@ def find_cycle(n: int, guess, *, section_map: SectionMap | None = None,
     return orbit_at(smap, shot, par, n, iterations)
 
 
-def newton(smap: SectionMap, x: np.ndarray, par: np.ndarray, n: int, max_iterations: int,
-           damped: bool = False) -> tuple[Shot, int]:  # fmt: skip
+def newton(
+    smap: SectionMap,
+    x: np.ndarray,
+    par: np.ndarray,
+    n: int,
+    max_iterations: int,
+    damped: bool = False,
+) -> tuple[Shot, int]:
     """Newton's method on Pⁿ(x) − x = 0 at fixed parameters; returns the converged shot (at
     the fixed point, with DPⁿ) and the iterations taken."""
     tol = smap.precision.newton_tol
@@ -168,8 +175,9 @@ def section_points(shot: Shot) -> np.ndarray:
     return np.vstack([shot.start[None, :], shot.points[:-1]])
 
 
-def orbit_at(smap: SectionMap, shot: Shot, par: np.ndarray, n: int,
-             iterations: int = 0) -> PeriodicOrbit:  # fmt: skip
+def orbit_at(
+    smap: SectionMap, shot: Shot, par: np.ndarray, n: int, iterations: int = 0
+) -> PeriodicOrbit:
     """The PeriodicOrbit of a converged fixed point of Pⁿ (``shot`` starts on it)."""
     points = section_points(shot)
     d = minimal_period(points)

@@ -73,8 +73,7 @@ class Shot:
         return self.image - self.start
 
 
-def model_settings(tensile="clamp", duty_cycle="separation", cam_velocity="chain",
-                   **laws) -> dict:  # fmt: skip
+def model_settings(tensile="clamp", duty_cycle="separation", cam_velocity="chain", **laws) -> dict:
     """The job model's options as a dict (validated when the SectionMap is built): the
     force law's options and, in ``laws``, the job's ``cam`` and ``contact`` sections."""
     return {"tensile": tensile, "duty_cycle": duty_cycle, "cam_velocity": cam_velocity, **laws}
@@ -85,8 +84,10 @@ def parameter_vector(parameters: dict) -> np.ndarray:
     each checked against its range (JobError)."""
     unknown = sorted(set(parameters) - set(PARAMETER_ORDER))
     if unknown:
-        raise JobError(f"unknown parameter {unknown[0]!r}; the model's parameters: "
-                       f"{', '.join(PARAMETER_ORDER)}")  # fmt: skip
+        raise JobError(
+            f"unknown parameter {unknown[0]!r}; the model's parameters: "
+            f"{', '.join(PARAMETER_ORDER)}"
+        )
     if "omega" not in parameters:
         raise JobError("omega is required")
     values = {**PAPER_VALUES, **parameters}
@@ -101,8 +102,9 @@ def parameter_vector(parameters: dict) -> np.ndarray:
 
 def parameter_index(name: str) -> int:
     if name not in PARAMETER_ORDER:
-        raise JobError(f"{name!r} is not a parameter of the model; one of "
-                       f"{', '.join(PARAMETER_ORDER)}")  # fmt: skip
+        raise JobError(
+            f"{name!r} is not a parameter of the model; one of {', '.join(PARAMETER_ORDER)}"
+        )
     return PARAMETER_ORDER.index(name)
 
 
@@ -135,11 +137,13 @@ class SectionMap:
         pr = self.precision
         data = {
             "name": "continuation",
-            "sweep": {"omega": {"from": 1.0, "to": 1.0, "points": 1},
-                      "f0": {"from": 0.5, "to": 0.5, "points": 1}},
+            "sweep": {
+                "omega": {"from": 1.0, "to": 1.0, "points": 1},
+                "f0": {"from": 0.5, "to": 0.5, "points": 1},
+            },
             "model": self.model,
             "integrator": {"method": pr.method, "rtol": pr.rtol, "atol": pr.atol},
-        }  # fmt: skip
+        }
         return Job.from_dict(data, source="continuation")
 
     def with_precision(self, **changes) -> "SectionMap":
@@ -155,8 +159,9 @@ class SectionMap:
         start = np.array(x, dtype=np.float64)
         status, result, jac, points = self._shooter(par, start, n, jacobian)
         if status != 0:
-            raise ContinuationError(f"integration failed at {describe(par)}: "
-                                    f"{status_message(status)}")  # fmt: skip
+            raise ContinuationError(
+                f"integration failed at {describe(par)}: {status_message(status)}"
+            )
         return Shot(
             start=start,
             image=result[:2].copy(),

@@ -31,8 +31,9 @@ MAX_BRANCHES = 64  # every branch of one cascade, at most
 MAX_PERIOD = 32  # no switching onto cycles longer than this (revolutions)
 
 
-def switch_at_pd(smap: SectionMap, sp: SpecialPoint, window, settings: BranchSettings,
-                 offsets=SWITCH_OFFSETS) -> Branch:  # fmt: skip
+def switch_at_pd(
+    smap: SectionMap, sp: SpecialPoint, window, settings: BranchSettings, offsets=SWITCH_OFFSETS
+) -> Branch:
     """The doubled branch (period 2n) born at the PD point ``sp``, continued in ``window``.
 
     Raises ContinuationError when Newton finds no 2n-cycle near the PD point for any
@@ -61,12 +62,18 @@ def switch_at_pd(smap: SectionMap, sp: SpecialPoint, window, settings: BranchSet
     )
 
 
-def continue_with_switching(orbit: PeriodicOrbit, parameter: str, window, depth: int, *,
-                            direction: float | None = None,
-                            section_map: SectionMap | None = None,
-                            settings: BranchSettings | None = None,
-                            switched: list | None = None,
-                            max_period: int = MAX_PERIOD) -> Branch:  # fmt: skip
+def continue_with_switching(
+    orbit: PeriodicOrbit,
+    parameter: str,
+    window,
+    depth: int,
+    *,
+    direction: float | None = None,
+    section_map: SectionMap | None = None,
+    settings: BranchSettings | None = None,
+    switched: list | None = None,
+    max_period: int = MAX_PERIOD,
+) -> Branch:
     """The branch of ``orbit`` and, ``depth`` doublings deep, the branches born at its PD
     points (each a child of the branch it was switched from: ``Branch.children``).
 
@@ -114,8 +121,9 @@ def continue_with_switching(orbit: PeriodicOrbit, parameter: str, window, depth:
     """
     smap = section_map or SectionMap(orbit.model)
     settings = settings or BranchSettings()
-    root = continue_branch(orbit, parameter, window, direction=direction, section_map=smap,
-                           settings=settings)  # fmt: skip
+    root = continue_branch(
+        orbit, parameter, window, direction=direction, section_map=smap, settings=settings
+    )
     switched = [] if switched is None else switched
     pending = [(root, depth)]
     count = 1
@@ -136,8 +144,14 @@ def continue_with_switching(orbit: PeriodicOrbit, parameter: str, window, depth:
                 continue
             if child.returned and len(child.values):
                 switched.append((sp.n, float(child.values[-1])))  # the bubble's other end
-            log.info("%d-cycles switched at %s=%.8f: %d points, %s", child.n, sp.parameter,
-                     sp.value, len(child.values), child.end)  # fmt: skip
+            log.info(
+                "%d-cycles switched at %s=%.8f: %d points, %s",
+                child.n,
+                sp.parameter,
+                sp.value,
+                len(child.values),
+                child.end,
+            )
             branch.children.append(child)
             count += 1
             pending.append((child, left - 1))

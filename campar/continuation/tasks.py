@@ -31,8 +31,9 @@ def empty_row(points: int) -> dict[str, np.ndarray]:
     return row
 
 
-def task_curves(task: list[Seed], *, section_map: SectionMap,
-                settings: CurveSettings) -> list[BifurcationCurve]:  # fmt: skip
+def task_curves(
+    task: list[Seed], *, section_map: SectionMap, settings: CurveSettings
+) -> list[BifurcationCurve]:
     """The curves of a task's seeds, at most CURVES_PER_TASK (ContinuationError, naming
     each seed's failure, where none of them yields one)."""
     curves, failures = [], []
@@ -43,8 +44,7 @@ def task_curves(task: list[Seed], *, section_map: SectionMap,
         if any(near(seed, curve, plane, spacing) for curve in curves):
             continue
         try:
-            curves.append(curve_from_seed(seed, section_map=section_map,
-                                          curve_settings=settings))  # fmt: skip
+            curves.append(curve_from_seed(seed, section_map=section_map, curve_settings=settings))
         except ContinuationError as exc:
             failures.append(f"cell {seed.cell}: {exc}")
     if not curves:
@@ -60,12 +60,12 @@ def near(seed: Seed, curve: BifurcationCurve, plane, spacing) -> bool:
     i = plane.index(seed.axis)
     centre = np.array([seed.parameters[plane[0]], seed.parameters[plane[1]]], dtype=float)
     centre[i] = 0.5 * (centre[i] + seed.neighbour)
-    return bool(distances_to(centre[None, :] / spacing, in_plane(curve, plane) / spacing)[0]
-                <= 1.5)  # fmt: skip
+    return bool(distances_to(centre[None, :] / spacing, in_plane(curve, plane) / spacing)[0] <= 1.5)
 
 
-def curve_rows(tasks: list[list[Seed]], points: int,
-               section_map: SectionMap | None = None) -> dict[str, np.ndarray]:  # fmt: skip
+def curve_rows(
+    tasks: list[list[Seed]], points: int, section_map: SectionMap | None = None
+) -> dict[str, np.ndarray]:
     """The arrays (len(tasks), CURVES_PER_TASK × points, …) of these tasks' curves."""
     rows = [empty_row(points) for _ in tasks]
     smap = section_map
@@ -99,16 +99,18 @@ def curves_of_rows(arrays: dict, plane: tuple[str, str]) -> list[dict]:
         for k in sorted(set(index[t][index[t] >= 0].tolist())):
             at = index[t] == k
             mult = np.asarray(arrays["curve_multipliers"])[t, at]
-            found.append({
-                "type": CURVE_TYPES[int(np.asarray(arrays["curve_type"])[t, at][0])],
-                "n": int(np.asarray(arrays["curve_n"])[t, at][0]),
-                "p": np.asarray(arrays["curve_p"])[t, at],
-                "values": np.asarray(arrays["curve_values"])[t, at],
-                "states": np.asarray(arrays["curve_state"])[t, at],
-                "multipliers": mult[..., 0] + 1j * mult[..., 1],
-                "plane": plane,
-                "task": t,
-            })  # fmt: skip
+            found.append(
+                {
+                    "type": CURVE_TYPES[int(np.asarray(arrays["curve_type"])[t, at][0])],
+                    "n": int(np.asarray(arrays["curve_n"])[t, at][0]),
+                    "p": np.asarray(arrays["curve_p"])[t, at],
+                    "values": np.asarray(arrays["curve_values"])[t, at],
+                    "states": np.asarray(arrays["curve_state"])[t, at],
+                    "multipliers": mult[..., 0] + 1j * mult[..., 1],
+                    "plane": plane,
+                    "task": t,
+                }
+            )
     return found
 
 

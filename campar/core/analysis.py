@@ -122,8 +122,9 @@ def newton_fixed_point(x_now0, x_now1, x_then0, x_then1, m):
 
 
 @hot
-def assess_revolution(xs, jac, est, k, base, n_max, conv_tol, window_tol, jump_residual,
-                      jump_cap, agree):  # fmt: skip
+def assess_revolution(
+    xs, jac, est, k, base, n_max, conv_tol, window_tol, jump_residual, jump_cap, agree
+):
     """Decide, after revolution k, whether the motion has converged to a cycle.
 
     Only revolutions after ``base`` (the last restart) are used. Returns

@@ -108,8 +108,9 @@ def tabulated_cam(knots, coef, bounds) -> TabulatedCam:
         first = int(np.searchsorted(knots, bounds[p], side="right")) - 1
         final = int(np.searchsorted(knots, bounds[p + 1], side="left")) - 1
         span[p] = min(max(first, 0), last), min(max(final, first, 0), last)
-    return TabulatedCam(knots, np.ascontiguousarray(coef, dtype=np.float64), span,
-                        tuple(float(b) for b in bounds))  # fmt: skip
+    return TabulatedCam(
+        knots, np.ascontiguousarray(coef, dtype=np.float64), span, tuple(float(b) for b in bounds)
+    )
 
 
 def segment(name: str, start: float, width: float):
@@ -133,8 +134,9 @@ def phased_cam(rise: str = "cosine", fall: str = "cosine", angles=PAPER_ANGLES) 
     """The cam of a rise law and a fall law over the four phase angles."""
     bounds = phase_bounds(angles)
     # widths from the angles themselves: bounds[3] − bounds[2] is Φ3 only up to rounding
-    return PhasedCam(segment(rise, 0.0, float(angles[0])),
-                     segment(fall, bounds[2], float(angles[2])), bounds)  # fmt: skip
+    return PhasedCam(
+        segment(rise, 0.0, float(angles[0])), segment(fall, bounds[2], float(angles[2])), bounds
+    )
 
 
 PAPER_CAM = phased_cam()
@@ -185,8 +187,11 @@ def cycloidal(u):
 @register_jitable
 def polynomial_345(u):
     v = 1.0 - u
-    return u * u * u * (10.0 - 15.0 * u + 6.0 * u * u), 30.0 * u * u * v * v, \
-        60.0 * u * v * (1.0 - 2.0 * u)  # fmt: skip
+    return (
+        u * u * u * (10.0 - 15.0 * u + 6.0 * u * u),
+        30.0 * u * u * v * v,
+        60.0 * u * v * (1.0 - 2.0 * u),
+    )
 
 
 def _mirrored(half):
@@ -221,8 +226,11 @@ def _trapezoid_half(u):
     v2 = v1 + 0.25 * a
     s2 = s1 + 0.25 * v1 + a / 32.0
     d = u - 0.375
-    return (s2 + v2 * d + a / (w * w) * (1.0 - math.cos(w * d)), v2 + a / w * math.sin(w * d),
-            a * math.cos(w * d))  # fmt: skip
+    return (
+        s2 + v2 * d + a / (w * w) * (1.0 - math.cos(w * d)),
+        v2 + a / w * math.sin(w * d),
+        a * math.cos(w * d),
+    )
 
 
 @register_jitable
@@ -232,8 +240,11 @@ def _sine_half(u):
         return _sine_ramp(u, a)
     s1, v1, _ = _sine_ramp(0.125, a)
     d = u - 0.125
-    return (s1 + v1 * d + a / (w3 * w3) * (1.0 - math.cos(w3 * d)), v1 + a / w3 * math.sin(w3 * d),
-            a * math.cos(w3 * d))  # fmt: skip
+    return (
+        s1 + v1 * d + a / (w3 * w3) * (1.0 - math.cos(w3 * d)),
+        v1 + a / w3 * math.sin(w3 * d),
+        a * math.cos(w3 * d),
+    )
 
 
 def _cosine_rise(law, theta):

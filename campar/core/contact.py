@@ -69,8 +69,13 @@ def hysteresis_factor(law: str, restitution: float) -> float:
     return 8.0 * (1.0 - e) / (5.0 * e)
 
 
-def contact_law(law: str = "hunt-crossley", n: float = HERTZ_EXPONENT, restitution: float = 0.8,
-                floor: float = IMPACT_FLOOR, general: bool = False):  # fmt: skip
+def contact_law(
+    law: str = "hunt-crossley",
+    n: float = HERTZ_EXPONENT,
+    restitution: float = 0.8,
+    floor: float = IMPACT_FLOOR,
+    general: bool = False,
+):
     """The kernel's contact law; ``general``: Hunt–Crossley by pow even at n = 1.5 (so a map
     that sweeps n compiles one law for every row). ValueError for values out of range."""
     if law not in CONTACT_LAWS:

@@ -537,9 +537,16 @@ def advance(rhs, events, t, t_end, y, f, p, mode, opt, w):
         t_new = t_end if h == remaining else t + h
         events(t_new, w.y_new, w.K[end], p, mode, w.g1, w.dg1)
         step = TrialStep(
-            method=opt.method, t=t, y=y, h=h, p=p, mode=mode, w=w, n_err=opt.n_err,
+            method=opt.method,
+            t=t,
+            y=y,
+            h=h,
+            p=p,
+            mode=mode,
+            w=w,
+            n_err=opt.n_err,
             theta_tol=opt.event_tol / h,
-        )  # fmt: skip
+        )
         which, theta = first_crossing(rhs, events, step, m)
         if which >= 0 and theta < 1.0:
             if theta * h <= opt.event_tol:

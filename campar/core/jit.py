@@ -54,13 +54,19 @@ class CompiledCallersOnly(CPUDispatcher):
         return super().compile(sig)
 
     def __call__(self, *args, **kwargs):
-        raise TypeError(f"{self.py_func.__qualname__} is compiled for compiled callers only "
-                        "(campar.core.jit.hot): call it through through_numba")  # fmt: skip
+        raise TypeError(
+            f"{self.py_func.__qualname__} is compiled for compiled callers only "
+            "(campar.core.jit.hot): call it through through_numba"
+        )
 
 
 def hot(function):
-    options = {"nopython": True, "_nrt": False, "no_cpython_wrapper": True,
-               "no_cfunc_wrapper": True}  # fmt: skip
+    options = {
+        "nopython": True,
+        "_nrt": False,
+        "no_cpython_wrapper": True,
+        "no_cfunc_wrapper": True,
+    }
     dispatcher = CompiledCallersOnly(py_func=function, locals={}, targetoptions=options)
     dispatcher.enable_caching()
     return dispatcher

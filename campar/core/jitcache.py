@@ -19,9 +19,22 @@ from . import numba_internals
 
 PACKAGE = Path(__file__).resolve().parent
 COMPILED_MODULES = (
-    "jit", "codes", "hermite", "dop853", "entry_steps", "cam", "contact", "model",
-    "integrator", "analysis", "revolution", "revolution_call", "kernel", "tracer", "shooting",
-)  # fmt: skip
+    "jit",
+    "codes",
+    "hermite",
+    "dop853",
+    "entry_steps",
+    "cam",
+    "contact",
+    "model",
+    "integrator",
+    "analysis",
+    "revolution",
+    "revolution_call",
+    "kernel",
+    "tracer",
+    "shooting",
+)
 STAMP = "campar-core.digest"
 
 

@@ -189,8 +189,9 @@ def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
     x[0] = cw.xs[k, 0]
     x[1] = cw.xs[k, 1]
     limit = w.counts[0] + w.counts[1] + (step_budget - spend(cw))
-    status = call_revolution(cw.revolution, x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit,
-                             None)  # fmt: skip
+    status = call_revolution(
+        cw.revolution, x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit, None
+    )
     if status != OK:
         return status
     if not (math.isfinite(x[0]) and math.isfinite(x[1])):
@@ -250,9 +251,18 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
             return status, k, 0, base, jumps, escapes
         k += 1
         period, jump_n, z0, z1 = assess_revolution(
-            cw.xs, cw.jac, cw.est, k, base, cs.n_max, cs.conv_tol, cs.window_tol,
-            cs.jump_residual, cs.jump_cap, cs.jump_agree,
-        )  # fmt: skip
+            cw.xs,
+            cw.jac,
+            cw.est,
+            k,
+            base,
+            cs.n_max,
+            cs.conv_tol,
+            cs.window_tol,
+            cs.jump_residual,
+            cs.jump_cap,
+            cs.jump_agree,
+        )
         if period > 0:
             return OK, k, period, base, jumps, escapes
         if k - base >= cs.window_revolutions and nonperiodic_verdict(cw, k, cs):
@@ -265,8 +275,9 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
             base = k
             jumps += 1
             continue
-        esc_n, z0, z1, v0, v1 = unstable_cycle_nearby(cw.xs, cw.jac, k, base, cs.n_max,
-                                                      cs.jump_residual)  # fmt: skip
+        esc_n, z0, z1, v0, v1 = unstable_cycle_nearby(
+            cw.xs, cw.jac, k, base, cs.n_max, cs.jump_residual
+        )
         if esc_n > 0:
             side = (cw.xs[k, 0] - z0) * v0 + (cw.xs[k, 1] - z1) * v1
             sign = 1.0 if side >= 0.0 else -1.0
@@ -370,8 +381,9 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     cw.u[1] = 0.0
     flags = 0
     if cs.transient == CONVERGED:
-        status, k, n, base, jumps, escapes = transient_converged(cw, p, opt, cs, want_stats,
-                                                                 step_budget)  # fmt: skip
+        status, k, n, base, jumps, escapes = transient_converged(
+            cw, p, opt, cs, want_stats, step_budget
+        )
         if jumps > escapes:
             flags |= FLAG_NEWTON
         if escapes > 0:
@@ -392,8 +404,15 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     if n == 0 and cs.transient == CONVERGED:
         # the budget ended on a slow stable cycle (analysis.slow_cycle_period): it is the
         # motion, which the window would read as a torus (its exponent is near 0)
-        n = slow_cycle_period(cw.xs, cw.jac, k, max(base, k - cs.window_revolutions),
-                              cs.n_max, SLOW_SETTLED, SLOW_MARGIN)  # fmt: skip
+        n = slow_cycle_period(
+            cw.xs,
+            cw.jac,
+            k,
+            max(base, k - cs.window_revolutions),
+            cs.n_max,
+            SLOW_SETTLED,
+            SLOW_MARGIN,
+        )
     if n > 0:
         m = distinct_period(cw.xs, k, n, cs.period_tol)
         if cs.transient == CONVERGED:  # (the paper's recipe keeps its plain repeat test)
@@ -480,8 +499,19 @@ def compile_chain(signature, solver, cs, law) -> None:
 def chain_signature(law, x_init, solver, cs, out) -> tuple:
     """chain_compiled's argument types for a chain with these settings."""
     none = np.empty(0)
-    args = (none, none, none, none, none, kernel_law(law), x_init, solver, cs, out,
-            make_chain_work(cs))  # fmt: skip
+    args = (
+        none,
+        none,
+        none,
+        none,
+        none,
+        kernel_law(law),
+        x_init,
+        solver,
+        cs,
+        out,
+        make_chain_work(cs),
+    )
     return tuple(typeof(a) for a in args)
 
 
@@ -491,8 +521,10 @@ def chain_loaded(solver, law) -> bool:
     differ between jobs (the method tag, integrator.method_tag; the laws, model.Law);
     every other one is fixed."""
     solver_type, law_type = typeof(solver), typeof(kernel_law(law))
-    return any(signature[7] == solver_type and signature[5] == law_type
-               for signature in chain_compiled.signatures)  # fmt: skip
+    return any(
+        signature[7] == solver_type and signature[5] == law_type
+        for signature in chain_compiled.signatures
+    )
 
 
 # Reference counting off, as in campar.core.jit.hot: the inlined cell layer reads arrays

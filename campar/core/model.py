@@ -69,8 +69,9 @@ DUTY_CYCLE_CHOICES = ("separation", "force")
 CAM_VELOCITY_CHOICES = ("chain", "literal")
 
 
-def law_flags(tensile: str = "clamp", duty_cycle: str = "separation",
-              cam_velocity: str = "chain") -> int:  # fmt: skip
+def law_flags(
+    tensile: str = "clamp", duty_cycle: str = "separation", cam_velocity: str = "chain"
+) -> int:
     """The LAW_* bits of the job's model settings (ValueError for an unknown value)."""
     bits = 0
     for value, choices, bit in (
@@ -135,8 +136,18 @@ def make_params(omega, zeta, f0, mu_kn, mu_cn, law):
     k = mu_kn / (1.0 - mu_kn)
     c = 2.0 * zeta * mu_cn / (1.0 - mu_cn)
     vcam = 1.0 if bits & LAW_CAM_LITERAL else omega
-    return ModelParams(omega, zeta, f0, k, c, (bits & LAW_CLAMP) != 0, vcam,
-                       (bits & LAW_DC_FORCE) != 0, the_cam, the_contact)  # fmt: skip
+    return ModelParams(
+        omega,
+        zeta,
+        f0,
+        k,
+        c,
+        (bits & LAW_CLAMP) != 0,
+        vcam,
+        (bits & LAW_DC_FORCE) != 0,
+        the_cam,
+        the_contact,
+    )
 
 
 def law_parts(law):
@@ -155,8 +166,9 @@ def _law_parts(law):
         n = HERTZ.n
 
         def paper(law):
-            the_cam = PhasedCam(Cosine(r0, r1, r2, r3), Cosine(f0_, f1, f2, f3),
-                                (b0, b1, b2, b3, b4))  # fmt: skip
+            the_cam = PhasedCam(
+                Cosine(r0, r1, r2, r3), Cosine(f0_, f1, f2, f3), (b0, b1, b2, b3, b4)
+            )
             return int(law), the_cam, HuntCrossleyHertz(n)
 
         return paper

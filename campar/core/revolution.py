@@ -157,8 +157,9 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                 if want_stats:
                     e1, de1, dde1, pn1, dpn1 = contact_kinematics(t, x, f, p, mode)
                     dc_time = released(contact, p)
-                    add_step_stats(row, t - t_prev, dc_time, e0, de0, dde0, e1, de1, dde1,
-                                   pn0, dpn0, pn1, dpn1)  # fmt: skip
+                    add_step_stats(
+                        row, t - t_prev, dc_time, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1
+                    )
                     e0, de0, dde0, pn0, dpn0 = e1, de1, dde1, pn1, dpn1
                     fresh = True
             elif which >= 0:

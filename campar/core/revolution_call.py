@@ -49,8 +49,18 @@ def revolution_args(solver, cs, work, recorder=types.none, law=PAPER_LAW) -> tup
     rk4_steps = typeof(cs)[cs._fields.index("rk4_steps")]
     params = _return_type(make_params, (types.float64,) * 5 + (typeof(kernel_law(law)),))
     options = _return_type(scale_solver_options, (typeof(solver), types.float64, rk4_steps))
-    return (VECTOR, VECTOR, params, options, typeof(work), MODE, VECTOR, types.boolean,
-            types.int64, recorder)  # fmt: skip
+    return (
+        VECTOR,
+        VECTOR,
+        params,
+        options,
+        typeof(work),
+        MODE,
+        VECTOR,
+        types.boolean,
+        types.int64,
+        recorder,
+    )
 
 
 def _return_type(dispatcher, args: tuple) -> types.Type:
@@ -89,8 +99,9 @@ def call_revolution(typingctx, link, x, f, p, opt, w, mode, row, want_stats, ste
     """run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec) through
     ``link`` (revolution_link): its status. Literal arguments are passed as their plain
     types, the ones revolution_args names."""
-    args = tuple(types.unliteral(a) for a in (x, f, p, opt, w, mode, row, want_stats,
-                                              step_limit, rec))  # fmt: skip
+    args = tuple(
+        types.unliteral(a) for a in (x, f, p, opt, w, mode, row, want_stats, step_limit, rec)
+    )
     expected = fingerprint(args)
 
     def codegen(context, builder, signature, llargs):
@@ -99,14 +110,19 @@ def call_revolution(typingctx, link, x, f, p, opt, w, mode, row, want_stats, ste
         linked = builder.load(cgutils.gep(builder, link_array.data, 1))
         mismatch = builder.icmp_unsigned("!=", linked, linked.type(expected))
         with cgutils.if_unlikely(builder, mismatch):
-            context.call_conv.return_user_exc(builder, RuntimeError, (
-                "run_revolution is called with other argument types than it was linked for "
-                "(campar.core.revolution_call.revolution_args has drifted from the call)",
-            ))  # fmt: skip
+            context.call_conv.return_user_exc(
+                builder,
+                RuntimeError,
+                (
+                    "run_revolution is called with other argument types than it was linked for "
+                    "(campar.core.revolution_call.revolution_args has drifted from the call)",
+                ),
+            )
         function_type = context.call_conv.get_function_type(types.int64, args)
         callee = builder.inttoptr(address, function_type.as_pointer())
-        status, result = context.call_conv.call_function(builder, callee, types.int64, args,
-                                                         list(llargs[1:]))  # fmt: skip
+        status, result = context.call_conv.call_function(
+            builder, callee, types.int64, args, list(llargs[1:])
+        )
         with cgutils.if_unlikely(builder, status.is_error):
             context.call_conv.return_status_propagate(builder, status)
         return result

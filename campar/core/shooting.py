@@ -99,10 +99,22 @@ class Shooter:
         x[1] = x0[1]
         start_chain(self.law)  # every shot from the same memory of impacts
         status = shoot_compiled(
-            np.asarray(par, dtype=np.float64), self.law, np.int64(n), self.solver,
-            self.rk4_steps, self.max_steps, self.link, x, self.f, self.work, self.mode,
-            self.row, result, jac, points,
-        )  # fmt: skip
+            np.asarray(par, dtype=np.float64),
+            self.law,
+            np.int64(n),
+            self.solver,
+            self.rk4_steps,
+            self.max_steps,
+            self.link,
+            x,
+            self.f,
+            self.work,
+            self.mode,
+            self.row,
+            result,
+            jac,
+            points,
+        )
         self.shots += 1
         return int(status), result, jac.reshape(2, 2), points
 
@@ -110,16 +122,30 @@ class Shooter:
 def compile_shooter(law, solver, cs) -> None:
     """Compile (or load) the shooting entry for these options, and link its revolution."""
     shooter = Shooter(law, solver, cs)
-    args = (np.zeros(5), shooter.law, np.int64(1), solver, shooter.rk4_steps,
-            shooter.max_steps, shooter.link, shooter.x, shooter.f, shooter.work,
-            shooter.mode, shooter.row, np.zeros(N_SHOT), np.zeros(4),
-            np.zeros((1, 2)))  # fmt: skip
+    args = (
+        np.zeros(5),
+        shooter.law,
+        np.int64(1),
+        solver,
+        shooter.rk4_steps,
+        shooter.max_steps,
+        shooter.link,
+        shooter.x,
+        shooter.f,
+        shooter.work,
+        shooter.mode,
+        shooter.row,
+        np.zeros(N_SHOT),
+        np.zeros(4),
+        np.zeros((1, 2)),
+    )
     shoot_compiled.compile(tuple(typeof(a) for a in args))
 
 
 @njit(cache=True, _nrt=False)
-def shoot_compiled(par, law, n, solver, rk4_steps, max_steps, link, x, f, w, mode, row,
-                   result, jac, points):  # fmt: skip
+def shoot_compiled(
+    par, law, n, solver, rk4_steps, max_steps, link, x, f, w, mode, row, result, jac, points
+):
     """Shooter.__call__'s compiled body: integrates in place on x (2 or 6 components; with
     6 the variational part gives DPⁿ into jac, row-major); the state after revolution k
     into points[k − 1] while there are rows."""
@@ -128,16 +154,24 @@ def shoot_compiled(par, law, n, solver, rk4_steps, max_steps, link, x, f, w, mod
     # every component error-controlled, Φ too: in a long free flight (y, y') alone allow
     # steps that lose Φ's accuracy (tests/test_kernel.py, the free-flight multipliers)
     scaled = scale_solver_options(solver, omega, rk4_steps)
-    opt = SolverOptions(scaled.method, scaled.rtol, scaled.atol, scaled.h_fixed, scaled.h_min,
-                        scaled.event_tol, x.shape[0])  # fmt: skip
+    opt = SolverOptions(
+        scaled.method,
+        scaled.rtol,
+        scaled.atol,
+        scaled.h_fixed,
+        scaled.h_min,
+        scaled.event_tol,
+        x.shape[0],
+    )
     mode[0] = RISE
     eps, deps = gap(0.0, x, p, mode[0])  # not RISE: numba would compile a variant for the literal
     mode[1] = contact_mode(eps, deps, p)
     model.rhs(0.0, x, p, mode, f)
     # a shot is a function of (x, parameters, n) alone: no step size, error history or
     # remembered entry step of an earlier shot (difference quotients of Pⁿ stay smooth)
-    restart_control(w, initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol,
-                                    2, 0.1))  # fmt: skip
+    restart_control(
+        w, initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol, 2, 0.1)
+    )
     forget(w.h_memory)
     variational = x.shape[0] == N_STATE_VARIATIONAL
     m0, m1, m2, m3 = 1.0, 0.0, 0.0, 1.0

@@ -44,11 +44,23 @@ def trace_orbit(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions,
 def trace_arguments(omega, zeta, f0, mu_kn, mu_cn, law, x0, solver, cs, revolutions, rec):
     """trace_compiled's arguments but its last, the revolution's link (tracer_link):
     trace_orbit's, then the buffers."""
-    buffers = (make_work(N_STATE, MAX_EVENTS, 0.0), np.zeros(N_STATE),
-               np.zeros(2, dtype=np.int64), np.zeros(N_REV_STATS))  # fmt: skip
+    buffers = (
+        make_work(N_STATE, MAX_EVENTS, 0.0),
+        np.zeros(N_STATE),
+        np.zeros(2, dtype=np.int64),
+        np.zeros(N_REV_STATS),
+    )
     parameters = (float(omega), float(zeta), float(f0), float(mu_kn), float(mu_cn))
-    return (*parameters, kernel_law(law), np.array(x0, dtype=np.float64), solver, cs,
-            np.int64(revolutions), rec, *buffers)  # fmt: skip
+    return (
+        *parameters,
+        kernel_law(law),
+        np.array(x0, dtype=np.float64),
+        solver,
+        cs,
+        np.int64(revolutions),
+        rec,
+        *buffers,
+    )
 
 
 def tracer_link(solver, cs, rec, law=PAPER_LAW) -> np.ndarray:
@@ -67,8 +79,9 @@ def compile_tracer(law, solver, cs) -> None:
 
 
 @njit(cache=True, _nrt=False)
-def trace_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x, solver, cs, revolutions, rec, w, f,
-                   mode, row, link):  # fmt: skip
+def trace_compiled(
+    omega, zeta, f0, mu_kn, mu_cn, law, x, solver, cs, revolutions, rec, w, f, mode, row, link
+):
     """trace_orbit's compiled body: integrates in place on x with the buffers w, f, mode, row;
     ``link``: revolution_link's for a recorder of rec's type."""
     p = make_params(omega, zeta, f0, mu_kn, mu_cn, law)

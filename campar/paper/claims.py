@@ -133,8 +133,9 @@ class Evidence:
             points = continuation_points(omega, PAPER_START)
             line = self.line((PAPER_START, omega), points, sections=1, mu_kn=mu_kn)
             y, v = (float(x) for x in line.state[-1])
-            result = self.point(omega, y0=y, v0=v, multipliers=True, lyapunov=True,
-                                trace=True, mu_kn=mu_kn)  # fmt: skip
+            result = self.point(
+                omega, y0=y, v0=v, multipliers=True, lyapunov=True, trace=True, mu_kn=mu_kn
+            )
             return Continued(result, line)
 
         return self._keep(("continued", omega, mu_kn), compute)
@@ -153,9 +154,19 @@ class Evidence:
         """LONG_RUN revolutions from ``state`` as a fixed transient, then the read window:
         the verdict a quasi-periodic or chaotic label must survive."""
         key = ("long", omega, tuple(state), *sorted(params.items()))
-        return self._keep(key, lambda: self.point(
-            omega, y0=float(state[0]), v0=float(state[1]), transient="fixed",
-            revolutions=LONG_RUN, multipliers=True, lyapunov=True, **params))  # fmt: skip
+        return self._keep(
+            key,
+            lambda: self.point(
+                omega,
+                y0=float(state[0]),
+                v0=float(state[1]),
+                transient="fixed",
+                revolutions=LONG_RUN,
+                multipliers=True,
+                lyapunov=True,
+                **params,
+            ),
+        )
 
     def fine_line(self, mu_kn: float):
         """The line at μkn from ω = 6.0 down to 2.0 in steps of 0.001 (context for P rows)."""
@@ -166,8 +177,7 @@ class Evidence:
         """The paper's path (``setups.plane_path_job``: the plane's 2-D continuation from its
         corner, ``chains: {start: continue}``) down to ω = ``low`` at ``second``: the cells
         of its last row, on the plane's full grid spacing."""
-        return self._keep(("path", second, low, plane),
-                          lambda: self._path_row(second, low, plane))  # fmt: skip
+        return self._keep(("path", second, low, plane), lambda: self._path_row(second, low, plane))
 
     def _path_row(self, second, low, plane) -> "PathRow":
         from ..core.codes import Kind, cell_label
@@ -178,8 +188,9 @@ class Evidence:
         rows = job.shape[0]
         cells = {k: v[0] for k, v in run_tile(job, Tile(0, rows - 1, rows)).items()}
         codes = zip(cells["kind"], cells["n"], cells["p"], strict=True)
-        labels = [cell_label(Kind(int(k)), int(n), int(p), job.classify.chatter_p)
-                  for k, n, p in codes]  # fmt: skip
+        labels = [
+            cell_label(Kind(int(k)), int(n), int(p), job.classify.chatter_p) for k, n, p in codes
+        ]
         return PathRow(job.omega, labels, cells["state"], job)
 
 
@@ -342,8 +353,11 @@ def never_fully_detached(ev: Evidence) -> Verdict:
     low = min(worst)
     text = f"smallest per-revolution max ε = {fmt(low)}"
     if one_cycles:
-        return Verdict(text + "; every orbit is a 1-cycle in contact, so the test cannot fail "
-                       "(trivial at these settings)", None)  # fmt: skip
+        return Verdict(
+            text + "; every orbit is a 1-cycle in contact, so the test cannot fail "
+            "(trivial at these settings)",
+            None,
+        )
     return Verdict(text, bool(low > 0))
 
 
@@ -374,8 +388,9 @@ def detachment_phases(ev: Evidence) -> Verdict:
     for omega in setups.SPEEDS:
         r = ev.steady(omega, f0=setups.FIG9_F0)
         angles = cam_angle(r.trace, r.trace.events_named("detachment")[:, 0])
-        ok += [any(lo <= a <= hi for lo, hi in (FAR_DWELL_START, FALL_TO_NEAR_DWELL))
-               for a in angles]  # fmt: skip
+        ok += [
+            any(lo <= a <= hi for lo, hi in (FAR_DWELL_START, FALL_TO_NEAR_DWELL)) for a in angles
+        ]
         parts.append(f"ω={omega:g}: " + ", ".join(f"{a:.0f}°" for a in angles))
     return Verdict("θ at detachment " + "; ".join(parts), all(ok) if ok else None)
 

@@ -26,9 +26,11 @@ NS_WINDOW = (3.1, 3.3)  # where the paper places its Hopf point (ω = 3.208583)
 
 
 def structure_command(ev: Evidence, law: str) -> str:
-    return (f"campar continue --omega 6:2 --mu-kn {setups.FIG6_MU_KN:g} --switch "
-            f"{SWITCH_DEPTH} -o branches.png --line {STRUCTURE_POINTS}{law} (the branch of "
-            "the attractor at ω = 6; --omega 4.4:2 and 4.4:6 for the 1-1 branch)")  # fmt: skip
+    return (
+        f"campar continue --omega 6:2 --mu-kn {setups.FIG6_MU_KN:g} --switch "
+        f"{SWITCH_DEPTH} -o branches.png --line {STRUCTURE_POINTS}{law} (the branch of "
+        "the attractor at ω = 6; --omega 4.4:2 and 4.4:6 for the 1-1 branch)"
+    )
 
 
 def structure(ev: Evidence):
@@ -38,9 +40,15 @@ def structure(ev: Evidence):
         from ..views.continuation import line_structure
 
         model = {"tensile": ev.tensile, **ev.options}
-        return line_structure(STRUCTURE_WINDOW, STRUCTURE_POINTS, {"mu_kn": setups.FIG6_MU_KN},
-                              switch=SWITCH_DEPTH, census=CENSUS_STARTS,
-                              max_period=MAX_PERIOD, model=model)  # fmt: skip
+        return line_structure(
+            STRUCTURE_WINDOW,
+            STRUCTURE_POINTS,
+            {"mu_kn": setups.FIG6_MU_KN},
+            switch=SWITCH_DEPTH,
+            census=CENSUS_STARTS,
+            max_period=MAX_PERIOD,
+            model=model,
+        )
 
     return ev._keep(("structure", setups.FIG6_MU_KN), compute)
 
@@ -56,15 +64,20 @@ def ns_claim(ev: Evidence) -> Verdict:
             inside = (branch.values >= lo) & (branch.values <= hi)
             if inside.any():
                 dets.append(np.abs(branch.multipliers[inside].prod(axis=1)).max())
-                labels.update(f"{lab}{'' if st else ' (unstable)'}" for lab, st in
-                              zip(np.array(branch.labels)[inside], branch.stable[inside],
-                                  strict=True))  # fmt: skip
+                labels.update(
+                    f"{lab}{'' if st else ' (unstable)'}"
+                    for lab, st in zip(
+                        np.array(branch.labels)[inside], branch.stable[inside], strict=True
+                    )
+                )
     if ns:
         return Verdict(f"NS at ω = {', '.join(fmt(sp.value, 6) for sp in ns)}", True)
     det = max(dets) if dets else float("nan")
-    text = (f"no NS point on the {len(dets)} branches crossing ω ∈ [{lo:g}, {hi:g}] "
-            f"({', '.join(sorted(labels))}): det DPⁿ ≤ {fmt(det, 4)} < 1 there (Liouville: "
-            "no complex pair reaches the unit circle)")  # fmt: skip
+    text = (
+        f"no NS point on the {len(dets)} branches crossing ω ∈ [{lo:g}, {hi:g}] "
+        f"({', '.join(sorted(labels))}): det DPⁿ ≤ {fmt(det, 4)} < 1 there (Liouville: "
+        "no complex pair reaches the unit circle)"
+    )
     return Verdict(text, False)
 
 
@@ -85,9 +98,12 @@ def cascade_claim(ev: Evidence) -> Verdict:
                 depth = max(depth, len(chain) - 1)
     listed = "; ".join(f"{n}-cycles at ω = {value:.6f}" for n, value in pds) or "none"
     bubbles = [b for root in found.branches for b in root.walk() if b.returned]
-    text = (f"PD points: {listed}; doublings in a row from the 1-cycles: {depth}"
-            + (f"; {len(bubbles)} doubled branch(es) return onto the cycles they left "
-               "(period-doubling bubbles)" if bubbles else ""))  # fmt: skip
+    text = f"PD points: {listed}; doublings in a row from the 1-cycles: {depth}" + (
+        f"; {len(bubbles)} doubled branch(es) return onto the cycles they left "
+        "(period-doubling bubbles)"
+        if bubbles
+        else ""
+    )
     return Verdict(text, depth >= 2)
 
 
@@ -155,16 +171,23 @@ def tongue_claim(ev: Evidence) -> Verdict:
             pd = sum(v for k, v in shares.items() if k.startswith("PD"))
             g = sum(v for k, v in shares.items() if k.startswith("G"))
             holds.append(pd + g >= BOUNDED_SHARE and pd > 0 and g > 0)
-            top = ", ".join(f"{k} {100 * v:.0f} %" for k, v in
-                            sorted(shares.items(), key=lambda kv: -kv[1])[:4])  # fmt: skip
+            top = ", ".join(
+                f"{k} {100 * v:.0f} %" for k, v in sorted(shares.items(), key=lambda kv: -kv[1])[:4]
+            )
             parts.append(f"{label} on (ω, {plane}): {top}")
     if not parts:
         return Verdict("no 2-2 or 2-1 cells on the planes", None)
-    return Verdict("; ".join(parts) + " (of each tongue's boundary: within a cell of a "
-                   "continued curve of that type and period)", all(holds))  # fmt: skip
+    return Verdict(
+        "; ".join(parts) + " (of each tongue's boundary: within a cell of a "
+        "continued curve of that type and period)",
+        all(holds),
+    )
 
 
 def tongue_command(ev: Evidence, law: str) -> str:
-    return ("campar run jobs/mu_kn.yaml and jobs/mu_cn.yaml" + (" (allow: model.tensile: "
-            "allow in a copy)" if law else "") + ", then campar curves results/mu_kn.zarr "
-            "and results/mu_cn.zarr; campar plot results/mu_kn.zarr --curves")  # fmt: skip
+    return (
+        "campar run jobs/mu_kn.yaml and jobs/mu_cn.yaml"
+        + (" (allow: model.tensile: allow in a copy)" if law else "")
+        + ", then campar curves results/mu_kn.zarr "
+        "and results/mu_cn.zarr; campar plot results/mu_kn.zarr --curves"
+    )

@@ -90,8 +90,9 @@ class Gallery:
     def name(self, stem: str) -> str:
         return stem if self.tensile == setups.LAW else f"{stem}-{self.tensile}"
 
-    def save(self, figure, stem: str, caption: str, recipe: dict, *, start: str,
-             direction: str) -> Path:  # fmt: skip
+    def save(
+        self, figure, stem: str, caption: str, recipe: dict, *, start: str, direction: str
+    ) -> Path:
         """Write the PNG (its title stating force law, start and direction) and its .yaml."""
         from ..views.plot import save_figure
 
@@ -100,8 +101,14 @@ class Gallery:
         figure.suptitle(f"{head}\n{line}" if head else line, x=0.01, ha="left", fontsize=8)
         path = save_figure(figure, self.outdir / f"{self.name(stem)}.png", dpi=PNG_DPI)
         caption = f"{caption}. {provenance(self.tensile, start, direction)}"
-        meta = {"figure": path.name, "caption": caption, "tensile": self.tensile,
-                "start": start, "direction": direction, "axes": axes_labels(figure)}  # fmt: skip
+        meta = {
+            "figure": path.name,
+            "caption": caption,
+            "tensile": self.tensile,
+            "start": start,
+            "direction": direction,
+            "axes": axes_labels(figure),
+        }
         write_yaml(self.outdir / f"{self.name(stem)}.yaml", {**meta, **recipe})
         self.entries.append((path.name, caption))
         self.log(f"wrote {path}")
@@ -138,8 +145,9 @@ def laws_of(tensile: str) -> tuple[str, ...]:
     return (tensile,)
 
 
-def make_gallery(outdir, size: str = "small", tensile: str = BOTH, stores=None,
-                 log=print) -> list[Path]:  # fmt: skip
+def make_gallery(
+    outdir, size: str = "small", tensile: str = BOTH, stores=None, log=print
+) -> list[Path]:
     """Compute and draw every figure into ``outdir`` under each force law of ``tensile``
     ("both", "clamp" or "allow"); returns the PNG paths."""
     if size not in setups.SIZES:
@@ -189,8 +197,12 @@ def draw_plane(g: Gallery, plane: str) -> None:
             continue
         figure = plot_map(job, arrays, what)
         caption = f"{text} on the ({axes}) plane, {rows} × {cols} cells, job {job.name}.yaml"
-        recipe = {"job": f"{job.name}.yaml", "store": str(store), "view": what,
-                  "command": f"campar plot {store} --what {what}"}  # fmt: skip
+        recipe = {
+            "job": f"{job.name}.yaml",
+            "store": str(store),
+            "view": what,
+            "command": f"campar plot {store} --what {what}",
+        }
         if what == "labels":
             cells = distinct_categories(map_labels(arrays, job.classify.chatter_p), LEGEND_MAX)
             recipe["palette"] = {e.label: to_hex(e.colour) for e in cells.entries}
@@ -199,10 +211,18 @@ def draw_plane(g: Gallery, plane: str) -> None:
                 members = other[0].members
                 recipe["other"] = list(members)
                 listed = ", ".join(plain_label(m) for m in members)
-                caption += (f"; the {len(members)} rarest labels ({other[0].count} cells) share "
-                            f"the hatched class “other”: {listed}")  # fmt: skip
-        g.save(figure, f"{MAP_FIGURES[plane]}_{plane}_{what}", caption, recipe,
-               start=job.chains.start, direction=job.chains.direction)  # fmt: skip
+                caption += (
+                    f"; the {len(members)} rarest labels ({other[0].count} cells) share "
+                    f"the hatched class “other”: {listed}"
+                )
+        g.save(
+            figure,
+            f"{MAP_FIGURES[plane]}_{plane}_{what}",
+            caption,
+            recipe,
+            start=job.chains.start,
+            direction=job.chains.direction,
+        )
 
 
 def plain_label(category: str) -> str:
@@ -214,8 +234,10 @@ def draw_lines(g: Gallery) -> None:
     from ..views.plot.bifurcation import plot_lines
 
     lines = setups.paper_lines(g.size, g.tensile)
-    titles = [rf"$\mu_{{\mathrm{{kn}}}}$ = {max(f'{mu:.2f}', f'{mu:g}', key=len)}"
-              for mu in setups.FIG5_MU_KN]  # fmt: skip
+    titles = [
+        rf"$\mu_{{\mathrm{{kn}}}}$ = {max(f'{mu:.2f}', f'{mu:g}', key=len)}"
+        for mu in setups.FIG5_MU_KN
+    ]
     points = setups.SIZES[g.size].line
     mu_list = " ".join(f"{mu:g}" for mu in setups.FIG5_MU_KN)
     recipe = {
@@ -225,11 +247,12 @@ def draw_lines(g: Gallery) -> None:
             setups.paper_line_job(mu, g.size, g.tensile).to_dict() for mu in setups.FIG5_MU_KN
         ],
     }
-    caption = (f"bifurcation lines (Fig. 5): σn points y and detachments p against ω, "
-               f"{points} ω values from 6.0 down, each chain from rest at ω = 6.0, "
-               f"μkn = {mu_list}")  # fmt: skip
-    g.save(plot_lines(lines, titles), "fig5_lines", caption, recipe, start="rest",
-           direction="down")  # fmt: skip
+    caption = (
+        f"bifurcation lines (Fig. 5): σn points y and detachments p against ω, "
+        f"{points} ω values from 6.0 down, each chain from rest at ω = 6.0, "
+        f"μkn = {mu_list}"
+    )
+    g.save(plot_lines(lines, titles), "fig5_lines", caption, recipe, start="rest", direction="down")
 
 
 def draw_phase_portraits(g: Gallery) -> None:
@@ -251,8 +274,9 @@ def draw_phase_portraits(g: Gallery) -> None:
             panels.append({"kind": "phase", "result": r, "heading": head})
             if r.kind != "periodic":
                 head = f"$\\sigma_n$ at $\\omega$ = {omega:.10g}: {r.label}"
-                panels.append({"kind": "section", "result": r, "cloud": portrait.cloud,
-                               "heading": head})  # fmt: skip
+                panels.append(
+                    {"kind": "section", "result": r, "cloud": portrait.cloud, "heading": head}
+                )
     starts = setups.FIG6_STARTS
     found = "; ".join(multistable) or (
         f"every cell monostable: all {starts} starts reached the path's attractor or none"
@@ -269,10 +293,19 @@ def draw_phase_portraits(g: Gallery) -> None:
         f"paper's label and campar's in each title; σn clouds of 1500 revolutions for "
         f"non-periodic attractors"
     )
-    recipe = {"path": "campar.paper.setups.plane_path_job: the plane's job cut to end at the "
-              "cell, its last row's last state", "cells": cells}  # fmt: skip
-    g.save(plot_phase_grid(panels), "fig6_phase_portraits", caption, recipe, start="continue",
-           direction="down")  # fmt: skip
+    recipe = {
+        "path": "campar.paper.setups.plane_path_job: the plane's job cut to end at the "
+        "cell, its last row's last state",
+        "cells": cells,
+    }
+    g.save(
+        plot_phase_grid(panels),
+        "fig6_phase_portraits",
+        caption,
+        recipe,
+        start="continue",
+        direction="down",
+    )
 
 
 def cell_recipe(cell) -> dict:
@@ -292,28 +325,37 @@ def cell_recipe(cell) -> dict:
                 "state": [float(x) for x in p.result.state],
             }
             for p in cell.portraits
-        ],  # fmt: skip
+        ],
     }
 
 
 def point_recipe(omega: float, tensile: str, params: dict) -> dict:
     job = point_job(omega=omega, tensile=tensile, **params)
     flags = " ".join(f"--{k.replace('_', '-')} {v:g}" for k, v in params.items())
-    return {"command": f"campar point --omega {omega:g} {flags} --tensile {tensile}",
-            "job": job.to_dict()}  # fmt: skip
+    return {
+        "command": f"campar point --omega {omega:g} {flags} --tensile {tensile}",
+        "job": job.to_dict(),
+    }
 
 
 def draw_penetration(g: Gallery) -> None:
     from ..views.plot.figures import plot_gap_family
 
     for stem, f0, varied, caption in (
-        ("fig3_gap_preload", None, (("f0", setups.FIG3_F0),),
-         "penetration ε(t) over the steady orbit (Fig. 3) for three preloads f0 at ω = 1, 3, 5"),
-        ("fig8_gap_stiffness_damping", setups.FIG8_F0,
-         (("mu_kn", setups.FIG8_RATIOS), ("mu_cn", setups.FIG8_RATIOS)),
-         "penetration ε(t) (Fig. 8) at f0 = 2.5 for three μkn (top) and three μcn (bottom), "
-         "ω = 1, 3, 5"),
-    ):  # fmt: skip
+        (
+            "fig3_gap_preload",
+            None,
+            (("f0", setups.FIG3_F0),),
+            "penetration ε(t) over the steady orbit (Fig. 3) for three preloads f0 at ω = 1, 3, 5",
+        ),
+        (
+            "fig8_gap_stiffness_damping",
+            setups.FIG8_F0,
+            (("mu_kn", setups.FIG8_RATIOS), ("mu_cn", setups.FIG8_RATIOS)),
+            "penetration ε(t) (Fig. 8) at f0 = 2.5 for three μkn (top) and three μcn (bottom), "
+            "ω = 1, 3, 5",
+        ),
+    ):
         rows, recipes = [], []
         for name, values in varied:
             by_speed = []
@@ -326,8 +368,14 @@ def draw_penetration(g: Gallery) -> None:
                 by_speed.append(results)
             rows.append((name, values, by_speed))
         caption += "; cam rise and fall shaded (R rise, FD far dwell, F fall, ND near dwell)"
-        g.save(plot_gap_family(rows), stem, caption, {"points": recipes}, start="rest",
-               direction="none")  # fmt: skip
+        g.save(
+            plot_gap_family(rows),
+            stem,
+            caption,
+            {"points": recipes},
+            start="rest",
+            direction="none",
+        )
 
 
 def draw_forces(g: Gallery) -> None:
@@ -337,22 +385,26 @@ def draw_forces(g: Gallery) -> None:
     params = {**PAPER_VALUES, "f0": setups.FIG9_F0}
     results = [setups.steady_point(omega, g.tensile, **params) for omega in setups.SPEEDS]
     recipe = {"points": [point_recipe(w, g.tensile, params) for w in setups.SPEEDS]}
-    clamped = [sum(b - a for a, b in clamped_intervals(r.trace)) / r.trace.period
-               for r in results]  # fmt: skip
+    clamped = [sum(b - a for a, b in clamped_intervals(r.trace)) / r.trace.period for r in results]
     recipe["clamped_fraction_of_revolution"] = {
         f"{w:g}": round(c, 4) for w, c in zip(setups.SPEEDS, clamped, strict=True)
     }
-    caption = ("contact force Pn(t) (red) with the cam input yc(t) (blue), impacts ○ and "
-               "detachments ★ (Fig. 9), f0 = 0.5, ω = 1, 3, 5")  # fmt: skip
+    caption = (
+        "contact force Pn(t) (red) with the cam input yc(t) (blue), impacts ○ and "
+        "detachments ★ (Fig. 9), f0 = 0.5, ω = 1, 3, 5"
+    )
     if g.tensile == "clamp":
-        caption += ("; shaded orange: the clamp holds Pn = 0 while ε > 0 (follower ahead of the "
-                    "cam without force), " + ", ".join(
-                        f"{c:.1%} of a revolution at ω = {w:g}"
-                        for w, c in zip(setups.SPEEDS, clamped, strict=True)))  # fmt: skip
+        caption += (
+            "; shaded orange: the clamp holds Pn = 0 while ε > 0 (follower ahead of the "
+            "cam without force), "
+            + ", ".join(
+                f"{c:.1%} of a revolution at ω = {w:g}"
+                for w, c in zip(setups.SPEEDS, clamped, strict=True)
+            )
+        )
     else:
         caption += "; Pn < 0 is the literal law's tensile force (no clamp, nothing shaded)"
-    g.save(plot_force_row(results), "fig9_force", caption, recipe, start="rest",
-           direction="none")  # fmt: skip
+    g.save(plot_force_row(results), "fig9_force", caption, recipe, start="rest", direction="none")
 
 
 def draw_orbit_example(g: Gallery) -> None:
@@ -360,10 +412,18 @@ def draw_orbit_example(g: Gallery) -> None:
 
     params = {**PAPER_VALUES, "mu_kn": setups.FIG6_MU_KN}
     result = setups.steady_point(3.0, g.tensile, **params)
-    caption = ("one point's orbit as `campar point --plot` draws it: phase portrait, ε(t), "
-               "Pn(t) with yc(t); ω = 3, μkn = 0.91, from rest")  # fmt: skip
-    g.save(plot_orbit(result), "orbit_point", caption, point_recipe(3.0, g.tensile, params),
-           start="rest", direction="none")  # fmt: skip
+    caption = (
+        "one point's orbit as `campar point --plot` draws it: phase portrait, ε(t), "
+        "Pn(t) with yc(t); ω = 3, μkn = 0.91, from rest"
+    )
+    g.save(
+        plot_orbit(result),
+        "orbit_point",
+        caption,
+        point_recipe(3.0, g.tensile, params),
+        start="rest",
+        direction="none",
+    )
 
 
 def write_index(outdir: Path, size: str, tensile: str, galleries, seconds: float) -> None:

@@ -26,8 +26,9 @@ def divergence_integral(result) -> float:
     par = result.parameters
     zeta = par["zeta"]
     # The contact stiffness k and damping c as the model derives them from μkn, μcn, ζ.
-    p = make_params(par["omega"], zeta, par["f0"], par["mu_kn"], par["mu_cn"],
-                    par["tensile"] == "clamp")  # fmt: skip
+    p = make_params(
+        par["omega"], zeta, par["f0"], par["mu_kn"], par["mu_cn"], par["tensile"] == "clamp"
+    )
     tr = result.trace
     # Samples inside a step share its contact mode, and a step ends on every mode switch,
     # so the interval (t_i, t_i+1] lies in the mode of sample i+1: evaluating both ends in
@@ -49,16 +50,26 @@ def liouville_rows(evidence: dict[str, Evidence]) -> list[dict]:
     rows = []
     for omega, quoted, conclusion in setups.QUOTED_MULTIPLIERS:
         product = (quoted[0] * quoted[1]).real
-        row = {"omega": omega, "quoted": quoted, "conclusion": conclusion, "product": product,
-               "bound": liouville_bound(omega), "models": {}}  # fmt: skip
+        row = {
+            "omega": omega,
+            "quoted": quoted,
+            "conclusion": conclusion,
+            "product": product,
+            "bound": liouville_bound(omega),
+            "models": {},
+        }
         for tensile, ev in evidence.items():
             r = ev.continued(omega, setups.QUOTED_MU_KN).result
             if r.kind != "periodic" or r.trace is None:
                 row["models"][tensile] = (r.label, math.nan, math.nan, math.nan)
                 continue
             det = float(np.prod(r.multipliers).real)
-            row["models"][tensile] = (r.label, math.exp(divergence_integral(r)), det,
-                                      liouville_bound(omega, n=r.n))  # fmt: skip
+            row["models"][tensile] = (
+                r.label,
+                math.exp(divergence_integral(r)),
+                det,
+                liouville_bound(omega, n=r.n),
+            )
         rows.append(row)
     return rows
 
@@ -88,10 +99,18 @@ def liouville_table(rows) -> list[str]:
     ]
     for i, row in enumerate(rows):
         quoted = ", ".join(complex_text(z) for z in row["quoted"])
-        models = [f"{m[0]}, {fmt(m[1], 4)}, {fmt(m[2], 4)}"
-                  for m in (row["models"][t] for t in setups.TENSILE)]  # fmt: skip
-        fields = (f"L{i + 1}", f"{row['omega']}", f"{quoted} ({row['conclusion']})",
-                  f"{row['product']:.4f}", f"{row['bound']:.4f}", *models,
-                  liouville_verdict(row))  # fmt: skip
+        models = [
+            f"{m[0]}, {fmt(m[1], 4)}, {fmt(m[2], 4)}"
+            for m in (row["models"][t] for t in setups.TENSILE)
+        ]
+        fields = (
+            f"L{i + 1}",
+            f"{row['omega']}",
+            f"{quoted} ({row['conclusion']})",
+            f"{row['product']:.4f}",
+            f"{row['bound']:.4f}",
+            *models,
+            liouville_verdict(row),
+        )
         lines.append("| " + " | ".join(cell(x) for x in fields) + " |")
     return lines

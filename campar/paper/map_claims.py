@@ -36,8 +36,10 @@ def lowest_speeds_rest(ev: Evidence) -> Verdict:
     text = f"{share:.0%} of the cells 1-0 with DC = 0"
     if others.any():
         _, f0 = pl.grid()
-        text += (f"; the others at f0 ≤ {fmt(f0[others].max())}, "
-                 f"DC up to {fmt(np.nanmax(a['dc'][others]))}")  # fmt: skip
+        text += (
+            f"; the others at f0 ≤ {fmt(f0[others].max())}, "
+            f"DC up to {fmt(np.nanmax(a['dc'][others]))}"
+        )
     return Verdict(text, bool(share >= 0.95))
 
 
@@ -56,8 +58,10 @@ def high_speed_dc(ev: Evidence) -> Verdict:
     w, _ = pl.grid()
     dc = pl.arrays["dc"][w > HIGH_OMEGA]
     median = float(np.nanmedian(dc))
-    return Verdict(f"median DC {fmt(median)} (range {fmt(np.nanmin(dc))}–{fmt(np.nanmax(dc))})",
-                   bool(median >= 0.9))  # fmt: skip
+    return Verdict(
+        f"median DC {fmt(median)} (range {fmt(np.nanmin(dc))}–{fmt(np.nanmax(dc))})",
+        bool(median >= 0.9),
+    )
 
 
 def dc_trend_second(plane: str, sign: int) -> callable:
@@ -66,8 +70,10 @@ def dc_trend_second(plane: str, sign: int) -> callable:
         means = row_mean(pl, pl.arrays["dc"])
         rho = rank_correlation(pl.second, means)
         hi, lo = high_low(pl, means)
-        return Verdict(f"ρ = {fmt(rho, 2)}; mean DC {fmt(lo)} (low third) → {fmt(hi)} "
-                       "(high third)", trend(rho, sign))  # fmt: skip
+        return Verdict(
+            f"ρ = {fmt(rho, 2)}; mean DC {fmt(lo)} (low third) → {fmt(hi)} (high third)",
+            trend(rho, sign),
+        )
 
     return evaluate
 
@@ -96,8 +102,10 @@ def rest_region(ev: Evidence) -> Verdict:
     rest = pl.periodic & (a["p"] == 0)
     fast = rest & (w > LOW_OMEGA)
     share = (fast & (mu < 0.8)).sum() / max(fast.sum(), 1)
-    text = (f"{rest.sum()} n-0 cells, {(rest & (w <= LOW_OMEGA)).sum()} of them at ω ≤ 1; "
-            f"{fast.sum()} at ω > 1, {share:.0%} of those at μkn < 0.8")  # fmt: skip
+    text = (
+        f"{rest.sum()} n-0 cells, {(rest & (w <= LOW_OMEGA)).sum()} of them at ω ≤ 1; "
+        f"{fast.sum()} at ω > 1, {share:.0%} of those at μkn < 0.8"
+    )
     return Verdict(text, bool(fast.any() and share >= 0.9))
 
 
@@ -107,8 +115,10 @@ def subharmonic_rest(ev: Evidence) -> Verdict:
     a = pl.arrays
     sub = pl.periodic & (a["p"] == 0) & (a["n"] >= 2)
     below, above = int((sub & (mu < 0.8)).sum()), int((sub & (mu > 0.8)).sum())
-    return Verdict(f"n-0 (n ≥ 2) cells: {below} at μkn < 0.8, {above} at μkn > 0.8",
-                   bool(below > 0 and above == 0))  # fmt: skip
+    return Verdict(
+        f"n-0 (n ≥ 2) cells: {below} at μkn < 0.8, {above} at μkn > 0.8",
+        bool(below > 0 and above == 0),
+    )
 
 
 def detachment_trend(plane: str) -> callable:
@@ -132,8 +142,11 @@ def richer_structure(plane: str) -> callable:
             distinct_labels(pl, np.arange(len(pl.second)) == i) for i in range(len(pl.second))
         ]
         rho = rank_correlation(pl.second, per_row)
-        return Verdict(f"distinct n-p {lower} (lower half) vs {upper} (upper half); "
-                       f"ρ(distinct n-p per row) = {fmt(rho, 2)}", bool(upper > lower))  # fmt: skip
+        return Verdict(
+            f"distinct n-p {lower} (lower half) vs {upper} (upper half); "
+            f"ρ(distinct n-p per row) = {fmt(rho, 2)}",
+            bool(upper > lower),
+        )
 
     return evaluate
 
@@ -146,8 +159,7 @@ def rest_shrinks_damping(ev: Evidence) -> Verdict:
     rho0, rho1 = rank_correlation(pl.second, rest), rank_correlation(pl.second, one)
     ok0, ok1 = trend(rho0, -1), trend(rho1, 1)
     match = None if ok0 is None or ok1 is None else ok0 and ok1
-    return Verdict(f"ρ(μcn, n-0 cells) = {fmt(rho0, 2)}, ρ(μcn, n-1 cells) = {fmt(rho1, 2)}",
-                   match)  # fmt: skip
+    return Verdict(f"ρ(μcn, n-0 cells) = {fmt(rho0, 2)}, ρ(μcn, n-1 cells) = {fmt(rho1, 2)}", match)
 
 
 def damping_hot_corner(ev: Evidence) -> Verdict:
@@ -170,5 +182,7 @@ def low_speed_many_detachments(ev: Evidence) -> Verdict:
         return Verdict(f"{low.sum()} low-speed 1-p, {high.sum()} high-speed n-p cells", None)
     p_low, p_high = a["p"][low].mean(), a["p"][high].mean()
     dc_low, dc_high = np.nanmean(a["dc"][low]), np.nanmean(a["dc"][high])
-    return Verdict(f"mean p {fmt(p_low)} vs {fmt(p_high)}; mean DC {fmt(dc_low)} vs "
-                   f"{fmt(dc_high)}", bool(p_low > p_high and dc_low < dc_high))  # fmt: skip
+    return Verdict(
+        f"mean p {fmt(p_low)} vs {fmt(p_high)}; mean DC {fmt(dc_low)} vs {fmt(dc_high)}",
+        bool(p_low > p_high and dc_low < dc_high),
+    )

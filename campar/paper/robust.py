@@ -48,8 +48,9 @@ class Neighbourhood:
         return len(self.omega) // 2
 
 
-def judge_label(expected: str, hood: Neighbourhood,
-                rivals: list[tuple[float, str, str]]) -> tuple[bool, list[str]]:  # fmt: skip
+def judge_label(
+    expected: str, hood: Neighbourhood, rivals: list[tuple[float, str, str]]
+) -> tuple[bool, list[str]]:
     """Whether the claim "``expected`` at hood.omega0" is reproduced robustly, and why not.
 
     ``rivals``: (ω, the paper's label there, campar's path label there) of the paper's other
@@ -61,32 +62,39 @@ def judge_label(expected: str, hood: Neighbourhood,
         wrong = [(w, lab) for w, lab in zip(hood.omega, labels, strict=True) if lab != expected]
         if wrong or len(labels) != 2 * NEIGHBOURS + 1:
             cells = ", ".join(f"{lab} at {w:.4g}" for w, lab in wrong)
-            reasons.append(f"{name}: {len(labels) - len(wrong)}/{len(labels)} cells {expected}"
-                           + (f" ({cells})" if cells else ""))  # fmt: skip
+            reasons.append(
+                f"{name}: {len(labels) - len(wrong)}/{len(labels)} cells {expected}"
+                + (f" ({cells})" if cells else "")
+            )
     # (a path that fails already has its reason; its long runs are context only)
     path_holds = all(lab == expected for lab in hood.path)
     long_holds = len(hood.long) == len(hood.omega) and all(lab == expected for lab in hood.long)
     if expected in NONPERIODIC and path_holds and not long_holds:
         found = ", ".join(hood.long) or "not run"
         reasons.append(f"{LONG_RUN} revolutions from the path's states: {found}")
-    same = [(w, claimed) for w, claimed, ours in rivals
-            if abs(w - hood.omega0) > WIDTH + 1e-12 and ours == expected]  # fmt: skip
+    same = [
+        (w, claimed)
+        for w, claimed, ours in rivals
+        if abs(w - hood.omega0) > WIDTH + 1e-12 and ours == expected
+    ]
     if same:
         where = ", ".join(f"ω = {w:g} (paper: {claimed})" for w, claimed in same)
         reasons.append(f"not specific: campar's path gives {expected} also at {where}")
     return not reasons, reasons
 
 
-def neighbourhood(ev: Evidence, omega0: float, expected: str,
-                  second: float = setups.FIG6_MU_KN) -> Neighbourhood:  # fmt: skip
+def neighbourhood(
+    ev: Evidence, omega0: float, expected: str, second: float = setups.FIG6_MU_KN
+) -> Neighbourhood:
     """The labels around ω0 along the paper's path and from rest (see the module doc)."""
 
     def compute():
         top = omega0 + WIDTH
         row = ev.path_row(second, top)
         start = (float(row.state[-1, 0]), float(row.state[-1, 1]))
-        line = ev.line((top, omega0 - WIDTH), 2 * NEIGHBOURS + 1, initial=start, sections=1,
-                       mu_kn=second)  # fmt: skip
+        line = ev.line(
+            (top, omega0 - WIDTH), 2 * NEIGHBOURS + 1, initial=start, sections=1, mu_kn=second
+        )
         omegas = tuple(float(w) for w in line.omega)
         states = tuple((float(y), float(v)) for y, v in line.state)
         rest = tuple(ev.rest(w, mu_kn=second).label for w in omegas)
@@ -112,8 +120,10 @@ def label_claim(omega: float, expected: str) -> Callable:
                 rivals.append((w, claimed, other.path[other.centre]))
         match, reasons = judge_label(expected, hood, rivals)
         centre = hood.centre
-        text = (f"path {hood.path[centre]}, rest {hood.rest[centre]}; ω ± {WIDTH:g}: path "
-                f"{summary(hood.path)}, rest {summary(hood.rest)}")  # fmt: skip
+        text = (
+            f"path {hood.path[centre]}, rest {hood.rest[centre]}; ω ± {WIDTH:g}: path "
+            f"{summary(hood.path)}, rest {summary(hood.rest)}"
+        )
         if hood.long:
             where = "the path's states" if len(hood.long) > 1 else "the path's state at ω"
             text += f"; {LONG_RUN} revolutions from {where}: {summary(hood.long)}"
@@ -123,9 +133,11 @@ def label_claim(omega: float, expected: str) -> Callable:
             text += ". Not robust: " + "; ".join(reasons)
         y, v = hood.states[centre]
         law = law_flags_text(ev)
-        command = (f"campar point --omega {omega:g} --mu-kn {setups.FIG6_MU_KN:g} --y0 {y:.9g} "
-                   f"--v0 {v:.9g}{law} (the path's state); campar point --omega {omega:g} "
-                   f"--mu-kn {setups.FIG6_MU_KN:g}{law} (from rest)")  # fmt: skip
+        command = (
+            f"campar point --omega {omega:g} --mu-kn {setups.FIG6_MU_KN:g} --y0 {y:.9g} "
+            f"--v0 {v:.9g}{law} (the path's state); campar point --omega {omega:g} "
+            f"--mu-kn {setups.FIG6_MU_KN:g}{law} (from rest)"
+        )
         return Verdict(text, match, command)
 
     return evaluate
@@ -160,9 +172,11 @@ def nonperiodic_context(ev: Evidence, label: str, omega: float) -> str:
     w = float(line.omega[i])
     long = ev.long_run(w, line.state[i], mu_kn=setups.FIG6_MU_KN)
     rest = ev.rest(w, mu_kn=setups.FIG6_MU_KN)
-    text = (f"{cells.size} {label} cells on {where}, the nearest at ω = {w:.4g}: "
-            f"{LONG_RUN} revolutions from the line's state there give {long.label}, "
-            f"from rest {rest.label}")  # fmt: skip
+    text = (
+        f"{cells.size} {label} cells on {where}, the nearest at ω = {w:.4g}: "
+        f"{LONG_RUN} revolutions from the line's state there give {long.label}, "
+        f"from rest {rest.label}"
+    )
     if rest.kind == "periodic" and rest.multipliers:
         text += " (stable, |λ| = " + ", ".join(f"{abs(m):.2g}" for m in rest.multipliers) + ")"
     return text

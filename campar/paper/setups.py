@@ -105,8 +105,7 @@ def jobs_dir() -> Path:
     return Path(__file__).resolve().parents[2] / "jobs"
 
 
-def plane_job(name: str, size: str = "full", tensile: str = LAW,
-              jobs: Path | None = None) -> Job:  # fmt: skip
+def plane_job(name: str, size: str = "full", tensile: str = LAW, jobs: Path | None = None) -> Job:
     """The job of a plane at a size: ``jobs/<name>.yaml``, its grid coarsened for "small",
     its force law set to ``tensile``, the ``lyapunov`` output added (the gallery draws it);
     named "<name>" or "<name>-allow", store unset."""
@@ -158,8 +157,9 @@ def fine_line(mu_kn: float, tensile: str = LAW) -> BifurcationLine:
 
 def paper_line_job(mu_kn: float, size: str = "full", tensile: str = LAW) -> Job:
     """A Fig. 5 line: ω from 6.0 down to 0.02 at μkn, the other parameters at base values."""
-    return line_job(LINE_OMEGA, SIZES[size].line, tensile=tensile, mu_kn=mu_kn,
-                    name=f"line_mu_kn_{mu_kn:g}")  # fmt: skip
+    return line_job(
+        LINE_OMEGA, SIZES[size].line, tensile=tensile, mu_kn=mu_kn, name=f"line_mu_kn_{mu_kn:g}"
+    )
 
 
 @dataclass(frozen=True)
@@ -177,8 +177,16 @@ def continued_point(omega: float, tensile: str = LAW, **params) -> ContinuedPoin
     from ..views.point import simulate_point
 
     line, state = continued_state(omega, tensile=tensile, **params)
-    result = simulate_point(omega, y0=state[0], v0=state[1], tensile=tensile, multipliers=True,
-                            lyapunov=True, trace=True, **params)  # fmt: skip
+    result = simulate_point(
+        omega,
+        y0=state[0],
+        v0=state[1],
+        tensile=tensile,
+        multipliers=True,
+        lyapunov=True,
+        trace=True,
+        **params,
+    )
     cloud = np.asarray(result.sections)
     if result.kind != "periodic":
         cloud = section_cloud(omega, state, tensile=tensile, **params)
@@ -187,8 +195,16 @@ def continued_point(omega: float, tensile: str = LAW, **params) -> ContinuedPoin
 
 def section_cloud(omega: float, state, revolutions: int = CLOUD_REVOLUTIONS, **options):
     """σn points (m, 2) of ``revolutions`` revolutions from ``state`` (a Poincaré section)."""
-    job = line_job((omega, omega), 1, initial=state, sections=revolutions, transient="fixed",
-                   revolutions=revolutions, name="cloud", **options)  # fmt: skip
+    job = line_job(
+        (omega, omega),
+        1,
+        initial=state,
+        sections=revolutions,
+        transient="fixed",
+        revolutions=revolutions,
+        name="cloud",
+        **options,
+    )
     points = compute_line(job).sections[0]
     return points[np.isfinite(points[:, 0])]
 
@@ -261,8 +277,13 @@ class PathCell:
     unsettled: int  # starts that settled on no attractor
 
 
-def path_cell(omega: float, second: float = FIG6_MU_KN, tensile: str = LAW,
-              starts: int | None = None, plane: str = FIG6_PLANE) -> PathCell:  # fmt: skip
+def path_cell(
+    omega: float,
+    second: float = FIG6_MU_KN,
+    tensile: str = LAW,
+    starts: int | None = None,
+    plane: str = FIG6_PLANE,
+) -> PathCell:
     """Reach (ω, second) along the plane's path, trace the attractor there, and run an
     attractor census of ``starts`` (default FIG6_STARTS) starts: rest, the path's state,
     Halton points."""
@@ -272,12 +293,22 @@ def path_cell(omega: float, second: float = FIG6_MU_KN, tensile: str = LAW,
 
     job = plane_path_job(omega, second, tensile, plane)
     state = plane_path_state(job)
-    params = {**{k: job.parameter(k) for k in ("f0", "mu_kn", "mu_cn", "zeta")
-                 if k != job.second}, job.second: second}  # fmt: skip
+    params = {
+        **{k: job.parameter(k) for k in ("f0", "mu_kn", "mu_cn", "zeta") if k != job.second},
+        job.second: second,
+    }
 
     def traced(y, v):
-        result = simulate_point(omega, y0=y, v0=v, tensile=tensile, multipliers=True,
-                                lyapunov=True, trace=True, **params)  # fmt: skip
+        result = simulate_point(
+            omega,
+            y0=y,
+            v0=v,
+            tensile=tensile,
+            multipliers=True,
+            lyapunov=True,
+            trace=True,
+            **params,
+        )
         cloud = np.asarray(result.sections)
         if result.kind != "periodic":
             cloud = section_cloud(omega, (y, v), tensile=tensile, **params)
@@ -293,5 +324,4 @@ def path_cell(omega: float, second: float = FIG6_MU_KN, tensile: str = LAW,
         if i != on_path:
             result, cloud = traced(*attractor.state)
             portraits.append(Portrait(result, cloud, attractor.fraction, False))
-    return PathCell(omega, job, state, tuple(portraits), len(census.starts),
-                    len(census.unsettled))  # fmt: skip
+    return PathCell(omega, job, state, tuple(portraits), len(census.starts), len(census.unsettled))

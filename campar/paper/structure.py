@@ -75,7 +75,7 @@ ZOOMS = {
             (4.15, 4.75),
             (1.95, 2.75),
         ),
-    ),  # fmt: skip
+    ),
     "mu_kn": (
         Zoom(
             "c",
@@ -101,7 +101,7 @@ ZOOMS = {
             (5.15, 5.95),
             (0.852, 0.892),
         ),
-    ),  # fmt: skip
+    ),
 }
 ZOOM_PLANES = tuple(ZOOMS)
 
@@ -120,11 +120,11 @@ def hysteresis_job(plane: str, size: str = "full", tensile: str = setups.LAW) ->
     base = setups.plane_job(plane, size, tensile)
     data = base.to_dict()
     data["chains"] = {"start": "continue", "direction": "both"}
-    data["outputs"] = [o for o in (*data["outputs"], "multipliers", "sections")
-                       if o != "lyapunov"]  # fmt: skip
+    data["outputs"] = [o for o in (*data["outputs"], "multipliers", "sections") if o != "lyapunov"]
     data["outputs"] = list(dict.fromkeys(data["outputs"]))
-    return Job.from_dict(_named(data, f"{plane}_both", tensile),
-                         source=f"{base.name} swept both ways")  # fmt: skip
+    return Job.from_dict(
+        _named(data, f"{plane}_both", tensile), source=f"{base.name} swept both ways"
+    )
 
 
 BASIN_JOB = "basin_bistable"  # jobs/basin_bistable.yaml: ω = 5.8, μkn = 0.86
@@ -162,8 +162,9 @@ def census_job(plane: str, size: str = "full", tensile: str = setups.LAW) -> Job
     data["chains"] = {"start": "continue", "direction": "down"}
     data["outputs"] = ["label", "dc"]
     data["attractors"] = {"starts": CENSUS_STARTS, "cap": CENSUS_CAP}
-    return Job.from_dict(_named(data, f"{plane}_census", tensile),
-                         source=f"{base.name} with an attractor census")  # fmt: skip
+    return Job.from_dict(
+        _named(data, f"{plane}_census", tensile), source=f"{base.name} with an attractor census"
+    )
 
 
 def zoom_of(plane: str, key: str) -> Zoom:
@@ -194,8 +195,10 @@ def zoom_job(plane: str, key: str, size: str = "full", tensile: str = setups.LAW
     lo, hi = zoom.second
     first, last = (hi, lo) if parent["from"] > parent["to"] else (lo, hi)  # the path's order
     omega = data["sweep"]["omega"]
-    data["sweep"] = {"omega": zoom_grid(omega["from"], *zoom.omega, points),
-                     name: {"from": first, "to": last, "points": points}}  # fmt: skip
+    data["sweep"] = {
+        "omega": zoom_grid(omega["from"], *zoom.omega, points),
+        name: {"from": first, "to": last, "points": points},
+    }
     if first != parent["from"]:  # the state the plane's path reaches at (6.0, first)
         path = setups.plane_path_job(omega["from"], first, tensile, plane)
         y, v = setups.plane_path_state(path)
@@ -203,8 +206,10 @@ def zoom_job(plane: str, key: str, size: str = "full", tensile: str = setups.LAW
     data["chains"] = {"start": "continue", "direction": "down"}
     data["outputs"] = list(dict.fromkeys([*data["outputs"], "multipliers", "sections"]))
     data["outputs"] = [o for o in data["outputs"] if o != "lyapunov"]
-    return Job.from_dict(_named(data, f"{plane}_zoom_{key}", tensile),
-                         source=f"{plane} zoom {key} ({zoom.paper}) at size {size}")  # fmt: skip
+    return Job.from_dict(
+        _named(data, f"{plane}_zoom_{key}", tensile),
+        source=f"{plane} zoom {key} ({zoom.paper}) at size {size}",
+    )
 
 
 def spacing(job: Job) -> tuple[float, float]:

@@ -45,9 +45,12 @@ def draw_basin(g) -> None:
     store = compute(g, job)
     with open_store(store) as ds:
         figure = plot_basin(ds)
-        found = [f"{label} {100 * fraction:.1f} %" for label, fraction in
-                 zip(ds["attractor_label"].values, ds["attractor_fraction"].values,
-                     strict=True)]  # fmt: skip
+        found = [
+            f"{label} {100 * fraction:.1f} %"
+            for label, fraction in zip(
+                ds["attractor_label"].values, ds["attractor_fraction"].values, strict=True
+            )
+        ]
     rows, cols = job.shape
     caption = (
         f"basin of attraction at ω = {job.parameter('omega'):g}, μkn = "
@@ -56,9 +59,13 @@ def draw_basin(g) -> None:
         f"(attractors matched by their cycles' section points, not their labels): "
         f"{', '.join(found) or 'none settled'}; each attractor's own σn points drawn on it"
     )
-    recipe = {"job": f"{job.name}.yaml", "store": str(store), "view": "basin",
-              "command": f"campar run {job.name}.yaml; campar plot {store}",
-              "attractors": found}  # fmt: skip
+    recipe = {
+        "job": f"{job.name}.yaml",
+        "store": str(store),
+        "view": "basin",
+        "command": f"campar run {job.name}.yaml; campar plot {store}",
+        "attractors": found,
+    }
     g.save(figure, BASIN_STEM, caption, recipe, start="grid", direction="none")
 
 
@@ -95,10 +102,14 @@ def draw_hysteresis(g, plane: str) -> None:
     job = structure.hysteresis_job(plane, g.size, g.tensile)
     store = compute(g, job)
     with open_store(store) as ds:
-        layers = [{k: ds[k].isel(direction=d).values for k in ("kind", "status", "n",
-                   "sections")} for d in (0, 1)]  # fmt: skip
-        arrays = {"hysteresis": ds["hysteresis"].values,
-                  "computed": (ds["kind"].values >= 0).all(axis=0)}  # fmt: skip
+        layers = [
+            {k: ds[k].isel(direction=d).values for k in ("kind", "status", "n", "sections")}
+            for d in (0, 1)
+        ]
+        arrays = {
+            "hysteresis": ds["hysteresis"].values,
+            "computed": (ds["kind"].values >= 0).all(axis=0),
+        }
     arrays["compared"] = settled_cycles(**layers[0]) & settled_cycles(**layers[1])
     jumps = jump_summary(load_both(store, typed=False))
     rows, cols = job.shape
@@ -112,11 +123,22 @@ def draw_hysteresis(g, plane: str) -> None:
         f"labels there: {pairs_text(jumps.pairs) or 'none'}); white: a sweep not periodic "
         f"({jumps.uncompared_differ} of these cells carry different labels)"
     )
-    recipe = {"job": f"{job.name}.yaml", "store": str(store), "view": "hysteresis",
-              "command": f"campar run {job.name}.yaml; campar plot {store} --what hysteresis",
-              "hysteretic_cells": jumps.cells, "compared_cells": jumps.compared}  # fmt: skip
-    g.save(plot_map(job, arrays, "hysteresis"), f"{plane}_hysteresis", caption, recipe,
-           start="continue", direction="both")  # fmt: skip
+    recipe = {
+        "job": f"{job.name}.yaml",
+        "store": str(store),
+        "view": "hysteresis",
+        "command": f"campar run {job.name}.yaml; campar plot {store} --what hysteresis",
+        "hysteretic_cells": jumps.cells,
+        "compared_cells": jumps.compared,
+    }
+    g.save(
+        plot_map(job, arrays, "hysteresis"),
+        f"{plane}_hysteresis",
+        caption,
+        recipe,
+        start="continue",
+        direction="both",
+    )
 
 
 def draw_multistability(g, plane: str) -> None:
@@ -137,11 +159,21 @@ def draw_multistability(g, plane: str) -> None:
         f"{multi} of {int((n >= 0).sum())} cells hold ≥ 2 attractors, "
         f"{int(census.unsettled.sum())} starts settled on none"
     )
-    recipe = {"job": f"{job.name}.yaml", "store": str(store), "view": "multistability",
-              "command": f"campar run {job.name}.yaml; campar plot {store} --what "
-              "multistability", "multistable_cells": multi}  # fmt: skip
-    g.save(plot_map(job, arrays, "multistability"), f"{plane}_multistability", caption,
-           recipe, start="continue", direction="down")  # fmt: skip
+    recipe = {
+        "job": f"{job.name}.yaml",
+        "store": str(store),
+        "view": "multistability",
+        "command": f"campar run {job.name}.yaml; campar plot {store} --what multistability",
+        "multistable_cells": multi,
+    }
+    g.save(
+        plot_map(job, arrays, "multistability"),
+        f"{plane}_multistability",
+        caption,
+        recipe,
+        start="continue",
+        direction="down",
+    )
 
 
 def store_labels(store):
@@ -175,11 +207,15 @@ def draw_zooms(g, plane: str) -> None:
     curves = store_boundaries(store, trace=True)
     zooms = structure.ZOOMS[plane]
     symbol = PLANE_SYMBOLS[job.second]
-    main = Panel(MapGrid.from_job(parent), arrays, curves,
-                 f"(a) {job.shape[0]} × {job.shape[1]} cells, Δω = "
-                 f"{structure.spacing(parent)[0]:.3g}, Δ{symbol} = "
-                 f"{structure.spacing(parent)[1]:.3g}",
-                 windows=tuple((z.key, z.omega, z.second) for z in zooms))  # fmt: skip
+    main = Panel(
+        MapGrid.from_job(parent),
+        arrays,
+        curves,
+        f"(a) {job.shape[0]} × {job.shape[1]} cells, Δω = "
+        f"{structure.spacing(parent)[0]:.3g}, Δ{symbol} = "
+        f"{structure.spacing(parent)[1]:.3g}",
+        windows=tuple((z.key, z.omega, z.second) for z in zooms),
+    )
     panels, recipes, texts = [], [], []
     for zoom in zooms:
         zjob = structure.zoom_job(plane, zoom.key, g.size, g.tensile)
@@ -188,22 +224,41 @@ def draw_zooms(g, plane: str) -> None:
         found = store_boundaries(zstore, omega=zoom.omega, trace=True)
         continued = curves_beside(zstore)
         dw, ds = structure.spacing(zjob)
-        panels.append(Panel(MapGrid.from_job(zparent), zarrays, found,
-                            f"({zoom.key}) as the paper's {zoom.paper}: recomputed, "
-                            f"Δω = {dw:.3g}, Δ{symbol} = {ds:.3g}", zoom.omega, zoom.second,
-                            zoom.key, continued=continued))  # fmt: skip
-        texts.append(f"({zoom.key}) ω {zoom.omega[0]:g}–{zoom.omega[1]:g}, {symbol} "
-                     f"{zoom.second[0]:g}–{zoom.second[1]:g}: {zoom.shows}; recomputed as "
-                     f"job {zjob.name}.yaml (Δω = {dw:.3g}, Δ{symbol} = {ds:.3g}); typed "
-                     f"edges {counts_text(found)}; continued curves "
-                     f"{describe_curves(continued)}")  # fmt: skip
-        recipes.append({"key": zoom.key, "paper": zoom.paper, "omega": list(zoom.omega),
-                        "second": list(zoom.second), "job": f"{zjob.name}.yaml",
-                        "store": str(zstore), "spacing": [dw, ds],
-                        "curves": found.counts(),
-                        "command": f"campar run {zjob.name}.yaml; campar plot {zstore} "
-                        f"--bifurcations --trace --omega {zoom.omega[0]:g}:"
-                        f"{zoom.omega[1]:g}"})  # fmt: skip
+        panels.append(
+            Panel(
+                MapGrid.from_job(zparent),
+                zarrays,
+                found,
+                f"({zoom.key}) as the paper's {zoom.paper}: recomputed, "
+                f"Δω = {dw:.3g}, Δ{symbol} = {ds:.3g}",
+                zoom.omega,
+                zoom.second,
+                zoom.key,
+                continued=continued,
+            )
+        )
+        texts.append(
+            f"({zoom.key}) ω {zoom.omega[0]:g}–{zoom.omega[1]:g}, {symbol} "
+            f"{zoom.second[0]:g}–{zoom.second[1]:g}: {zoom.shows}; recomputed as "
+            f"job {zjob.name}.yaml (Δω = {dw:.3g}, Δ{symbol} = {ds:.3g}); typed "
+            f"edges {counts_text(found)}; continued curves "
+            f"{describe_curves(continued)}"
+        )
+        recipes.append(
+            {
+                "key": zoom.key,
+                "paper": zoom.paper,
+                "omega": list(zoom.omega),
+                "second": list(zoom.second),
+                "job": f"{zjob.name}.yaml",
+                "store": str(zstore),
+                "spacing": [dw, ds],
+                "curves": found.counts(),
+                "command": f"campar run {zjob.name}.yaml; campar plot {zstore} "
+                f"--bifurcations --trace --omega {zoom.omega[0]:g}:"
+                f"{zoom.omega[1]:g}",
+            }
+        )
     caption = (
         f"bifurcation curves (as the paper's {MAP_FIGURES[plane].replace('fig', 'Fig. ')}a, "
         f"c–e) on the ({axes_text(job)}) plane: (a) the n-p map of job {job.name}.yaml with "
@@ -214,12 +269,21 @@ def draw_zooms(g, plane: str) -> None:
         f"at ω = {parent.omega[0]:g} from the state the plane's path reaches at the window's "
         f"starting edge, its rows ω down from {parent.omega[0]:g} at the window's spacing), "
         "drawn over its window only, its edges typed on its own cells and its PD, SN and G "
-        "curves continued from them (campar curves, lines): "
-        + "; ".join(texts)
-    )  # fmt: skip
-    recipe = {"job": f"{job.name}.yaml", "store": str(store),
-              "command": f"campar plot {store} --bifurcations --trace",
-              "curves": curves.counts(), "zooms": recipes}  # fmt: skip
+        "curves continued from them (campar curves, lines): " + "; ".join(texts)
+    )
+    recipe = {
+        "job": f"{job.name}.yaml",
+        "store": str(store),
+        "command": f"campar plot {store} --bifurcations --trace",
+        "curves": curves.counts(),
+        "zooms": recipes,
+    }
     figure = plot_zoom_set(main, panels)
-    g.save(figure, f"{MAP_FIGURES[plane]}_{plane}_curves_zooms", caption, recipe,
-           start="continue", direction="down")  # fmt: skip
+    g.save(
+        figure,
+        f"{MAP_FIGURES[plane]}_{plane}_curves_zooms",
+        caption,
+        recipe,
+        start="continue",
+        direction="down",
+    )

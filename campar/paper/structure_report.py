@@ -48,18 +48,26 @@ def intervals_text(runs) -> str:
 
 def region_text(r: st.Region, name: str) -> str:
     name = SYMBOLS.get(name, name)
-    shape = (f"tongue, tip at {name} = {num(r.tip)}" if r.tongue
-             else f"no tip (end widths {r.ends[0]}, {r.ends[1]})")  # fmt: skip
-    return (f"{r.cells} cells, ω {num(r.omega[0])}–{num(r.omega[1])}, {name} "
-            f"{num(r.second[0])}–{num(r.second[1])}, widest {r.widest}: {shape}")  # fmt: skip
+    shape = (
+        f"tongue, tip at {name} = {num(r.tip)}"
+        if r.tongue
+        else f"no tip (end widths {r.ends[0]}, {r.ends[1]})"
+    )
+    return (
+        f"{r.cells} cells, ω {num(r.omega[0])}–{num(r.omega[1])}, {name} "
+        f"{num(r.second[0])}–{num(r.second[1])}, widest {r.widest}: {shape}"
+    )
 
 
 def bounds_text(r: st.Region) -> str:
     if not r.bounds:
         return "–"
     total = sum(r.bounds.values())
-    both = sum(n for (hi, lo), n in r.bounds.items() if sweeps(hi) ^ sweeps(lo) == {"down", "up"}
-               and sweeps(hi) and sweeps(lo))  # fmt: skip
+    both = sum(
+        n
+        for (hi, lo), n in r.bounds.items()
+        if sweeps(hi) ^ sweeps(lo) == {"down", "up"} and sweeps(hi) and sweeps(lo)
+    )
     top = ", ".join(f"[{hi}] … [{lo}] ({n})" for (hi, lo), n in r.bounds.most_common(2))
     return f"{both} of {total} rows bounded by one sweep's change at each end; {top}"
 
@@ -78,8 +86,9 @@ class Plane:
         self.both = st.load_both(structure.run(self.both_job, stores))
         self.census = st.load_census(structure.run(self.census_job, stores))
         self.jumps = st.jump_summary(self.both)
-        self.regions = st.regions(self.both.hysteresis, self.both.omega, self.both.second,
-                                  self.both)  # fmt: skip
+        self.regions = st.regions(
+            self.both.hysteresis, self.both.omega, self.both.second, self.both
+        )
         multi = self.census.n_attractors >= 2
         self.census_regions = st.regions(multi, self.census.omega, self.census.second)
         self.sets = st.attractor_sets(self.census, multi)
@@ -102,10 +111,21 @@ def jumps_table(planes) -> list[str]:
     for p in planes:
         j = p.jumps
         w = f"{num(j.omega_range[0])}–{num(j.omega_range[1])}" if j.omega_range else "–"
-        lines.append(p.head + " | ".join(cell(x) for x in (
-            f" {share(j.cells, j.compared)}", w, intervals_text(j.intervals),
-            pairs_text(j.pairs), j.same_label,
-            f"{j.uncompared_differ}: {pairs_text(j.uncompared_pairs)}")) + " |")  # fmt: skip
+        lines.append(
+            p.head
+            + " | ".join(
+                cell(x)
+                for x in (
+                    f" {share(j.cells, j.compared)}",
+                    w,
+                    intervals_text(j.intervals),
+                    pairs_text(j.pairs),
+                    j.same_label,
+                    f"{j.uncompared_differ}: {pairs_text(j.uncompared_pairs)}",
+                )
+            )
+            + " |"
+        )
     return lines
 
 
@@ -120,10 +140,15 @@ def tongues_table(planes) -> list[str]:
         name = p.both.name
         tongues = sum(r.tongue for r in p.regions)
         largest = "; ".join(region_text(r, name) for r in p.regions[:SHOWN]) or "–"
-        bounds = "; ".join(f"region {k + 1}: {bounds_text(r)}"
-                           for k, r in enumerate(p.regions[:SHOWN])) or "–"  # fmt: skip
-        lines.append(p.head + " | ".join(cell(x) for x in (
-            f" {len(p.regions)} ({tongues})", largest, bounds)) + " |")  # fmt: skip
+        bounds = (
+            "; ".join(f"region {k + 1}: {bounds_text(r)}" for k, r in enumerate(p.regions[:SHOWN]))
+            or "–"
+        )
+        lines.append(
+            p.head
+            + " | ".join(cell(x) for x in (f" {len(p.regions)} ({tongues})", largest, bounds))
+            + " |"
+        )
     return lines
 
 
@@ -139,9 +164,11 @@ def labels_table(planes) -> list[str]:
             f"{r.label}: {region_text(r.region, p.both.name)}; edges "
             + ", ".join(f"{t} {n}" for t, n in r.types.most_common())
             for r in regions[:SHOWN]
-        )  # fmt: skip
-        counts = (f" {len(regions)} ({sum(r.region.tongue for r in regions)}; "
-                  f"{sum(r.pd_and_g for r in regions)})")  # fmt: skip
+        )
+        counts = (
+            f" {len(regions)} ({sum(r.region.tongue for r in regions)}; "
+            f"{sum(r.pd_and_g for r in regions)})"
+        )
         lines.append(p.head + " | ".join(cell(x) for x in (counts, largest or "–")) + " |")
     return lines
 
@@ -161,11 +188,21 @@ def census_table(planes) -> list[str]:
         regions = p.census_regions
         largest = region_text(regions[0], c.name) if regions else "–"
         where = "the same cells" if k["exact"] else "nearest cells"
-        lines.append(p.head + " | ".join(cell(x) for x in (
-            f" {rows} × {cols} ({c.starts})", share(k["multistable"], computed),
-            f"{len(regions)} ({sum(r.tongue for r in regions)}): {largest}",
-            pairs_sets(p.sets), f"{k['confirmed']} of {k['hysteretic']} ({where})",
-            share(k["multistable_hysteretic"], k["multistable"]))) + " |")  # fmt: skip
+        lines.append(
+            p.head
+            + " | ".join(
+                cell(x)
+                for x in (
+                    f" {rows} × {cols} ({c.starts})",
+                    share(k["multistable"], computed),
+                    f"{len(regions)} ({sum(r.tongue for r in regions)}): {largest}",
+                    pairs_sets(p.sets),
+                    f"{k['confirmed']} of {k['hysteretic']} ({where})",
+                    share(k["multistable_hysteretic"], k["multistable"]),
+                )
+            )
+            + " |"
+        )
     return lines
 
 
@@ -186,9 +223,22 @@ def crossings_table(planes) -> list[str]:
     for p in planes:
         for sweep, c in p.crossings.items():
             far = f"{c.far} ({num(median(c.far_omega))})" if c.far_omega else "0"
-            lines.append(p.head + " | ".join(cell(x) for x in (
-                f" {sweep}", c.total, share(c.same, c.total), c.near, far, c.never,
-                pairs_text(c.irreversible, arrow=" → "))) + " |")  # fmt: skip
+            lines.append(
+                p.head
+                + " | ".join(
+                    cell(x)
+                    for x in (
+                        f" {sweep}",
+                        c.total,
+                        share(c.same, c.total),
+                        c.near,
+                        far,
+                        c.never,
+                        pairs_text(c.irreversible, arrow=" → "),
+                    )
+                )
+                + " |"
+            )
     return lines
 
 
@@ -207,8 +257,11 @@ def first_column(p: Plane) -> list[tuple[float, str, str]]:
     axis at the plane's first ω, from its corner): (second between the rows, from, to)."""
     m = p.both
     labels = m.down[:, int(m.omega.argmax())]
-    return [(float((m.second[i] + m.second[i + 1]) / 2), str(labels[i]), str(labels[i + 1]))
-            for i in range(len(labels) - 1) if labels[i] != labels[i + 1]]  # fmt: skip
+    return [
+        (float((m.second[i] + m.second[i + 1]) / 2), str(labels[i]), str(labels[i + 1]))
+        for i in range(len(labels) - 1)
+        if labels[i] != labels[i + 1]
+    ]
 
 
 def path_edges(p: Plane) -> str:
@@ -226,10 +279,12 @@ def path_edges(p: Plane) -> str:
     text = f"; the path's first column (ω = {num(m.omega.max())}) changes label at {shown}{more}"
     if not cut:
         return text + f", where none of the {len(p.regions)} hysteresis regions ends"
-    return (text + f", and {cut} of the {len(p.regions)} hysteresis regions end{'s' * (cut == 1)} "
-            "within a cell of such a change: there its straight edge along ω is the path's "
-            "history, every row on one side starting on one branch and every row on the other "
-            "on another")  # fmt: skip
+    return (
+        text + f", and {cut} of the {len(p.regions)} hysteresis regions end{'s' * (cut == 1)} "
+        "within a cell of such a change: there its straight edge along ω is the path's "
+        "history, every row on one side starting on one branch and every row on the other "
+        "on another"
+    )
 
 
 def summary(planes) -> list[str]:
@@ -238,18 +293,24 @@ def summary(planes) -> list[str]:
         j, c = p.jumps, p.crossings["down"]
         tongues = [r for r in p.regions if r.tongue]
         hits, back = pair_crossings(p)
-        text = (f"- {PLANE_TEXT[p.plane]}, {p.tensile}: {j.cells} hysteretic "
-                f"cell{'s' * (j.cells != 1)}"
-                + (f", ω {num(j.omega_range[0])}–{num(j.omega_range[1])}, mostly "
-                   f"{pairs_text(j.pairs, 2)} (down / up)" if j.cells else "")
-                + f"; {len(tongues)} of {len(p.regions)} hysteresis regions tongue-shaped; "
-                f"{sum(r.region.tongue for r in p.labels)} of {len(p.labels)} subharmonic "
-                f"label regions of the paper's path tongue-shaped, "
-                f"{sum(r.pd_and_g for r in p.labels)} bounded by PD and G; "
-                f"{share(p.check['multistable'], int((p.census.n_attractors >= 0).sum()))} "
-                f"census cells multistable; of the down sweep's {c.total} label changes "
-                f"{c.same} are crossed back at the same edge, {c.never} nowhere in their "
-                f"row")  # fmt: skip
+        text = (
+            f"- {PLANE_TEXT[p.plane]}, {p.tensile}: {j.cells} hysteretic "
+            f"cell{'s' * (j.cells != 1)}"
+            + (
+                f", ω {num(j.omega_range[0])}–{num(j.omega_range[1])}, mostly "
+                f"{pairs_text(j.pairs, 2)} (down / up)"
+                if j.cells
+                else ""
+            )
+            + f"; {len(tongues)} of {len(p.regions)} hysteresis regions tongue-shaped; "
+            f"{sum(r.region.tongue for r in p.labels)} of {len(p.labels)} subharmonic "
+            f"label regions of the paper's path tongue-shaped, "
+            f"{sum(r.pd_and_g for r in p.labels)} bounded by PD and G; "
+            f"{share(p.check['multistable'], int((p.census.n_attractors >= 0).sum()))} "
+            f"census cells multistable; of the down sweep's {c.total} label changes "
+            f"{c.same} are crossed back at the same edge, {c.never} nowhere in their "
+            f"row"
+        )
         if p.regions:
             text += path_edges(p)
         if hits:
@@ -258,11 +319,20 @@ def summary(planes) -> list[str]:
                 f"grazing jump): {back} of {hits} crossed back at the same edge"
             )
         lines.append(text + ".")
-    lingual = [f"{r.label} on {PLANE_TEXT[p.plane]}, {p.tensile}" for p in planes
-               for r in p.labels if r.region.tongue and r.pd_and_g]  # fmt: skip
+    lingual = [
+        f"{r.label} on {PLANE_TEXT[p.plane]}, {p.tensile}"
+        for p in planes
+        for r in p.labels
+        if r.region.tongue and r.pd_and_g
+    ]
     rows = sum(sum(r.bounds.values()) for p in planes for r in p.regions)
-    pd_g = sum(n for p in planes for r in p.regions for (hi, lo), n in r.bounds.items()
-               if {"PD", "G"} <= set(hi.split()) | set(lo.split()))  # fmt: skip
+    pd_g = sum(
+        n
+        for p in planes
+        for r in p.regions
+        for (hi, lo), n in r.bounds.items()
+        if {"PD", "G"} <= set(hi.split()) | set(lo.split())
+    )
     lines += [
         "- Against the paper's lingual domains (a tongue of subharmonic motion bounded by PD "
         "and G, which it ascribes to irreversible PD and G transitions): tongue-shaped "

@@ -54,21 +54,33 @@ def load_both(store, typed: bool = True) -> BothMap:
 
     with open_store(store) as ds:
         second = ds["label"].dims[1]
-        layers = [{name: ds[name].isel(direction=k).values for name in
-                   ("label", "kind", "status", "n", "sections")} for k in (0, 1)]  # fmt: skip
-        both = BothMap(ds["omega"].values, ds[second].values, second, layers[0]["label"],
-                       layers[1]["label"], ds["hysteresis"].values.astype(bool),
-                       settled_cycles(*(layers[0][k] for k in ("kind", "status", "n",
-                                                                "sections")))
-                       & settled_cycles(*(layers[1][k] for k in ("kind", "status", "n",
-                                                                 "sections"))))  # fmt: skip
+        layers = [
+            {
+                name: ds[name].isel(direction=k).values
+                for name in ("label", "kind", "status", "n", "sections")
+            }
+            for k in (0, 1)
+        ]
+        both = BothMap(
+            ds["omega"].values,
+            ds[second].values,
+            second,
+            layers[0]["label"],
+            layers[1]["label"],
+            ds["hysteresis"].values.astype(bool),
+            settled_cycles(*(layers[0][k] for k in ("kind", "status", "n", "sections")))
+            & settled_cycles(*(layers[1][k] for k in ("kind", "status", "n", "sections"))),
+        )
     if typed:
         from ..views.boundaries import store_boundaries
 
         for sweep in ("down", "up"):
             found = store_boundaries(store, direction=sweep, trace=True)
-            both.types[sweep] = {(s.before[0], min(s.before[1], s.after[1])): s.type
-                                 for s in found.segments if s.axis == "omega"}  # fmt: skip
+            both.types[sweep] = {
+                (s.before[0], min(s.before[1], s.after[1])): s.type
+                for s in found.segments
+                if s.axis == "omega"
+            }
             both.edges[sweep] = [(s.before, s.after, s.type) for s in found.segments]
     return both
 
@@ -107,8 +119,7 @@ def label_regions(m: BothMap, sweep: str = "down", min_cells: int = MIN_REGION) 
             inside = ids == k
             if inside.sum() < min_cells:
                 continue
-            types = Counter(kind for a, b, kind in m.edges.get(sweep, ())
-                            if inside[a] or inside[b])  # fmt: skip
+            types = Counter(kind for a, b, kind in m.edges.get(sweep, ()) if inside[a] or inside[b])
             out.append(LabelRegion(label, describe(inside, m.omega, m.second), types))
     return sorted(out, key=lambda r: -r.region.cells)
 
@@ -153,12 +164,16 @@ def jump_summary(m: BothMap) -> Jumps:
     other = Counter(zip(m.down[differ].tolist(), m.up[differ].tolist(), strict=True))
     w = np.broadcast_to(m.omega, h.shape)[h]
     return Jumps(
-        int(h.sum()), int(m.compared.sum()), int(computed.sum()),
+        int(h.sum()),
+        int(m.compared.sum()),
+        int(computed.sum()),
         (float(w.min()), float(w.max())) if w.size else None,
-        column_intervals(cols, m.omega, per_column), pairs.most_common(),
-        int(sum(c for (a, b), c in pairs.items() if a == b)), int(differ.sum()),
+        column_intervals(cols, m.omega, per_column),
+        pairs.most_common(),
+        int(sum(c for (a, b), c in pairs.items() if a == b)),
+        int(differ.sum()),
         other.most_common(),
-    )  # fmt: skip
+    )
 
 
 # -- regions (tongues) -------------------------------------------------------------------
@@ -214,8 +229,9 @@ def region_shape(widths_by_row: np.ndarray, second: np.ndarray):
     return tongue, tip, (int(lo), int(hi))
 
 
-def regions(mask, omega, second, both: BothMap | None = None,
-            min_cells: int = MIN_REGION) -> list[Region]:  # fmt: skip
+def regions(
+    mask, omega, second, both: BothMap | None = None, min_cells: int = MIN_REGION
+) -> list[Region]:
     """The connected regions of ``mask`` with ≥ ``min_cells`` cells, largest first."""
     labels, count = components(mask)
     out = []
@@ -236,12 +252,22 @@ def describe(inside, omega, second, both: BothMap | None = None) -> Region:
     tongue, tip, ends = region_shape(widths[order], second[rows][order])
     pairs, bounds = [], Counter()
     if both is not None:
-        pairs = Counter(zip(both.down[inside].tolist(), both.up[inside].tolist(),
-                            strict=True)).most_common()  # fmt: skip
+        pairs = Counter(
+            zip(both.down[inside].tolist(), both.up[inside].tolist(), strict=True)
+        ).most_common()
         bounds = run_bounds(inside, both)
-    return Region(int(inside.sum()), (float(omega[c].min()), float(omega[c].max())),
-                  (float(second[r].min()), float(second[r].max())), len(rows),
-                  int(widths.max()), ends, tongue, tip, pairs, bounds)  # fmt: skip
+    return Region(
+        int(inside.sum()),
+        (float(omega[c].min()), float(omega[c].max())),
+        (float(second[r].min()), float(second[r].max())),
+        len(rows),
+        int(widths.max()),
+        ends,
+        tongue,
+        tip,
+        pairs,
+        bounds,
+    )
 
 
 def edge_text(both: BothMap, row: int, left: int) -> str:
@@ -312,8 +338,17 @@ def irreversibility(m: BothMap, sweep: str = "down") -> Crossings:
         else:
             counts["far"] += 1
             far_omega.append(float(step[min(j, k) : max(j, k)].sum()))
-    return Crossings(sweep, int(change.sum()), int(same.sum()), counts["near"], counts["far"],
-                     counts["never"], far_omega, pairs.most_common(), where)  # fmt: skip
+    return Crossings(
+        sweep,
+        int(change.sum()),
+        int(same.sum()),
+        counts["near"],
+        counts["far"],
+        counts["never"],
+        far_omega,
+        pairs.most_common(),
+        where,
+    )
 
 
 # -- the census ----------------------------------------------------------------------------
@@ -336,9 +371,15 @@ def load_census(store) -> Census:
     with open_store(store) as ds:
         second = ds["n_attractors"].dims[0]
         starts = json.loads(ds.attrs["job"])["attractors"]["starts"]
-        return Census(ds["omega"].values, ds[second].values, second,
-                      ds["n_attractors"].values.astype(np.int64), ds["attractor_label"].values,
-                      ds["unsettled_starts"].values, starts)  # fmt: skip
+        return Census(
+            ds["omega"].values,
+            ds[second].values,
+            second,
+            ds["n_attractors"].values.astype(np.int64),
+            ds["attractor_label"].values,
+            ds["unsettled_starts"].values,
+            starts,
+        )
 
 
 def attractor_sets(c: Census, mask: np.ndarray) -> list:

@@ -24,9 +24,13 @@ OUTPUT_ARRAYS = {
 }
 # Arrays of a job's ``attractors`` census (campar.sweep.multistable), only with that key.
 CENSUS_ARRAYS = (
-    "n_attractors", "unsettled_starts",
-    "attractor_n", "attractor_p", "attractor_kind", "attractor_fraction",
-)  # fmt: skip
+    "n_attractors",
+    "unsettled_starts",
+    "attractor_n",
+    "attractor_p",
+    "attractor_kind",
+    "attractor_fraction",
+)
 
 # dtype and trailing shape of every per-cell array (S = sections per cell).
 ARRAY_SPECS = {
@@ -74,12 +78,14 @@ PARTS = ("real", "imag")  # of a complex Floquet multiplier
 # values and names are in campar.core.codes; the store states them from there.
 ARRAY_DOCS = {
     "n": (
-        "period of the steady motion", "1",
+        "period of the steady motion",
+        "1",
         "cam revolutions per period: points of the stroboscopic section σn (θ = 0 mod 2π); "
         "0 where kind is not periodic",
     ),
     "p": (
-        "detachments per period", "1",
+        "detachments per period",
+        "1",
         "contact→separation events (ε crossing 0 downward) in n revolutions; where kind is "
         "not periodic, in the read window",
     ),
@@ -87,86 +93,103 @@ ARRAY_DOCS = {
     "status": ("why the cell ended", None, "anything but ok is a failed cell (its numbers NaN)"),
     "flags": ("remarks on the cell", None, "bits that a reader of a map should know about"),
     "dc": (
-        "duty cycle", "1",
+        "duty cycle",
+        "1",
         "fraction of time separated (ε < 0) in the steady window: 0 never, 1 always detached",
     ),
     "eps_min": (
-        "minimum penetration", "1",
+        "minimum penetration",
+        "1",
         "min ε = yc − y over the steady window, in units of the stroke h; < 0: detachment height",
     ),
     "eps_max": (
-        "intrusion depth", "1",
+        "intrusion depth",
+        "1",
         "max ε = yc − y over the steady window, in units of the stroke h",
     ),
     "pn_max": (
-        "maximum contact force", "1",
+        "maximum contact force",
+        "1",
         "max Pn over the steady window, in units of K1·h (Hunt–Crossley, docs/model.md)",
     ),
     "state": (
-        "final state at θ = 0", "1",
+        "final state at θ = 0",
+        "1",
         "the cell's last section point, where the next cell of the chain starts: y in units of "
         "the stroke h, ydot = dy/dt with t in units of 1/ωn",
     ),
     "revolutions": ("revolutions computed", "1", "transient and read window: the cell's cost"),
     "steps": ("integrator steps accepted", "1", "the cell's cost"),
     "lyapunov": (
-        "largest Lyapunov exponent", "1",
+        "largest Lyapunov exponent",
+        "1",
         "per unit dimensionless time t (t in units of 1/ωn); of the cycle where periodic",
     ),
     "separation_omega": (
-        "separation speed", "1",
+        "separation speed",
+        "1",
         "of the cell's row, the same in every cell of it: the lowest ω at which the follower "
         "detaches (p > 0) along the row's chain, located between cells to 1e-6 by bisection "
         "(campar.sweep.separation); NaN where the row's lowest cell detaches or none does",
     ),
     "separation_eps_max": (
-        "largest intrusion below the separation speed", "1",
+        "largest intrusion below the separation speed",
+        "1",
         "of the cell's row: max ε over its contact cells up to the separation speed (grid and "
         "bisection), in units of the stroke h",
     ),
     "separation_pn_max": (
-        "largest contact force below the separation speed", "1",
+        "largest contact force below the separation speed",
+        "1",
         "of the cell's row: max Pn over its contact cells up to the separation speed (grid and "
         "bisection), in units of K1·h",
     ),
     "multipliers": (
-        "Floquet multipliers", "1",
+        "Floquet multipliers",
+        "1",
         "eigenvalues of the Jacobian of the period-n section map, largest modulus first; "
         "NaN where not periodic or where the Jacobian was not integrated",
     ),
     "sections": (
-        "stroboscopic section points σn", "1",
+        "stroboscopic section points σn",
+        "1",
         "(y, ydot) at θ = 0 mod 2π over the last revolutions, in order; NaN-padded",
     ),
     "n_attractors": (
-        "distinct attractors found", None,
+        "distinct attractors found",
+        None,
         "of the cell's census: the attractors reached by the job's attractors.starts starts "
         "(rest, then Halton points over y in [-1, 2], ydot within ±1.5 omega at θ = 0) and "
         "by the chain's own end state, each run at the cell to its steady motion; periodic "
         "motions one attractor when their σn points agree up to a cyclic shift",
     ),
     "unsettled_starts": (
-        "starts that settled on no attractor", None,
+        "starts that settled on no attractor",
+        None,
         "of the census's starts: unconverged or failed within the transient budget",
     ),
     "attractor_n": (
-        "period of the attractor", "1",
+        "period of the attractor",
+        "1",
         "cam revolutions per period; 0 where not periodic; -1 where the cell has fewer attractors",
     ),
     "attractor_p": (
-        "detachments per period of the attractor", "1",
+        "detachments per period of the attractor",
+        "1",
         "as p; -1 where the cell has fewer attractors",
     ),
     "attractor_kind": (
-        "kind of the attractor", None,
+        "kind of the attractor",
+        None,
         "attractors by basin fraction, most frequent first; -1 where the cell has fewer",
     ),
     "attractor_fraction": (
-        "basin fraction of the attractor", "1",
+        "basin fraction of the attractor",
+        "1",
         "share of the census's starts that reached it (0: reached by the chain alone); "
         "NaN where the cell has fewer attractors",
     ),
-}  # fmt: skip
+}
 
 
 def array_names(job: Job) -> list[str]:

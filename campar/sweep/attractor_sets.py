@@ -42,7 +42,7 @@ def set_name(keys, more: bool, chatter_p: int) -> str:
     labels = [
         cell_label(
             int(k >> (2 * BITS)) - 1, int((k >> BITS) & mask) - 1, int(k & mask) - 1, chatter_p
-        )  # fmt: skip
+        )
         for k in keys
         if k != np.iinfo(np.int64).max
     ]

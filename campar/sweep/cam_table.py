@@ -40,8 +40,9 @@ def check_angles(angles) -> tuple[float, float, float, float]:
             raise ValueError(f"{name} must be {'> 0' if positive else '≥ 0'}, got {a:.12g}")
     total = sum(phi)
     if abs(total - TWO_PI) > ANGLE_TOL:
-        raise ValueError(f"the cam angles phi1 … phi4 must sum to 2π = {TWO_PI:.12g}, "
-                         f"they sum to {total:.12g}")  # fmt: skip
+        raise ValueError(
+            f"the cam angles phi1 … phi4 must sum to 2π = {TWO_PI:.12g}, they sum to {total:.12g}"
+        )
     return phi
 
 
@@ -118,8 +119,10 @@ def parse_table(text: str, name: str = "cam table", raw: bytes | None = None) ->
     steps = np.diff(theta)
     if np.any(steps <= 0.0):
         i = int(np.argmax(steps <= 0.0)) + 1
-        raise ValueError(f"{name} line {lines[i]}: θ must rise strictly, {theta[i]:.12g} "
-                         f"follows {theta[i - 1]:.12g}")  # fmt: skip
+        raise ValueError(
+            f"{name} line {lines[i]}: θ must rise strictly, {theta[i]:.12g} "
+            f"follows {theta[i - 1]:.12g}"
+        )
     if theta[-1] > TWO_PI + ANGLE_TOL:
         hint = " (θ is in radians, not degrees)" if theta[-1] > 7.0 else ""
         raise ValueError(f"{name} line {lines[-1]}: θ = {theta[-1]:.12g} is beyond 2π{hint}")
@@ -133,9 +136,11 @@ def parse_table(text: str, name: str = "cam table", raw: bytes | None = None) ->
     gaps = np.diff(np.append(theta, TWO_PI))
     widest = int(np.argmax(gaps))
     if gaps[widest] > MAX_GAP:
-        raise ValueError(f"{name} line {lines[widest]}: a gap of {gaps[widest]:.4g} rad after "
-                         f"θ = {theta[widest]:.6g}; a cam table's points are at most "
-                         f"2π/32 = {MAX_GAP:.4g} rad apart")  # fmt: skip
+        raise ValueError(
+            f"{name} line {lines[widest]}: a gap of {gaps[widest]:.4g} rad after "
+            f"θ = {theta[widest]:.6g}; a cam table's points are at most "
+            f"2π/32 = {MAX_GAP:.4g} rad apart"
+        )
     digest = hashlib.sha256(raw if raw is not None else text.encode()).hexdigest()
     return CamTable(theta, lift, digest, name)
 
@@ -184,8 +189,10 @@ def phase_splines(theta, lift, bounds, name: str = "cam table"):
             ends.append(i)
         i0, i1 = ends
         if i1 - i0 < 4:
-            raise ValueError(f"{name}: {i1 - i0} intervals in the phase from θ = {lo_b:.6g}; "
-                             "with table_joins: phases each phase needs at least 4")  # fmt: skip
+            raise ValueError(
+                f"{name}: {i1 - i0} intervals in the phase from θ = {lo_b:.6g}; "
+                "with table_joins: phases each phase needs at least 4"
+            )
         coef[i0:i1] = clamped_spline(x[i0 : i1 + 1], y[i0 : i1 + 1])
     return x, coef
 
@@ -193,8 +200,10 @@ def phase_splines(theta, lift, bounds, name: str = "cam table"):
 def clamped_spline(x, y) -> np.ndarray:
     """Coefficients (a, b, c, e) of the cubic spline through (x, y) whose end slopes are
     those of the quartic through the five points at each end."""
-    slopes = [np.polyval(np.polyder(np.polyfit(x[:5] - x[0], y[:5], 4)), 0.0),
-              np.polyval(np.polyder(np.polyfit(x[-5:] - x[-1], y[-5:], 4)), 0.0)]  # fmt: skip
+    slopes = [
+        np.polyval(np.polyder(np.polyfit(x[:5] - x[0], y[:5], 4)), 0.0),
+        np.polyval(np.polyder(np.polyfit(x[-5:] - x[-1], y[-5:], 4)), 0.0),
+    ]
     h = np.diff(x)
     slope = np.diff(y) / h
     n = len(x)

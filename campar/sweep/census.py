@@ -233,8 +233,10 @@ def group_cells(kinds, ns, sections, tol: float, counted: int | None = None):
                 same[block : block + BLOCK] = same_cycles(
                     np.full(len(cells), ns[first]),
                     np.broadcast_to(sections[first], (len(cells), *sections.shape[1:])),
-                    ns[cells], sections[cells], tol,
-                )  # fmt: skip
+                    ns[cells],
+                    sections[cells],
+                    tol,
+                )
         else:
             cloud = record_points(int(kinds[first]), int(ns[first]), sections[first])
             for j, cell in enumerate(rest):

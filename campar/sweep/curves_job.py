@@ -45,23 +45,44 @@ FOUND, NONE_FOUND = 0, 1  # curve_status
 
 # What a reader of the store needs to know of each array (as arrays.ARRAY_DOCS).
 CURVE_ARRAY_DOCS = {
-    "curve_index": ("curve of the task", None,
-                    "which of the task's curves the point belongs to; -1: no point here"),
-    "curve_type": ("bifurcation type of the curve", None,
-                   "0 PD (a multiplier -1), 1 SN (fold, +1), 2 NS (a complex pair on the unit "
-                   "circle), 3 G (grazing: an extremum of the penetration at 0)"),
+    "curve_index": (
+        "curve of the task",
+        None,
+        "which of the task's curves the point belongs to; -1: no point here",
+    ),
+    "curve_type": (
+        "bifurcation type of the curve",
+        None,
+        "0 PD (a multiplier -1), 1 SN (fold, +1), 2 NS (a complex pair on the unit "
+        "circle), 3 G (grazing: an extremum of the penetration at 0)",
+    ),
     "curve_n": ("period of the cycles on the curve", "1", "cam revolutions"),
-    "curve_p": ("detachments per period on the curve", "1",
-                "at the point (for G: the count on one side, p changes across the curve)"),
-    "curve_values": ("the point in the map's plane", "1",
-                     "(omega, the map's second parameter) of the curve's point"),
-    "curve_state": ("the cycle's state at θ = 0", "1",
-                    "(y, ydot) of the cycle at the point, units of the stroke h and h·ωn"),
-    "curve_multipliers": ("Floquet multipliers of the cycle", "1",
-                          "eigenvalues of DP^n at the point, largest modulus first"),
-    "curve_status": ("whether the task found a curve", None,
-                     "0: its curves are stored; 1: none of its seeds gave one"),
-}  # fmt: skip
+    "curve_p": (
+        "detachments per period on the curve",
+        "1",
+        "at the point (for G: the count on one side, p changes across the curve)",
+    ),
+    "curve_values": (
+        "the point in the map's plane",
+        "1",
+        "(omega, the map's second parameter) of the curve's point",
+    ),
+    "curve_state": (
+        "the cycle's state at θ = 0",
+        "1",
+        "(y, ydot) of the cycle at the point, units of the stroke h and h·ωn",
+    ),
+    "curve_multipliers": (
+        "Floquet multipliers of the cycle",
+        "1",
+        "eigenvalues of DP^n at the point, largest modulus first",
+    ),
+    "curve_status": (
+        "whether the task found a curve",
+        None,
+        "0: its curves are stored; 1: none of its seeds gave one",
+    ),
+}
 
 
 class SeedSettings(Settings):
@@ -114,8 +135,10 @@ def check_curves_job(job) -> None:
     if (job.curves is not None) == (tuple(job.sweep) == CURVE_AXES):
         return
     if job.curves is None:
-        raise ValueError(f"a sweep over {', '.join(CURVE_AXES)} is a curves job: it needs "
-                         "curves: (campar curves MAP writes it)")  # fmt: skip
+        raise ValueError(
+            f"a sweep over {', '.join(CURVE_AXES)} is a curves job: it needs "
+            "curves: (campar curves MAP writes it)"
+        )
     raise ValueError(f"curves: needs the sweep {', '.join(CURVE_AXES)} (campar curves MAP)")
 
 
@@ -124,29 +147,39 @@ def check_curves_axes(job) -> None:
         return
     columns = CURVES_PER_TASK * job.curves.points
     if job.shape != (len(job.curves.tasks), columns):
-        raise ValueError(f"sweep: a curves job of {len(job.curves.tasks)} tasks and "
-                         f"{job.curves.points} points is {len(job.curves.tasks)} task × "
-                         f"{columns} point, got {job.shape[0]} × {job.shape[1]}")  # fmt: skip
+        raise ValueError(
+            f"sweep: a curves job of {len(job.curves.tasks)} tasks and "
+            f"{job.curves.points} points is {len(job.curves.tasks)} task × "
+            f"{columns} point, got {job.shape[0]} × {job.shape[1]}"
+        )
 
 
-def curves_job_data(map_job, map_path: str, tasks: list[list[dict]], *, types, points: int,
-                    store: str) -> dict:  # fmt: skip
+def curves_job_data(
+    map_job, map_path: str, tasks: list[list[dict]], *, types, points: int, store: str
+) -> dict:
     """The job (as a mapping, for Job.from_dict) that runs these tasks of ``map_job``'s
     curves into ``store``."""
     plane = ("omega", map_job.second)
     columns = CURVES_PER_TASK * points
     return {
         "name": f"{map_job.name}_curves",
-        "sweep": {"point": {"from": 0, "to": columns - 1, "points": columns},
-                  "task": {"from": 0, "to": max(len(tasks) - 1, 0), "points": len(tasks)}},
+        "sweep": {
+            "point": {"from": 0, "to": columns - 1, "points": columns},
+            "task": {"from": 0, "to": max(len(tasks) - 1, 0), "points": len(tasks)},
+        },
         "fixed": {k: v for k, v in map_job.fixed.items() if k not in plane},
         "model": map_job.model.model_dump(mode="json"),
         "integrator": map_job.integrator.model_dump(mode="json"),
-        "curves": {"map": str(map_path), "plane": list(plane), "types": list(types),
-                   "points": points, "tasks": tasks},
+        "curves": {
+            "map": str(map_path),
+            "plane": list(plane),
+            "types": list(types),
+            "points": points,
+            "tasks": tasks,
+        },
         "tiles": {"rows": 1},
         "store": store,
-    }  # fmt: skip
+    }
 
 
 # The runner's functions of this kind, registered by campar.continuation.tasks:
@@ -161,6 +194,8 @@ def register(tile: Callable, compile: Callable) -> None:
 
 def runner(what: str) -> Callable:
     if what not in RUNNERS:
-        raise RuntimeError("a curves job runs with campar.continuation.tasks imported "
-                           "(campar curves, campar run and campar.run import it)")  # fmt: skip
+        raise RuntimeError(
+            "a curves job runs with campar.continuation.tasks imported "
+            "(campar curves, campar run and campar.run import it)"
+        )
     return RUNNERS[what]

@@ -73,8 +73,10 @@ class Forecast:
         ]
         if self.logged_cells_per_s:
             at_rate = self.pending_cells / self.logged_cells_per_s
-            lines.append(f"         {duration(at_rate)} at this store's logged "
-                         f"{self.logged_cells_per_s:,.0f} cells/s")  # fmt: skip
+            lines.append(
+                f"         {duration(at_rate)} at this store's logged "
+                f"{self.logged_cells_per_s:,.0f} cells/s"
+            )
         if self.limits_exceeded:
             lines.append(f"refused  {self.limits_exceeded}")
         return "\n".join(lines)

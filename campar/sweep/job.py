@@ -107,9 +107,12 @@ class ModelSettings(Settings):
 
 # Model options whose default leaves a job's hash as it was before the option existed,
 # so stores computed then stay valid (``job_digest``).
-MODEL_OPTION_DEFAULTS = {"duty_cycle": "separation", "cam_velocity": "chain",
-                         "cam": CamSettings().model_dump(mode="json"),
-                         "contact": ContactSettings().model_dump(mode="json")}  # fmt: skip
+MODEL_OPTION_DEFAULTS = {
+    "duty_cycle": "separation",
+    "cam_velocity": "chain",
+    "cam": CamSettings().model_dump(mode="json"),
+    "contact": ContactSettings().model_dump(mode="json"),
+}
 
 
 class InitialState(Settings):
@@ -312,8 +315,9 @@ class Job(Settings):
             for name, axis in sweep.items():
                 for end, value in (("from", axis.start), ("to", axis.stop)):
                     if abs(value) > MAX_START:
-                        raise ValueError(f"{name}.{end}: a start is within ±{MAX_START:g}, "
-                                         f"got {value:g}")  # fmt: skip
+                        raise ValueError(
+                            f"{name}.{end}: a start is within ±{MAX_START:g}, got {value:g}"
+                        )
             return sweep
         unknown = [k for k in keys if k not in MAP_AXES]
         if unknown:
@@ -537,12 +541,17 @@ class Job(Settings):
 def job_digest(data: dict) -> str:
     """``Job.digest`` of a normalised job as ``to_dict`` gives it, or as a store holds it
     (so a store can check its job against its hash without this campar's defaults)."""
-    data = {key: value for key, value in data.items() if key != "store"
-            and not (key in OPTIONAL_SECTIONS and value is None)}  # fmt: skip
+    data = {
+        key: value
+        for key, value in data.items()
+        if key != "store" and not (key in OPTIONAL_SECTIONS and value is None)
+    }
     if isinstance(data.get("model"), dict):
-        data["model"] = {key: value for key, value in data["model"].items()
-                         if key not in MODEL_OPTION_DEFAULTS
-                         or MODEL_OPTION_DEFAULTS[key] != value}  # fmt: skip
+        data["model"] = {
+            key: value
+            for key, value in data["model"].items()
+            if key not in MODEL_OPTION_DEFAULTS or MODEL_OPTION_DEFAULTS[key] != value
+        }
     text = json.dumps(data, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 

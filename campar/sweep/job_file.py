@@ -51,9 +51,10 @@ def format_validation_error(exc, source: str, allowed_keys) -> str:
             keys = missing[text]
             prefix = f"{text}." if text else ""
             lines.append(
-                f"{prefix}{keys[0]}: required key is missing" if len(keys) == 1 else
-                f"{text or '(top level)'}: required keys are missing: {', '.join(keys)}"
-            )  # fmt: skip
+                f"{prefix}{keys[0]}: required key is missing"
+                if len(keys) == 1
+                else f"{text or '(top level)'}: required keys are missing: {', '.join(keys)}"
+            )
         else:
             lines.append(text)
     return f"{source}: " + "; ".join(lines)

@@ -16,9 +16,13 @@ from .settings import Settings
 # Parameters of the job's laws (model.cam, model.contact) that a map may sweep as its
 # second axis: the name in ``sweep`` and the model section it overrides row by row.
 LAW_PARAMETERS = {
-    "phi1": "cam", "phi2": "cam", "phi3": "cam", "phi4": "cam",
-    "n": "contact", "restitution": "contact",
-}  # fmt: skip
+    "phi1": "cam",
+    "phi2": "cam",
+    "phi3": "cam",
+    "phi4": "cam",
+    "n": "contact",
+    "restitution": "contact",
+}
 # The cam angle that takes up the difference when one is swept (they sum to 2π): the near
 # dwell, or the far dwell when the near dwell itself is swept.
 TAKES_UP = {"phi1": "phi4", "phi2": "phi4", "phi3": "phi4", "phi4": "phi2"}
@@ -168,8 +172,7 @@ def kernel_law(model, name: str | None = None, value: float | None = None, swept
         the_cam = cam.phased_cam(settings.rise, settings.fall, settings.angles)
     restitution = 0.8 if con.restitution is None else con.restitution
     floor = contact.IMPACT_FLOOR if con.impact_floor is None else con.impact_floor
-    the_contact = contact.contact_law(con.law, con.n, restitution, floor,
-                                      general="n" in swept)  # fmt: skip
+    the_contact = contact.contact_law(con.law, con.n, restitution, floor, general="n" in swept)
     return Law(np.int64(model.law_bits), the_cam, the_contact)
 
 

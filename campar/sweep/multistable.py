@@ -44,8 +44,18 @@ def run_starts(
     law = job.law() if law is None else law
     for i, x0 in enumerate(starts):
         rec = allocate_outputs(1, CENSUS_BITS, n_sections)
-        run_chain(cell["omega"], cell["zeta"], cell["f0"], cell["mu_kn"], cell["mu_cn"],
-                  law, np.array(x0, float), solver, settings, rec)  # fmt: skip
+        run_chain(
+            cell["omega"],
+            cell["zeta"],
+            cell["f0"],
+            cell["mu_kn"],
+            cell["mu_cn"],
+            law,
+            np.array(x0, float),
+            solver,
+            settings,
+            rec,
+        )
         for mine, one in zip(records, rec, strict=True):
             if len(one):  # outputs not asked for have no cells
                 mine[i] = one[0]

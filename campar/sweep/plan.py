@@ -99,9 +99,11 @@ def auto_tile_rows(job: Job, lanes: int, direct: bool) -> tuple[int, str]:
     why = f"auto for {lanes} lane{'s' if lanes != 1 else ''}: {rows} rows a tile"
     if writer > balance:
         n_tiles = -(-n_rows // rows) * len(job.directions)
-        why += (f"; the master's pace needs ≥ {writer} rows a tile and {tiles_wanted} tiles "
-                f"would need ≤ {balance}: {n_tiles} tiles for {lanes} lanes, some idle at "
-                "the end (more rows in the grid, or fewer ranks)")  # fmt: skip
+        why += (
+            f"; the master's pace needs ≥ {writer} rows a tile and {tiles_wanted} tiles "
+            f"would need ≤ {balance}: {n_tiles} tiles for {lanes} lanes, some idle at "
+            "the end (more rows in the grid, or fewer ranks)"
+        )
     return rows, why
 
 

@@ -166,8 +166,13 @@ class Tally:
                 n, p = pair >> 32, pair & 0xFFFFFFFF
                 labels[cell_label(0, n, p, self.chatter_p)] += count
         if "n_attractors" in a:  # a census map: which attractors coexist (2 or more)
-            codes, names = attractor_sets(a["attractor_kind"], a["attractor_n"], a["attractor_p"],
-                                          a["n_attractors"], self.chatter_p)  # fmt: skip
+            codes, names = attractor_sets(
+                a["attractor_kind"],
+                a["attractor_n"],
+                a["attractor_p"],
+                a["n_attractors"],
+                self.chatter_p,
+            )
             several = self.sets.setdefault(check.tile.direction, Counter())
             for code, count in _counts(codes):
                 if "+" in names[code]:
@@ -193,7 +198,7 @@ def summarize(reader) -> dict:
             for way, c in sorted(
                 tally.labels.items(), key=lambda item: DIRECTIONS.index(item[0]) if item[0] else -1
             )
-        },  # fmt: skip
+        },
         "sets": {way: dict(c.most_common()) for way, c in tally.sets.items()},
         "damaged": report.damaged,
         "variables": report.variables,
@@ -235,8 +240,10 @@ def describe(reader, max_labels: int = 12) -> str:
         top = list(sets.items())
         shown = ", ".join(f"{name} {c}" for name, c in top[:max_labels]) or "none"
         more = f", … {len(top) - max_labels} more" if len(top) > max_labels else ""
-        lines.append(f"sets    {f'({way}) ' if way else ''}{shown}{more}  (cells where "
-                     "several attractors coexist)")  # fmt: skip
+        lines.append(
+            f"sets    {f'({way}) ' if way else ''}{shown}{more}  (cells where "
+            "several attractors coexist)"
+        )
     if s["runs"]:
         lines.append(
             f"runs    {s['runs']} ({s['last_outcome']} last), {format_duration(s['seconds'])} "

@@ -88,8 +88,9 @@ class ThreadLane:
     writing a tile, holding the GIL, or busy with other ranks) — unless ``halted()``
     says a stop signal came: then the next waits for the master to take it back."""
 
-    def __init__(self, job: Job, where: str, preload: bool = False, halted=lambda: False,
-                 share=None):  # fmt: skip
+    def __init__(
+        self, job: Job, where: str, preload: bool = False, halted=lambda: False, share=None
+    ):
         """With ``preload`` the thread first loads the kernel (``load_kernel``, a cold
         compile split as ``share`` says) while the caller waits for the master; tiles
         queue behind it."""
@@ -474,8 +475,13 @@ def run_master(job, store, signals, comm, grace, lane, direct=False) -> RunSumma
     store.log_run(entry)
     log.info(
         "%s: %s, %d tiles (%d cells) in %.1f s, %.1f cells/s",
-        store.path, outcome, entry["tiles"], entry["cells"], entry["seconds"], entry["cells_per_s"],
-    )  # fmt: skip
+        store.path,
+        outcome,
+        entry["tiles"],
+        entry["cells"],
+        entry["seconds"],
+        entry["cells_per_s"],
+    )
     if master.failure:
         raise CamparError(master.failure)
     if remaining and signals.early and entry["tiles"] == 0:  # under MPI, before the start

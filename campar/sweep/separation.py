@@ -48,11 +48,22 @@ def separation_row(job: Job, par: dict, out, law, solver, settings, allocate) ->
     trials = []  # (eps_max, pn_max) of the bisection's contact cells
     while w_hi - w_lo > OMEGA_TOL:
         mid = 0.5 * (w_hi + w_lo)
-        cell = {name: np.array([values[hi] if name != "omega" else mid])
-                for name, values in par.items()}  # fmt: skip
+        cell = {
+            name: np.array([values[hi] if name != "omega" else mid]) for name, values in par.items()
+        }
         one = allocate(1)
-        run_chain(cell["omega"], cell["zeta"], cell["f0"], cell["mu_kn"], cell["mu_cn"], law,
-                  state, solver, settings, one)  # fmt: skip
+        run_chain(
+            cell["omega"],
+            cell["zeta"],
+            cell["f0"],
+            cell["mu_kn"],
+            cell["mu_cn"],
+            law,
+            state,
+            solver,
+            settings,
+            one,
+        )
         if one.status[0] != OK:
             break  # the bracket so far: the chain cannot be followed further
         if one.p[0] > 0:

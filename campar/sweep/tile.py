@@ -153,9 +153,17 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
         par = chain_parameters(job, row)
         out = allocate_outputs(n_omega, settings.output_bits, job.n_sections)
         run_chain(
-            par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-            job.law(row), starts[row], solver, settings, out,
-        )  # fmt: skip
+            par["omega"],
+            par["zeta"],
+            par["f0"],
+            par["mu_kn"],
+            par["mu_cn"],
+            job.law(row),
+            starts[row],
+            solver,
+            settings,
+            out,
+        )
         extra = census_of(job, par, out.state, job.law(row))
         if job.wants("separation"):
             extra.update(separation_of(job, par, out, job.law(row), solver, settings))
@@ -259,16 +267,33 @@ def chain_starts(job: Job) -> np.ndarray:
             for row in range(n_rows):
                 cell = {name: values[row : row + 1] for name, values in par.items()}
                 one = allocate_outputs(1, 0, job.n_sections)
-                run_chain(cell["omega"], cell["zeta"], cell["f0"], cell["mu_kn"],
-                          cell["mu_cn"], job.law(row), state, solver_options(job), settings,
-                          one)  # fmt: skip
+                run_chain(
+                    cell["omega"],
+                    cell["zeta"],
+                    cell["f0"],
+                    cell["mu_kn"],
+                    cell["mu_cn"],
+                    job.law(row),
+                    state,
+                    solver_options(job),
+                    settings,
+                    one,
+                )
                 out.state[row] = one.state[0]
                 state = one.state[0] if np.all(np.isfinite(one.state[0])) else x_init
         else:
             run_chain(
-                par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-                job.law(), x_init, solver_options(job), settings, out,
-            )  # fmt: skip
+                par["omega"],
+                par["zeta"],
+                par["f0"],
+                par["mu_kn"],
+                par["mu_cn"],
+                job.law(),
+                x_init,
+                solver_options(job),
+                settings,
+                out,
+            )
         ok = np.all(np.isfinite(out.state), axis=1)[:, None]
         _FIRST_COLUMN_STARTS[key] = np.where(ok, out.state, x_init)
     return _FIRST_COLUMN_STARTS[key]
@@ -296,8 +321,16 @@ def warm_up() -> float:
     run_tile(job, Tile(0, 0, 1))
     par = chain_parameters(job, 0)
     trace_orbit(
-        par["omega"][0], par["zeta"][0], par["f0"][0], par["mu_kn"][0], par["mu_cn"][0],
-        job.law(), np.zeros(N_STATE), solver_options(job), cell_settings(job), 1,
+        par["omega"][0],
+        par["zeta"][0],
+        par["f0"][0],
+        par["mu_kn"][0],
+        par["mu_cn"][0],
+        job.law(),
+        np.zeros(N_STATE),
+        solver_options(job),
+        cell_settings(job),
+        1,
         make_trace(16, 16, 2),
-    )  # fmt: skip
+    )
     return time.perf_counter() - start

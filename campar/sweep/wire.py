@@ -441,9 +441,15 @@ def cache_sharers(comm, cache_dir: str) -> tuple[int, int]:
 
 
 SHARED_ERRORS = (
-    CamparError, JobError, StoreError, StoreMismatch, StoreLocked, Interrupted, StoreIOError,
+    CamparError,
+    JobError,
+    StoreError,
+    StoreMismatch,
+    StoreLocked,
+    Interrupted,
+    StoreIOError,
     StoreDamaged,
-)  # fmt: skip
+)
 
 
 def workers_write(direct_writes: bool) -> bool:
@@ -475,8 +481,9 @@ def seen_store(direct: str) -> str:
     log.warning(
         "rank on %s does not see the store %s as rank 0 does (not a shared file system?): "
         "it sends its tiles to rank 0 to write",
-        socket.gethostname(), real,
-    )  # fmt: skip
+        socket.gethostname(),
+        real,
+    )
     return ""
 
 

@@ -155,7 +155,7 @@ class AttractorCensus:
                     "revolutions": r.revolutions,
                 }
                 for i, r in self.unsettled
-            ],  # fmt: skip
+            ],
         }
 
 
@@ -229,14 +229,22 @@ def find_attractors(
         starts = spread_starts(count, omega, given)
     starts = np.asarray(starts, dtype=float).reshape(-1, 2)
     results = [
-        simulate_point(omega, y0=float(y), v0=float(v), multipliers=True, lyapunov=lyapunov,
-                       sections=CLOUD_POINTS, **settings)
+        simulate_point(
+            omega,
+            y0=float(y),
+            v0=float(v),
+            multipliers=True,
+            lyapunov=lyapunov,
+            sections=CLOUD_POINTS,
+            **settings,
+        )
         for y, v in starts
-    ]  # fmt: skip
+    ]
     tol = match_tolerance()
     # the grouping a map's census uses too (campar.sweep.multistable): one rule
-    groups, basin = group_records([KIND_CODES[r.kind] for r in results],
-                                  [r.sections for r in results], tol)  # fmt: skip
+    groups, basin = group_records(
+        [KIND_CODES[r.kind] for r in results], [r.sections for r in results], tol
+    )
     unsettled = [(i, r) for i, r in enumerate(results) if basin[i] < 0]
     attractors = tuple(Attractor(results[g[0]], tuple(g), len(g) / len(starts)) for g in groups)
     parameters = results[0].parameters if results else {"omega": omega}
@@ -254,18 +262,23 @@ def describe_attractors(census: AttractorCensus) -> str:
         flags = f"  flags: {', '.join(r.flags)}" if r.flags else ""
         rows.append(f"  [{j}] {a.label:>6}  ({a.kind})  basin fraction {share}{flags}")
         first = census.starts[a.starts[0]]
-        rows.append(f"      state ({r.state[0]:+.6f}, {r.state[1]:+.6f}), first reached from "
-                    f"({first[0]:+.6f}, {first[1]:+.6f})")  # fmt: skip
+        rows.append(
+            f"      state ({r.state[0]:+.6f}, {r.state[1]:+.6f}), first reached from "
+            f"({first[0]:+.6f}, {first[1]:+.6f})"
+        )
         if r.n and r.multipliers is not None:
-            mult = ", ".join(f"{m.real:+.6f}{m.imag:+.6f}j (|λ|={abs(m):.6f})"
-                             for m in r.multipliers)  # fmt: skip
+            mult = ", ".join(
+                f"{m.real:+.6f}{m.imag:+.6f}j (|λ|={abs(m):.6f})" for m in r.multipliers
+            )
             rows.append(f"      Floquet multipliers: {mult}")
     if census.unsettled:
         rows.append(f"  {len(census.unsettled)} start(s) settled on no attractor:")
         for i, r in census.unsettled:
             y, v = census.starts[i]
-            rows.append(f"      from ({y:+.6f}, {v:+.6f}): {r.label} ({r.status}, "
-                        f"{r.revolutions} revolutions)")  # fmt: skip
+            rows.append(
+                f"      from ({y:+.6f}, {v:+.6f}): {r.label} ({r.status}, "
+                f"{r.revolutions} revolutions)"
+            )
     rows.append(f"  (cycles matched within {census.match_tol:.0e}, ∞-norm of σn points)")
     return "\n".join(rows)
 

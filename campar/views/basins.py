@@ -67,11 +67,17 @@ ATTRACTOR_VARIABLES = {
     "attractor_label": ("label", "n-p label of the attractor", {}),
     "attractor_starts": ("starts", "starts that reached the attractor", {}),
     "attractor_fraction": ("fraction", "basin fraction of the attractor", {"units": "1"}),
-    "attractor_sections": ("points", "stroboscopic section points of the attractor", {
-        "units": "1", "comment": "of its first start: a cycle's n points, a cloud's read window"}),
-    "attractor_multipliers": ("multipliers", "Floquet multipliers of the attractor", {
-        "units": "1", "comment": "of its first start; NaN where not periodic"}),
-}  # fmt: skip
+    "attractor_sections": (
+        "points",
+        "stroboscopic section points of the attractor",
+        {"units": "1", "comment": "of its first start: a cycle's n points, a cloud's read window"},
+    ),
+    "attractor_multipliers": (
+        "multipliers",
+        "Floquet multipliers of the attractor",
+        {"units": "1", "comment": "of its first start; NaN where not periodic"},
+    ),
+}
 
 
 def basin_variables(ds: xr.Dataset, job) -> dict[str, xr.DataArray]:
@@ -80,8 +86,10 @@ def basin_variables(ds: xr.Dataset, job) -> dict[str, xr.DataArray]:
     and multipliers."""
     grid = (job.second, job.first)
     match = match_basin(job, ds["kind"].values, ds["n"].values, ds["sections"].values)
-    per = {name: ds[name].values.reshape(match.basin.size, *ds[name].shape[2:])[match.first]
-           for name in ("n", "p", "kind", "sections", "multipliers", "label")}  # fmt: skip
+    per = {
+        name: ds[name].values.reshape(match.basin.size, *ds[name].shape[2:])[match.first]
+        for name in ("n", "p", "kind", "sections", "multipliers", "label")
+    }
     # a cycle's own points: its first n σn points; a cloud keeps the whole read window
     width = per["sections"].shape[1]
     periodic = per["kind"] == Kind.PERIODIC
@@ -90,8 +98,16 @@ def basin_variables(ds: xr.Dataset, job) -> dict[str, xr.DataArray]:
     per["starts"], per["fraction"] = match.starts, match.fraction
     tails = {"points": ds["sections"].dims[2:], "multipliers": ds["multipliers"].dims[2:]}
     rank = np.arange(1, len(match.first) + 1, dtype=np.int32)
-    coords = {"attractor": ("attractor", rank, {"long_name": "attractor of the basin",
-              "comment": "rank by the starts that reached it, 1 the most"})}  # fmt: skip
+    coords = {
+        "attractor": (
+            "attractor",
+            rank,
+            {
+                "long_name": "attractor of the basin",
+                "comment": "rank by the starts that reached it, 1 the most",
+            },
+        )
+    }
     codes = {k: v for k, v in ds["kind"].attrs.items() if k in ("flag_values", "flag_meanings")}
     out = {
         "basin": xr.DataArray(

@@ -48,12 +48,16 @@ from .transitions import (
 
 TYPES = ("PD", "SN", "NS", "G", "chaos", "jump", "unknown")  # in legend order
 NOT_COMPUTED = -1  # kind of a cell not computed yet (campar.open's fill value)
-NO_MULTIPLIERS = ("the store holds no Floquet multipliers (add `multipliers` to the "
-                  "job's outputs): PD, SN, NS and jump cannot be told, such edges are "
-                  "unknown")  # fmt: skip
-BOUNDED_GRAZES = ("grazing judged from the stored global extrema of ε only: where the "
-                  "detachments change without them approaching 0 the edge is unknown "
-                  "(trace to tell)")  # fmt: skip
+NO_MULTIPLIERS = (
+    "the store holds no Floquet multipliers (add `multipliers` to the "
+    "job's outputs): PD, SN, NS and jump cannot be told, such edges are "
+    "unknown"
+)
+BOUNDED_GRAZES = (
+    "grazing judged from the stored global extrema of ε only: where the "
+    "detachments change without them approaching 0 the edge is unknown "
+    "(trace to tell)"
+)
 
 
 @dataclass(frozen=True)
@@ -74,12 +78,17 @@ class Segment:
     def to_dict(self) -> dict:
         t = self.transition
         return {
-            "axis": self.axis, "cells": [list(self.before), list(self.after)],
-            "edge": list(self.edge), "type": t.type, "from": t.before.label,
-            "to": t.after.label, "reason": t.reason,
+            "axis": self.axis,
+            "cells": [list(self.before), list(self.after)],
+            "edge": list(self.edge),
+            "type": t.type,
+            "from": t.before.label,
+            "to": t.after.label,
+            "reason": t.reason,
             "evidence": None if t.evidence is None else t.evidence.to_dict(),
-            "before": t.before.to_dict(), "after": t.after.to_dict(),
-        }  # fmt: skip
+            "before": t.before.to_dict(),
+            "after": t.after.to_dict(),
+        }
 
 
 @dataclass(frozen=True)
@@ -124,17 +133,27 @@ class MapBoundaries:
 
     def to_dict(self, *, segments: bool = True) -> dict:
         data = {
-            "second": self.second_name, "multipliers": self.multipliers,
+            "second": self.second_name,
+            "multipliers": self.multipliers,
             "grazing_from": "traced orbits" if self.traced else "stored ε extrema",
-            "notes": list(self.notes), "counts": self.counts(),
-        }  # fmt: skip
+            "notes": list(self.notes),
+            "counts": self.counts(),
+        }
         if segments:
             data["segments"] = [s.to_dict() for s in self.segments]
         return data
 
 
-def find_boundaries(arrays, omega, second, second_name: str, *, direction: str = "down",
-                    chatter_p: int = 7, trace=None) -> MapBoundaries:  # fmt: skip
+def find_boundaries(
+    arrays,
+    omega,
+    second,
+    second_name: str,
+    *,
+    direction: str = "down",
+    chatter_p: int = 7,
+    trace=None,
+) -> MapBoundaries:
     """Every edge between neighbouring computed cells of different labels, typed.
 
     arrays: name → array shaped (second, omega) in the job's order: "kind", "n", "p"
@@ -157,19 +176,28 @@ def find_boundaries(arrays, omega, second, second_name: str, *, direction: str =
     for i, j in zip(*np.nonzero(cells.differs(axis=1)), strict=True):
         a, b = ((i, j), (i, j + 1)) if first_is_j else ((i, j + 1), (i, j))
         x = xe[j + 1]
-        segments.append(cells.segment(a, b, "omega", (x, ye[i], x, ye[i + 1]), direction_text(
-            omega[a[1]], omega[b[1]], "ω")))  # fmt: skip
+        segments.append(
+            cells.segment(
+                a,
+                b,
+                "omega",
+                (x, ye[i], x, ye[i + 1]),
+                direction_text(omega[a[1]], omega[b[1]], "ω"),
+            )
+        )
     # along the second axis: (i, j) | (i + 1, j), in the first column's continuation order
     for i, j in zip(*np.nonzero(cells.differs(axis=0)), strict=True):
         y = ye[i + 1]
         text = direction_text(second[i], second[i + 1], second_name)
-        segments.append(cells.segment((i, j), (i + 1, j), second_name,
-                                      (xe[j], y, xe[j + 1], y), text))  # fmt: skip
+        segments.append(
+            cells.segment((i, j), (i + 1, j), second_name, (xe[j], y, xe[j + 1], y), text)
+        )
     notes = [] if cells.multipliers is not None else [NO_MULTIPLIERS]
     if trace is None:
         notes.append(BOUNDED_GRAZES)
-    return MapBoundaries(tuple(segments), second_name, cells.multipliers is not None,
-                         trace is not None, tuple(notes))  # fmt: skip
+    return MapBoundaries(
+        tuple(segments), second_name, cells.multipliers is not None, trace is not None, tuple(notes)
+    )
 
 
 def direction_text(first: float, then: float, name: str) -> str:
@@ -186,10 +214,12 @@ class MapCells:
         self.omega, self.second, self.second_name = omega, second, second_name
         self.chatter_p, self.trace = chatter_p, trace
         get = arrays.get
-        self.multipliers = None if get("multipliers") is None else np.asarray(
-            get("multipliers"), float)  # fmt: skip
-        self.eps = [np.asarray(get(name), float) for name in ("eps_min", "eps_max")
-                    if get(name) is not None]  # fmt: skip
+        self.multipliers = (
+            None if get("multipliers") is None else np.asarray(get("multipliers"), float)
+        )
+        self.eps = [
+            np.asarray(get(name), float) for name in ("eps_min", "eps_max") if get(name) is not None
+        ]
         self.lyapunov = None if get("lyapunov") is None else np.asarray(get("lyapunov"), float)
         self.gaps = get("half_gap")
         if self.gaps is None and get("sections") is not None:
@@ -231,8 +261,13 @@ class MapCells:
         if self.trace is not None and self._detachments_change(first, then):
             first, then = self.traced(first, before, step, -1), self.traced(then, after, step, 1)
         transition = Transition(first, then, *classify_boundary(first, then, direction))
-        return Segment(axis, tuple(map(int, before)), tuple(map(int, after)),
-                       tuple(float(v) for v in edge), transition)  # fmt: skip
+        return Segment(
+            axis,
+            tuple(map(int, before)),
+            tuple(map(int, after)),
+            tuple(float(v) for v in edge),
+            transition,
+        )
 
     @staticmethod
     def _detachments_change(a: Side, b: Side) -> bool:
@@ -243,16 +278,23 @@ class MapCells:
 
     def side(self, cell, farther) -> Side:
         """The side whose last cell is ``cell``; ``farther`` is used if inside, same label."""
-        farther = farther if self.inside(farther) and \
-            self.label_codes[farther] == self.label_codes[cell] else None  # fmt: skip
+        farther = (
+            farther
+            if self.inside(farther) and self.label_codes[farther] == self.label_codes[cell]
+            else None
+        )
         kind = Kind(int(self.kind[cell]))
         n = int(self.n[cell])
         graze, graze_farther = self.eps_bound(cell), None
         if farther is not None:
             graze_farther = self.eps_bound(farther)
         return Side(
-            index=int(cell[1]), omega=float(self.omega[cell[1]]), label=self.label(cell),
-            kind=KIND_NAMES[kind], n=n, p=int(self.p[cell]),
+            index=int(cell[1]),
+            omega=float(self.omega[cell[1]]),
+            label=self.label(cell),
+            kind=KIND_NAMES[kind],
+            n=n,
+            p=int(self.p[cell]),
             multipliers=self.cell_multipliers(cell),
             farther=None if farther is None else self.cell_multipliers(farther),
             graze=graze if kind == Kind.PERIODIC else None,
@@ -260,8 +302,9 @@ class MapCells:
             half_gap=self.gap(cell),
             half_gap_farther=None if farther is None else self.gap(farther),
             second=(self.second_name, float(self.second[cell[0]])),
-            lyapunov=self.cell_lyapunov(cell), graze_bound=graze is not None,
-        )  # fmt: skip
+            lyapunov=self.cell_lyapunov(cell),
+            graze_bound=graze is not None,
+        )
 
     def gap(self, cell) -> float | None:
         if self.gaps is None or not math.isfinite(self.gaps[cell]):
@@ -310,8 +353,9 @@ def half_gaps(sections, n) -> np.ndarray:
     return out
 
 
-def store_boundaries(path, *, omega=None, second=None, trace: bool = False,
-                     direction: str | None = None) -> MapBoundaries:  # fmt: skip
+def store_boundaries(
+    path, *, omega=None, second=None, trace: bool = False, direction: str | None = None
+) -> MapBoundaries:
     """``find_boundaries`` of a result store (the cells whose centres lie in the zoom
     ranges ``omega=(a, b)``, ``second=(c, d)``, either order; None: the whole axis).
 
@@ -353,8 +397,17 @@ def store_boundaries(path, *, omega=None, second=None, trace: bool = False,
     from ..sweep.store import read_store, verify_store
     from .plot import PlotError  # cheap: matplotlib is not loaded
 
-    wanted = ("kind", "n", "p", "multipliers", "eps_min", "eps_max", "lyapunov", "sections",
-              "state")  # fmt: skip
+    wanted = (
+        "kind",
+        "n",
+        "p",
+        "multipliers",
+        "eps_min",
+        "eps_max",
+        "lyapunov",
+        "sections",
+        "state",
+    )
     with read_store(path) as store:
         job = store.job
         if job.kind == "basin":
@@ -389,11 +442,16 @@ def store_boundaries(path, *, omega=None, second=None, trace: bool = False,
     arrays["kind"][~done] = NOT_COMPUTED
     rows, cols = zoom(job.second_values, second, job.second), zoom(job.omega, omega, "omega")
     arrays = {name: values[rows][:, cols] for name, values in arrays.items()}
-    tracer = store_tracer(job, arrays, job.omega[cols], job.second_values[rows]) if trace \
-        else None  # fmt: skip
-    return find_boundaries(arrays, job.omega[cols], job.second_values[rows], job.second,
-                           direction=sweep, chatter_p=job.classify.chatter_p,
-                           trace=tracer)  # fmt: skip
+    tracer = store_tracer(job, arrays, job.omega[cols], job.second_values[rows]) if trace else None
+    return find_boundaries(
+        arrays,
+        job.omega[cols],
+        job.second_values[rows],
+        job.second,
+        direction=sweep,
+        chatter_p=job.classify.chatter_p,
+        trace=tracer,
+    )
 
 
 def zoom(centres, bounds, name: str) -> slice:
@@ -406,8 +464,10 @@ def zoom(centres, bounds, name: str) -> slice:
     if inside.size == 0:
         from .plot import PlotError  # cheap: matplotlib is not loaded
 
-        raise PlotError(f"no cell centre of {name} lies in [{lo:g}, {hi:g}]; the map covers "
-                        f"{name} from {centres.min():g} to {centres.max():g}")  # fmt: skip
+        raise PlotError(
+            f"no cell centre of {name} lies in [{lo:g}, {hi:g}]; the map covers "
+            f"{name} from {centres.min():g} to {centres.max():g}"
+        )
     return slice(int(inside[0]), int(inside[-1]) + 1)
 
 
@@ -416,12 +476,19 @@ def store_tracer(job, arrays, omega, second):
     its stored final state with the job's integrator settings ((None, None) if it fails)."""
     from .point import trace_steady
 
-    fixed = {name: float(job.parameter(name)) for name in ("f0", "mu_kn", "mu_cn", "zeta")
-             if name != job.second}  # fmt: skip
+    fixed = {
+        name: float(job.parameter(name))
+        for name in ("f0", "mu_kn", "mu_cn", "zeta")
+        if name != job.second
+    }
 
     def trace(row: int, col: int, revolutions: int):
-        parameters = {**fixed, job.second: float(second[row]), "omega": float(omega[col]),
-                      "tensile": job.model.tensile}  # fmt: skip
+        parameters = {
+            **fixed,
+            job.second: float(second[row]),
+            "omega": float(omega[col]),
+            "tensile": job.model.tensile,
+        }
         orbit = trace_steady(job, parameters, arrays["state"][row, col], max(revolutions, 1))
         return (None, None) if orbit is None else (orbit.t, orbit.eps)
 
@@ -435,6 +502,8 @@ def describe_boundaries(found: MapBoundaries, limit: int = 20) -> str:
     typed = [s for s in found.segments if s.type != "unknown"][:limit]
     for s in typed:
         t = s.transition
-        rows.append(f"  {s.type:>5}  {t.before.label:>6} → {t.after.label:<6} at "
-                    f"{t.before.where} | {t.after.where}: {t.reason}")  # fmt: skip
+        rows.append(
+            f"  {s.type:>5}  {t.before.label:>6} → {t.after.label:<6} at "
+            f"{t.before.where} | {t.after.where}: {t.reason}"
+        )
     return "\n".join(rows)

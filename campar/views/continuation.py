@@ -51,13 +51,22 @@ class ContinuationResult:
         }
 
 
-def continue_from_cell(parameter: str, span: tuple[float, float], fixed: dict, *,
-                       y0: float = 0.0, v0: float = 0.0, cycle: int | None = None,
-                       switch: int = 0, model: dict | None = None,
-                       settings: BranchSettings | None = None,
-                       curve_types=(), second: str | None = None,
-                       second_window: tuple[float, float] | None = None,
-                       section_map: SectionMap | None = None) -> ContinuationResult:  # fmt: skip
+def continue_from_cell(
+    parameter: str,
+    span: tuple[float, float],
+    fixed: dict,
+    *,
+    y0: float = 0.0,
+    v0: float = 0.0,
+    cycle: int | None = None,
+    switch: int = 0,
+    model: dict | None = None,
+    settings: BranchSettings | None = None,
+    curve_types=(),
+    second: str | None = None,
+    second_window: tuple[float, float] | None = None,
+    section_map: SectionMap | None = None,
+) -> ContinuationResult:
     """Continue the periodic orbit of the cell at ``span[0]`` along ``parameter`` to span[1].
 
     Parameters
@@ -132,15 +141,17 @@ def continue_from_cell(parameter: str, span: tuple[float, float], fixed: dict, *
         raise ContinuationError(f"the cell at {parameter}={span[0]} failed: {cell.status}")
     start = find_cycle(period, cell.state, section_map=smap, **{**fixed, parameter: span[0]})
     direction = 1.0 if span[1] > span[0] else -1.0
-    root = continue_with_switching(start, parameter, span, switch, direction=direction,
-                                   section_map=smap, settings=settings)  # fmt: skip
+    root = continue_with_switching(
+        start, parameter, span, switch, direction=direction, section_map=smap, settings=settings
+    )
     result = ContinuationResult(start=start, root=root)
     for _, sp in list(result.special_points()):
         if sp.type not in curve_types:
             continue
         try:
-            result.curves.append(continue_curve(sp, second, (span, second_window),
-                                                section_map=smap))  # fmt: skip
+            result.curves.append(
+                continue_curve(sp, second, (span, second_window), section_map=smap)
+            )
         except ContinuationError as exc:
             result.curve_failures.append(f"{sp.type} at {parameter}={sp.value:.10g}: {exc}")
     result.seconds = time.perf_counter() - began
@@ -152,8 +163,10 @@ def describe_continuation(result: ContinuationResult) -> str:
     """A few lines: the start, every branch with its end, every special point."""
     start = result.start
     state = "stable" if start.stable else "unstable"
-    lines = [f"start: {start.label} ({state}) at "
-             + ", ".join(f"{k}={v:g}" for k, v in start.parameters.items())]  # fmt: skip
+    lines = [
+        f"start: {start.label} ({state}) at "
+        + ", ".join(f"{k}={v:g}" for k, v in start.parameters.items())
+    ]
     for branch in result.root.walk():
         where = (
             ""
@@ -162,19 +175,26 @@ def describe_continuation(result: ContinuationResult) -> str:
                 f", switched at the PD point {branch.origin.parameter}={branch.origin.value:.10g}"
             )
         )
-        lines.append(f"branch of period {branch.n}: {len(branch.values)} points{where}; "
-                     f"{branch.end}")  # fmt: skip
+        lines.append(
+            f"branch of period {branch.n}: {len(branch.values)} points{where}; {branch.end}"
+        )
         for sp in branch.special:
             mult = ", ".join(f"{m.real:+.6f}{m.imag:+.6f}j" for m in sp.multipliers)
-            sides = " → ".join(f"{lab} {'stable' if st else 'unstable'}"
-                               for lab, st in zip(sp.labels, sp.stable, strict=True))  # fmt: skip
-            lines.append(f"  {sp.type:2s} at {sp.parameter}={sp.value:.10f} (±{sp.accuracy:.1e})"
-                         f"  {sides}  multipliers {mult}")  # fmt: skip
+            sides = " → ".join(
+                f"{lab} {'stable' if st else 'unstable'}"
+                for lab, st in zip(sp.labels, sp.stable, strict=True)
+            )
+            lines.append(
+                f"  {sp.type:2s} at {sp.parameter}={sp.value:.10f} (±{sp.accuracy:.1e})"
+                f"  {sides}  multipliers {mult}"
+            )
         for failure in branch.switch_failures:
             lines.append(f"  no switch: {failure}")
     for curve in result.curves:
-        lines.append(f"{curve.type} curve of {curve.n}-cycles in ({curve.first}, {curve.second}):"
-                     f" {len(curve.values)} points; {curve.end}")  # fmt: skip
+        lines.append(
+            f"{curve.type} curve of {curve.n}-cycles in ({curve.first}, {curve.second}):"
+            f" {len(curve.values)} points; {curve.end}"
+        )
     lines.extend(f"no curve: {failure}" for failure in result.curve_failures)
     lines.append(f"{result.shots} integrations of the section map, {result.seconds:.2f} s")
     return "\n".join(lines)
@@ -206,19 +226,25 @@ class LineStructure:
         return {
             "seeds": [{"omega": w, "label": label} for w, label in self.seeds],
             "branches": [root.to_dict() for root in self.branches],
-            "special": [
-                {"branch_period": b.n, **sp.to_dict()} for b, sp in self.special_points()
-            ],  # fmt: skip
+            "special": [{"branch_period": b.n, **sp.to_dict()} for b, sp in self.special_points()],
             "seconds": self.seconds,
             "shots": self.shots,
         }
 
 
-def line_structure(window: tuple[float, float], points: int, fixed: dict, *, switch: int = 3,
-                   census: int = 0, census_points: int = 9, max_period: int = 32,
-                   model: dict | None = None,
-                   settings: BranchSettings | None = None,
-                   section_map: SectionMap | None = None) -> LineStructure:  # fmt: skip
+def line_structure(
+    window: tuple[float, float],
+    points: int,
+    fixed: dict,
+    *,
+    switch: int = 3,
+    census: int = 0,
+    census_points: int = 9,
+    max_period: int = 32,
+    model: dict | None = None,
+    settings: BranchSettings | None = None,
+    section_map: SectionMap | None = None,
+) -> LineStructure:
     """The branch structure along ω over ``window`` at the parameters ``fixed``.
 
     The line is simulated from the window's upper end down (``campar line``, ``points``
@@ -250,8 +276,7 @@ def line_structure(window: tuple[float, float], points: int, fixed: dict, *, swi
     for a, b in runs:
         k = (a + b) // 2
         n = int(line.n[k])
-        candidates.append((float(line.omega[k]), n, labels[k], line.state[k],
-                           line.sections[k, :n]))  # fmt: skip
+        candidates.append((float(line.omega[k]), n, labels[k], line.state[k], line.sections[k, :n]))
     if census:
         from .attractors import find_attractors
 
@@ -260,8 +285,15 @@ def line_structure(window: tuple[float, float], points: int, fixed: dict, *, swi
             for a in found.attractors:
                 if a.kind == "periodic":
                     r = a.result
-                    candidates.append((float(omega), r.n, r.label, np.array(r.state),
-                                       np.asarray(r.sections)[: r.n]))  # fmt: skip
+                    candidates.append(
+                        (
+                            float(omega),
+                            r.n,
+                            r.label,
+                            np.array(r.state),
+                            np.asarray(r.sections)[: r.n],
+                        )
+                    )
     settings = settings or BranchSettings()
     roots, seeds, switched = [], [], []
     for omega, n, label, state, points in candidates:
@@ -275,9 +307,17 @@ def line_structure(window: tuple[float, float], points: int, fixed: dict, *, swi
             continue
         seeds.append((omega, label))
         for direction in (-1.0, 1.0):
-            root = continue_with_switching(orbit, "omega", window, switch, direction=direction,
-                                           section_map=smap, settings=settings,
-                                           switched=switched, max_period=max_period)  # fmt: skip
+            root = continue_with_switching(
+                orbit,
+                "omega",
+                window,
+                switch,
+                direction=direction,
+                section_map=smap,
+                settings=settings,
+                switched=switched,
+                max_period=max_period,
+            )
             roots.append(root)
             if root.closed:  # a loop: the other direction goes round it again
                 break

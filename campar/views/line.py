@@ -125,13 +125,23 @@ class BifurcationLine:
 
     def to_npz(self, path) -> None:
         """Save every array (and the parameters as 0-d entries) in one .npz file."""
-        optional = {name: getattr(self, name) for name in ("multipliers", "flags", "eps_min",
-                    "eps_max") if getattr(self, name) is not None}  # fmt: skip
+        optional = {
+            name: getattr(self, name)
+            for name in ("multipliers", "flags", "eps_min", "eps_max")
+            if getattr(self, name) is not None
+        }
         np.savez_compressed(
-            path, omega=self.omega, sections=self.sections, n=self.n, p=self.p,
-            kind=self.kind, dc=self.dc, state=self.state, **optional,
+            path,
+            omega=self.omega,
+            sections=self.sections,
+            n=self.n,
+            p=self.p,
+            kind=self.kind,
+            dc=self.dc,
+            state=self.state,
+            **optional,
             **{k: np.array(v) for k, v in self.parameters.items()},
-        )  # fmt: skip
+        )
 
     def to_dict(self) -> dict:
         """JSON-ready summary: parameters, ω range, runs of labels and transitions."""
@@ -313,8 +323,9 @@ def bifurcation_line(omega: tuple[float, float], points: int, **options) -> Bifu
     return compute_line(line_job(omega, points, **options))
 
 
-def continuation_points(omega: float, start: float = PAPER_START,
-                        step: float = CONTINUATION_STEP) -> int:  # fmt: skip
+def continuation_points(
+    omega: float, start: float = PAPER_START, step: float = CONTINUATION_STEP
+) -> int:
     """Cells of a chain from ``start`` down to ``omega`` with spacing at most ``step``."""
     return max(2, math.ceil(abs(start - omega) / step) + 1)
 
@@ -355,8 +366,9 @@ def varied_parameters(values: dict[str, list[float]]) -> list[dict[str, float]]:
 
 def describe_line(line: BifurcationLine) -> str:
     """One text line per run of equal labels, in the order computed (ω decreasing)."""
-    par = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
-                    for k, v in line.parameters.items())  # fmt: skip
+    par = ", ".join(
+        f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in line.parameters.items()
+    )
     rows = [f"line at {par}: {len(line.omega)} cells, ω {line.omega[0]:g} → {line.omega[-1]:g}"]
     rows += [f"  {label:>11}  ω {a:.5g} … {b:.5g}" for label, a, b in line.runs()]
     return "\n".join(rows)

@@ -60,8 +60,10 @@ def store_seeds(path, types=SEED_TYPES, *, group: bool = True) -> list[list[Seed
     fixed = dict(job.fixed)
     model = job.model.model_dump(mode="json")
     window = ((float(omega.min()), float(omega.max())), (float(second.min()), float(second.max())))
-    spacing = (float(np.abs(np.diff(omega)).mean()) if len(omega) > 1 else 1.0,
-               float(np.abs(np.diff(second)).mean()) if len(second) > 1 else 1.0)  # fmt: skip
+    spacing = (
+        float(np.abs(np.diff(omega)).mean()) if len(omega) > 1 else 1.0,
+        float(np.abs(np.diff(second)).mean()) if len(second) > 1 else 1.0,
+    )
     seeds = []
     for segment in found.segments:
         if segment.type not in types:
@@ -74,14 +76,26 @@ def store_seeds(path, types=SEED_TYPES, *, group: bool = True) -> list[list[Seed
                 continue
             axis = "omega" if segment.axis == "omega" else second_name
             neighbour = omega[other[1]] if axis == "omega" else second[other[0]]
-            seeds.append(Seed(
-                type=segment.type, n=side.n, p=side.p, cell=(int(row), int(col)),
-                parameters={**fixed, "omega": float(omega[col]),
-                            second_name: float(second[row])},
-                state=(float(state[row, col, 0]), float(state[row, col, 1])), axis=axis,
-                neighbour=float(neighbour), plane=("omega", second_name), window=window,
-                spacing=spacing, model=model,
-            ))  # fmt: skip
+            seeds.append(
+                Seed(
+                    type=segment.type,
+                    n=side.n,
+                    p=side.p,
+                    cell=(int(row), int(col)),
+                    parameters={
+                        **fixed,
+                        "omega": float(omega[col]),
+                        second_name: float(second[row]),
+                    },
+                    state=(float(state[row, col, 0]), float(state[row, col, 1])),
+                    axis=axis,
+                    neighbour=float(neighbour),
+                    plane=("omega", second_name),
+                    window=window,
+                    spacing=spacing,
+                    model=model,
+                )
+            )
     return group_seeds(seeds) if group else [[seed] for seed in seeds]
 
 
@@ -101,9 +115,13 @@ class Agreement:
     counts: tuple[int, int]
 
     def to_dict(self) -> dict:
-        return {"type": self.type, "edges_near": self.edges_near,
-                "length_near": self.length_near, "edges": self.counts[0],
-                "curve_points": self.counts[1]}  # fmt: skip
+        return {
+            "type": self.type,
+            "edges_near": self.edges_near,
+            "length_near": self.length_near,
+            "edges": self.counts[0],
+            "curve_points": self.counts[1],
+        }
 
 
 def agreement(found, curves, grid, kind_type: str) -> Agreement:
@@ -119,8 +137,9 @@ def agreement(found, curves, grid, kind_type: str) -> Agreement:
     plane = ("omega", found.second_name)
     mine = [c for c in curves if c.type == kind_type]
     edges = [s for s in found.segments if s.type == kind_type]
-    centres = np.array([[0.5 * (s.edge[0] + s.edge[2]), 0.5 * (s.edge[1] + s.edge[3])]
-                        for s in edges]).reshape(-1, 2)  # fmt: skip
+    centres = np.array(
+        [[0.5 * (s.edge[0] + s.edge[2]), 0.5 * (s.edge[1] + s.edge[3])] for s in edges]
+    ).reshape(-1, 2)
     points = np.vstack([in_plane(c, plane) for c in mine]) if mine else np.zeros((0, 2))
     near = distances_to(centres / spacing, points / spacing) <= NEAR_CELLS + 0.5
     edges_near = float(near.mean()) if len(edges) else float("nan")
@@ -168,12 +187,18 @@ def curves_job(map_path, types=SEED_TYPES, *, points: int = 400, store=None):
         raise JobError(f"{map_path} is a {map_job.kind} store: curves are seeded from a map")
     tasks = store_seeds(map_path, types)
     if not tasks:
-        raise JobError(f"{map_path}: no typed edge of {', '.join(types)} to seed a curve from "
-                       "(the map needs the multipliers output for PD and SN)")  # fmt: skip
-    data = curves_job_data(map_job, str(map_path),
-                           [[s.model_dump(mode="json") for s in t] for t in tasks],
-                           types=types, points=points,
-                           store=str(store or curves_store_path(map_path)))  # fmt: skip
+        raise JobError(
+            f"{map_path}: no typed edge of {', '.join(types)} to seed a curve from "
+            "(the map needs the multipliers output for PD and SN)"
+        )
+    data = curves_job_data(
+        map_job,
+        str(map_path),
+        [[s.model_dump(mode="json") for s in t] for t in tasks],
+        types=types,
+        points=points,
+        store=str(store or curves_store_path(map_path)),
+    )
     return Job.from_dict(data, source=f"curves of {map_path}")
 
 
@@ -200,23 +225,34 @@ def read_curves(path, *, merge: bool = True) -> list:
             raise ValueError(f"{target} holds no curves")
 
         def take(check):  # a committed task whose checksum holds
-            rows[check.tile.row_start] = {k: v for k, v in check.arrays.items()
-                                          if k.startswith("curve_")}  # fmt: skip
+            rows[check.tile.row_start] = {
+                k: v for k, v in check.arrays.items() if k.startswith("curve_")
+            }
 
         verify_store(reader, take)
     if not rows:
         return []
-    arrays = {name: np.concatenate([rows[r][name] for r in sorted(rows)])
-              for name in rows[min(rows)]}  # fmt: skip
+    arrays = {
+        name: np.concatenate([rows[r][name] for r in sorted(rows)]) for name in rows[min(rows)]
+    }
     plane = tuple(job.curves.plane)
     found = [
-        BifurcationCurve(type=c["type"], n=c["n"], first=plane[0], second=plane[1],
-                         parameters=dict(job.fixed), model=job.model.model_dump(mode="json"),
-                         values=c["values"], states=c["states"], multipliers=c["multipliers"],
-                         p=c["p"], end="stored",
-                         extra={"task": sorted(rows)[c["task"]]})
+        BifurcationCurve(
+            type=c["type"],
+            n=c["n"],
+            first=plane[0],
+            second=plane[1],
+            parameters=dict(job.fixed),
+            model=job.model.model_dump(mode="json"),
+            values=c["values"],
+            states=c["states"],
+            multipliers=c["multipliers"],
+            p=c["p"],
+            end="stored",
+            extra={"task": sorted(rows)[c["task"]]},
+        )
         for c in curves_of_rows(arrays, plane)
-    ]  # fmt: skip
+    ]
     if not merge:
         return found
     spacing = job.curves.tasks[0][0].spacing

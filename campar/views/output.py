@@ -25,9 +25,11 @@ def writable_file(path: str | Path, what: str = "output") -> Path:
         raise OutputError(f"cannot write the {what} {path}: the file is read-only")
     folder = path.parent
     if not folder.is_dir():
-        why = f"{folder} is a file, not a folder" if folder.exists() else (
-            f"the folder {folder} does not exist; create it, or choose another path"
-        )  # fmt: skip
+        why = (
+            f"{folder} is a file, not a folder"
+            if folder.exists()
+            else (f"the folder {folder} does not exist; create it, or choose another path")
+        )
         raise OutputError(f"cannot write the {what} {path}: {why}")
     try:
         with tempfile.NamedTemporaryFile(dir=folder, prefix=".campar-probe-"):

@@ -35,8 +35,12 @@ POINT_OUTPUTS = ("label", "dc", "eps", "pn", "sections")
 
 # The cam phases of one revolution as the model defines them: (name, start θ, end θ).
 # Handed to the plots on every OrbitTrace, which draw them without importing the model.
-_PHASE_NAMES = {model.RISE: "rise", model.FAR_DWELL: "far dwell", model.FALL: "fall",
-                model.NEAR_DWELL: "near dwell"}  # fmt: skip
+_PHASE_NAMES = {
+    model.RISE: "rise",
+    model.FAR_DWELL: "far dwell",
+    model.FALL: "fall",
+    model.NEAR_DWELL: "near dwell",
+}
 CAM_PHASES = tuple(
     (_PHASE_NAMES[i], float(model.PHASE_BOUNDS[i]), float(model.PHASE_BOUNDS[i + 1]))
     for i in range(model.N_PHASES)
@@ -227,8 +231,12 @@ def point_parameters(job: Job) -> dict:
     law's options (duty_cycle, cam_velocity)."""
     values = {"omega": float(job.omega[0]), job.second: float(job.second_values[0]), **job.fixed}
     model = job.model
-    return {**{name: values[name] for name in PARAMETERS}, "tensile": model.tensile,
-            "duty_cycle": model.duty_cycle, "cam_velocity": model.cam_velocity}  # fmt: skip
+    return {
+        **{name: values[name] for name in PARAMETERS},
+        "tensile": model.tensile,
+        "duty_cycle": model.duty_cycle,
+        "cam_velocity": model.cam_velocity,
+    }
 
 
 def simulate_point(
@@ -341,8 +349,9 @@ def point_result(job: Job, cell: dict) -> PointResult:
     )
 
 
-def trace_steady(job: Job, parameters: dict, state, revolutions: int,
-                 steps: int = 0) -> OrbitTrace | None:  # fmt: skip
+def trace_steady(
+    job: Job, parameters: dict, state, revolutions: int, steps: int = 0
+) -> OrbitTrace | None:
     """``revolutions`` revolutions from ``state`` (y, y') at θ = 0, sampled densely with the
     integrator settings of ``job``; ``parameters`` as ``point_parameters`` gives them and
     ``steps`` the cell's step count (sizes the buffer). None when the integration fails."""
@@ -350,10 +359,18 @@ def trace_steady(job: Job, parameters: dict, state, revolutions: int,
     max_samples = SAMPLES_PER_STEP * max(steps, 1000) * 4 + 16
     rec = make_trace(max_samples, 64 * revolutions + 64, SAMPLES_PER_STEP)
     status, _, _ = trace_orbit(
-        par["omega"], par["zeta"], par["f0"], par["mu_kn"], par["mu_cn"],
-        job.law(), np.array(state, dtype=float), solver_options(job),
-        cell_settings(job), revolutions, rec,
-    )  # fmt: skip
+        par["omega"],
+        par["zeta"],
+        par["f0"],
+        par["mu_kn"],
+        par["mu_cn"],
+        job.law(),
+        np.array(state, dtype=float),
+        solver_options(job),
+        cell_settings(job),
+        revolutions,
+        rec,
+    )
     if status != 0:
         return None
     samples = rec.samples[: rec.count[0]]

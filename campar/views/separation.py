@@ -46,16 +46,27 @@ def separation_curve(path: str | Path) -> SeparationCurve:
     with read_store(path) as reader:
         job = reader.job
         if not job.wants("separation"):
-            raise CamparError(f"{path}: its job has no separation output; add separation to "
-                              "its outputs and run it")  # fmt: skip
+            raise CamparError(
+                f"{path}: its job has no separation output; add separation to "
+                "its outputs and run it"
+            )
         if job.chains.direction == "both":
-            raise CamparError(f"{path}: a both-direction store; separation curves are drawn "
-                              "for one direction")  # fmt: skip
-        rows = {name: reader.read(name)[:, 0] for name in
-                ("separation_omega", "separation_eps_max", "separation_pn_max")}  # fmt: skip
-    return SeparationCurve(Path(path), laws_label(job), job.second, job.second_values,
-                           rows["separation_omega"], rows["separation_eps_max"],
-                           rows["separation_pn_max"])  # fmt: skip
+            raise CamparError(
+                f"{path}: a both-direction store; separation curves are drawn for one direction"
+            )
+        rows = {
+            name: reader.read(name)[:, 0]
+            for name in ("separation_omega", "separation_eps_max", "separation_pn_max")
+        }
+    return SeparationCurve(
+        Path(path),
+        laws_label(job),
+        job.second,
+        job.second_values,
+        rows["separation_omega"],
+        rows["separation_eps_max"],
+        rows["separation_pn_max"],
+    )
 
 
 def describe_curves(curves: list[SeparationCurve]) -> str:

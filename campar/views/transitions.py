@@ -111,22 +111,31 @@ class Side:
     def halving(self) -> bool:
         """True when the cycle's points pair up towards the boundary (half_gap shrinking):
         the cycle may be the period-doubled daughter of one of half its period."""
-        return (self.half_gap is not None and self.half_gap_farther is not None
-                and self.half_gap < self.half_gap_farther)  # fmt: skip
+        return (
+            self.half_gap is not None
+            and self.half_gap_farther is not None
+            and self.half_gap < self.half_gap_farther
+        )
 
     def to_dict(self) -> dict:
         def pairs(values):
             return None if values is None else [[m.real, m.imag] for m in values]
 
         return {
-            "omega": self.omega, "label": self.label, "kind": self.kind, "n": self.n,
-            "p": self.p, "multipliers": pairs(self.multipliers),
-            "multipliers_farther": pairs(self.farther), "graze": finite(self.graze),
-            "graze_farther": finite(self.graze_farther), "half_gap": finite(self.half_gap),
+            "omega": self.omega,
+            "label": self.label,
+            "kind": self.kind,
+            "n": self.n,
+            "p": self.p,
+            "multipliers": pairs(self.multipliers),
+            "multipliers_farther": pairs(self.farther),
+            "graze": finite(self.graze),
+            "graze_farther": finite(self.graze_farther),
+            "half_gap": finite(self.half_gap),
             "half_gap_farther": finite(self.half_gap_farther),
             **({} if self.second is None else {self.second[0]: self.second[1]}),
             **({} if self.lyapunov is None else {"lyapunov": finite(self.lyapunov)}),
-        }  # fmt: skip
+        }
 
 
 @dataclass(frozen=True)
@@ -146,20 +155,26 @@ class Approach:
 
     def describe(self, side: Side) -> str:
         value = self.value
-        shown = f"{value.real:+.4f}{value.imag:+.4f}j" if isinstance(value, complex) \
-            else f"{value:.3g}"  # fmt: skip
+        shown = (
+            f"{value.real:+.4f}{value.imag:+.4f}j" if isinstance(value, complex) else f"{value:.3g}"
+        )
         rate = "" if self.steps is None else f", {self.steps:.2f} spacings away at its rate"
-        return (f"{side.label} at {side.where}: {CRITICAL[self.critical][0]} "
-                f"({shown}, distance {self.distance:.3g}{rate})")  # fmt: skip
+        return (
+            f"{side.label} at {side.where}: {CRITICAL[self.critical][0]} "
+            f"({shown}, distance {self.distance:.3g}{rate})"
+        )
 
     def to_dict(self) -> dict:
         value = self.value
         return {
-            "critical": self.critical, "what": CRITICAL[self.critical][0], "side": self.side,
+            "critical": self.critical,
+            "what": CRITICAL[self.critical][0],
+            "side": self.side,
             "value": [value.real, value.imag] if isinstance(value, complex) else value,
-            "distance": self.distance, "farther_distance": finite(self.farther_distance),
+            "distance": self.distance,
+            "farther_distance": finite(self.farther_distance),
             "steps": finite(self.steps),
-        }  # fmt: skip
+        }
 
 
 @dataclass(frozen=True)
@@ -201,12 +216,17 @@ class Transition:
 
     def to_dict(self) -> dict:
         return {
-            "omega": self.omega, "omega_before": self.before.omega,
-            "omega_after": self.after.omega, "from": self.before.label,
-            "to": self.after.label, "type": self.type, "reason": self.reason,
+            "omega": self.omega,
+            "omega_before": self.before.omega,
+            "omega_after": self.after.omega,
+            "from": self.before.label,
+            "to": self.after.label,
+            "type": self.type,
+            "reason": self.reason,
             "evidence": None if self.evidence is None else self.evidence.to_dict(),
-            "before": self.before.to_dict(), "after": self.after.to_dict(),
-        }  # fmt: skip
+            "before": self.before.to_dict(),
+            "after": self.after.to_dict(),
+        }
 
 
 def finite(value: float | None) -> float | None:
@@ -232,8 +252,9 @@ def critical_distance(multipliers, critical: str) -> float:
     return min(found)
 
 
-def approaching(distance: float, farther: float | None, near: float,
-                reach: float) -> tuple[bool, float | None]:  # fmt: skip
+def approaching(
+    distance: float, farther: float | None, near: float, reach: float
+) -> tuple[bool, float | None]:
     """(approaches, spacings to reach 0 at the last spacing's rate), see the module doc."""
     steps = None
     if farther is not None and math.isfinite(farther) and farther > distance:
@@ -275,8 +296,9 @@ def first_approach(sides: dict[str, Side], criticals) -> Approach | None:
     return None
 
 
-def classify_boundary(before: Side, after: Side, direction: str = "ω decreasing"
-                      ) -> tuple[str, str, Approach | None]:  # fmt: skip
+def classify_boundary(
+    before: Side, after: Side, direction: str = "ω decreasing"
+) -> tuple[str, str, Approach | None]:
     """(type, reason, evidence) of the boundary between two sides (module docstring);
     ``direction`` says which way "before" → "after" goes, for the text.
 
@@ -292,8 +314,14 @@ def classify_boundary(before: Side, after: Side, direction: str = "ω decreasing
     if (before.kind == CHAOTIC_NAME) != (after.kind == CHAOTIC_NAME):
         chaotic = before if before.kind == CHAOTIC_NAME else after
         if chaotic.lyapunov is not None and not chaotic.lyapunov > 0.0:
-            return "unknown", (f"chaos at {chaotic.where} with a largest Lyapunov exponent "
-                               f"{chaotic.lyapunov:.3g} ≤ 0 stored"), None  # fmt: skip
+            return (
+                "unknown",
+                (
+                    f"chaos at {chaotic.where} with a largest Lyapunov exponent "
+                    f"{chaotic.lyapunov:.3g} ≤ 0 stored"
+                ),
+                None,
+            )
         begins = "ends" if before.kind == CHAOTIC_NAME else "begins"
         exponent = "" if chaotic.lyapunov is None else f", λ1 {chaotic.lyapunov:.3g}"
         route = f"; route {local.type}: {local.describe(sides[local.side])}" if local else ""
@@ -307,29 +335,46 @@ def classify_boundary(before: Side, after: Side, direction: str = "ω decreasing
         unseen = side.n % 2 == 0 and side.half_gap is None
         if local.critical == "+1" and (doubled or side.halving or unseen):
             parent = other.label if doubled else f"a period-{side.n // 2} cycle"
-            pairing = "its points pairing up" if doubled or side.halving else \
-                "its σn points not stored (pairing unseen)"  # fmt: skip
-            return "unknown", (f"{local.describe(side)}, {pairing}: the period-doubled "
-                               f"daughter of {parent}, or a fold; no multiplier → −1 on the "
-                               "other side"), local  # fmt: skip
+            pairing = (
+                "its points pairing up"
+                if doubled or side.halving
+                else "its σn points not stored (pairing unseen)"
+            )
+            return (
+                "unknown",
+                (
+                    f"{local.describe(side)}, {pairing}: the period-doubled "
+                    f"daughter of {parent}, or a fold; no multiplier → −1 on the "
+                    "other side"
+                ),
+                local,
+            )
         return local.type, local.describe(side), local
     if before.kind != PERIODIC_NAME or after.kind != PERIODIC_NAME:
-        return "unknown", (f"{before.label} → {after.label}: no multiplier approaches its "
-                           "critical value"), None  # fmt: skip
+        return (
+            "unknown",
+            (f"{before.label} → {after.label}: no multiplier approaches its critical value"),
+            None,
+        )
     if before.p * after.n != after.p * before.n:  # detachments per revolution change
         graze = first_approach(sides, ("graze",))
         if graze is not None:
             return "G", graze.describe(sides[graze.side]), graze
         if before.graze_bound or after.graze_bound:  # only the global extrema were seen
-            reason = (f"{before.label} → {after.label}: detachments per revolution change, "
-                      "no stored extremum of ε approaches 0; a grazing at another extremum "
-                      "is not excluded (trace the orbits)")  # fmt: skip
+            reason = (
+                f"{before.label} → {after.label}: detachments per revolution change, "
+                "no stored extremum of ε approaches 0; a grazing at another extremum "
+                "is not excluded (trace the orbits)"
+            )
             return "unknown", reason, None
     if before.multipliers is None or after.multipliers is None:
         return "unknown", "multipliers not computed on both sides", None
     radius = max(abs(m) for s in (before, after) for m in s.multipliers)
-    return "jump", (f"both sides stable (largest |λ| {radius:.3f}), nothing approaches "
-                    "its critical value"), None  # fmt: skip
+    return (
+        "jump",
+        (f"both sides stable (largest |λ| {radius:.3f}), nothing approaches its critical value"),
+        None,
+    )
 
 
 def find_transitions(line, *, trace=None) -> tuple[Transition, ...]:
@@ -366,8 +411,11 @@ def find_transitions(line, *, trace=None) -> tuple[Transition, ...]:
             continue
         before = side_of(line, labels, i, i - 1)
         after = side_of(line, labels, i + 1, i + 2)
-        if before.kind == after.kind == PERIODIC_NAME and trace is not None and \
-                before.p * after.n != after.p * before.n:  # fmt: skip
+        if (
+            before.kind == after.kind == PERIODIC_NAME
+            and trace is not None
+            and before.p * after.n != after.p * before.n
+        ):
             before = with_grazes(before, line, labels, i - 1, trace)
             after = with_grazes(after, line, labels, i + 2, trace)
         out.append(Transition(before, after, *classify_boundary(before, after)))
@@ -380,12 +428,17 @@ def side_of(line, labels, i: int, j: int) -> Side:
     farther = j if 0 <= j < len(labels) and labels[j] == labels[i] else None
     n = int(line.n[i])
     return Side(
-        index=i, omega=float(line.omega[i]), label=labels[i], kind=KIND_NAMES[kind],
-        n=n, p=int(line.p[i]), multipliers=cell_multipliers(line, i),
+        index=i,
+        omega=float(line.omega[i]),
+        label=labels[i],
+        kind=KIND_NAMES[kind],
+        n=n,
+        p=int(line.p[i]),
+        multipliers=cell_multipliers(line, i),
         farther=None if farther is None else cell_multipliers(line, farther),
         half_gap=half_gap(line.sections[i], n),
         half_gap_farther=None if farther is None else half_gap(line.sections[farther], n),
-    )  # fmt: skip
+    )
 
 
 def half_gap(sections, n: int) -> float | None:

@@ -192,8 +192,11 @@ def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job):
     if report.committed:
         log.info(
             "%s: %d committed tiles verified in %.1f s, %d damaged",
-            path, len(report.committed), time.monotonic() - start, len(report.damaged),
-        )  # fmt: skip
+            path,
+            len(report.committed),
+            time.monotonic() - start,
+            len(report.damaged),
+        )
     return report.verified
 
 

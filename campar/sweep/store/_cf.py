@@ -203,8 +203,10 @@ def global_attrs(job: Job, created: str) -> dict:
 
 def title(job: Job) -> str:
     if job.kind == "curves":
-        return (f"campar curves {job.name}: bifurcation curves in the "
-                f"({', '.join(job.curves.plane)}) plane of {job.curves.map}")  # fmt: skip
+        return (
+            f"campar curves {job.name}: bifurcation curves in the "
+            f"({', '.join(job.curves.plane)}) plane of {job.curves.map}"
+        )
     return f"campar {job.kind} {job.name}: steady motions over ({job.first}, {job.second})" + (
         f" at omega = {job.parameter('omega'):g}" if job.kind == "basin" else ""
     )
@@ -216,14 +218,18 @@ def law_attrs(job: Job) -> dict:
     cam, contact = job.model.cam, job.model.contact
     attrs = {}
     if cam != type(cam)():
-        attrs["cam"] = (f"table {cam.table} (sha256 {cam.table_sha256}, joins {cam.table_joins})"
-                        if cam.table else f"rise {cam.rise}, fall {cam.fall}")  # fmt: skip
+        attrs["cam"] = (
+            f"table {cam.table} (sha256 {cam.table_sha256}, joins {cam.table_joins})"
+            if cam.table
+            else f"rise {cam.rise}, fall {cam.fall}"
+        )
         attrs["cam_angles"] = "phi1 … phi4 = " + ", ".join(f"{a:.12g}" for a in cam.angles)
     if contact != type(contact)():
         attrs["contact_law"] = f"{contact.law}, n = {contact.n:g}" + (
             f", restitution {contact.restitution}, impact floor {contact.impact_floor}"
-            if contact.law != "hunt-crossley" else ""
-        )  # fmt: skip
+            if contact.law != "hunt-crossley"
+            else ""
+        )
     return attrs
 
 

@@ -139,11 +139,14 @@ def _rescued_attrs(path: Path, state: str) -> dict:
         sealed = sealed_job(path)
         error = StoreDamaged(
             f"{path} is damaged ({state}) and {rescued.failure}; "
-            + (f"its seal says it holds job {sealed}: `campar run` of that job keeps it aside "
-               "and computes the map again" if sealed else
-               "campar cannot tell which job it holds, and never deletes it: move it away "
-               "and run again")
-        )  # fmt: skip
+            + (
+                f"its seal says it holds job {sealed}: `campar run` of that job keeps it aside "
+                "and computes the map again"
+                if sealed
+                else "campar cannot tell which job it holds, and never deletes it: move it away "
+                "and run again"
+            )
+        )
         error.sealed_job = sealed
         raise error
     return rescued.attrs
@@ -226,14 +229,21 @@ def describe_file(f: h5py.File, arrays) -> dict:
         try:
             data = f[a.name]
             document = {
-                "dtype": data.dtype.str, "shape": list(data.shape),
+                "dtype": data.dtype.str,
+                "shape": list(data.shape),
                 "chunks": list(data.chunks) if data.chunks else None,
-                "fillvalue": _plain(data.fillvalue), "compression": data.compression,
-                "compression_opts": _plain(data.compression_opts), "shuffle": data.shuffle,
-                "scaleoffset": data.scaleoffset, "fletcher32": data.fletcher32,
-                "attrs": {key: _plain(value) for key, value in data.attrs.items()
-                          if key not in SCALE_LINKS},
-            }  # fmt: skip
+                "fillvalue": _plain(data.fillvalue),
+                "compression": data.compression,
+                "compression_opts": _plain(data.compression_opts),
+                "shuffle": data.shuffle,
+                "scaleoffset": data.scaleoffset,
+                "fletcher32": data.fletcher32,
+                "attrs": {
+                    key: _plain(value)
+                    for key, value in data.attrs.items()
+                    if key not in SCALE_LINKS
+                },
+            }
             values = np.asarray(data[()]) if a.values is not None else None
         except KeyError:
             found[a.name] = f"dataset {a.name} is missing"
@@ -274,9 +284,14 @@ def _create_dataset(f: h5py.File, a: ArraySchema) -> h5py.Dataset:
     if a.values is not None:
         return f.create_dataset(a.name, data=a.values, dtype=a.dtype, track_order=True)
     return f.create_dataset(
-        a.name, shape=a.shape, dtype=a.dtype, chunks=a.chunks, fillvalue=a.fill,
-        compression=None if a.name in TILE_ARRAYS else "gzip", track_order=True,
-    )  # fmt: skip
+        a.name,
+        shape=a.shape,
+        dtype=a.dtype,
+        chunks=a.chunks,
+        fillvalue=a.fill,
+        compression=None if a.name in TILE_ARRAYS else "gzip",
+        track_order=True,
+    )
 
 
 def remove(path: Path) -> None:
@@ -505,8 +520,9 @@ class Hdf5Reader(StoreReader):
                 "no tile of it can be trusted; move it away and run again"
             )
         self._damage = f"the HDF5 file is damaged ({state})"
-        self._file_problems.append(f"{self._damage}: tiles read from a rescued copy of those "
-                                   "that verify")  # fmt: skip
+        self._file_problems.append(
+            f"{self._damage}: tiles read from a rescued copy of those that verify"
+        )
         self._rescued_damage = rescued.damaged
         return h5py.File(copy, "r")
 

@@ -74,8 +74,9 @@ class StoreLock:
         try:
             blocking = next((p for p in path.parents if p.exists() or p.is_symlink()), None)
             if blocking is not None and not blocking.is_dir():  # mkdir would say "File exists"
-                raise StoreIOError(f"cannot create the store {store}: {blocking} is a file, "
-                                   "not a folder")  # fmt: skip
+                raise StoreIOError(
+                    f"cannot create the store {store}: {blocking} is a file, not a folder"
+                )
             path.parent.mkdir(parents=True, exist_ok=True)
             return cls._acquire(store, path)
         except OSError as exc:

@@ -47,14 +47,35 @@ def global_document(attrs: dict) -> dict:
 # What changes how a variable's bytes decode: checked against the job where a store has no
 # checksums. Zarr document keys, HDF5 description keys, and CF attributes.
 DECODING = {
-    "shape", "data_type", "chunk_grid", "chunk_key_encoding", "fill_value", "codecs",
-    "dimension_names", "dtype", "chunks", "fillvalue", "compression", "scaleoffset",
-}  # fmt: skip
+    "shape",
+    "data_type",
+    "chunk_grid",
+    "chunk_key_encoding",
+    "fill_value",
+    "codecs",
+    "dimension_names",
+    "dtype",
+    "chunks",
+    "fillvalue",
+    "compression",
+    "scaleoffset",
+}
 DECODING_ATTRS = {
-    "scale_factor", "add_offset", "_FillValue", "missing_value", "valid_min", "valid_max",
-    "valid_range", "units", "calendar", "_Unsigned", "dtype", "coordinates", "flag_values",
+    "scale_factor",
+    "add_offset",
+    "_FillValue",
+    "missing_value",
+    "valid_min",
+    "valid_max",
+    "valid_range",
+    "units",
+    "calendar",
+    "_Unsigned",
+    "dtype",
+    "coordinates",
+    "flag_values",
     "flag_masks",
-}  # fmt: skip
+}
 
 
 @dataclass

@@ -89,12 +89,15 @@ def cell_arrays(job: Job) -> list[ArraySchema]:
         fill = fill_value(dtype)
         arrays.append(
             ArraySchema(
-                name, dtype, (*lead, n_second, n_first, *tail),
+                name,
+                dtype,
+                (*lead, n_second, n_first, *tail),
                 (*lead_chunks, job.tiles.rows, n_first, *tail),
-                (*lead_dims, job.second, job.first, *TAIL_DIMS.get(name, ())), fill,
+                (*lead_dims, job.second, job.first, *TAIL_DIMS.get(name, ())),
+                fill,
                 cell_attrs(job, name, dtype, fill),
             )
-        )  # fmt: skip
+        )
     return arrays
 
 

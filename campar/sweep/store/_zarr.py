@@ -117,11 +117,16 @@ def _build(tmp: Path, job: Job, separator: str | None = None) -> None:
     for a in arrays:
         text = a.dtype.kind == "U"
         array = group.create_array(
-            a.name, shape=a.shape, dtype=str if text else a.dtype, chunks=a.chunks,
-            fill_value="" if text else a.fill, dimension_names=list(a.dims),
+            a.name,
+            shape=a.shape,
+            dtype=str if text else a.dtype,
+            chunks=a.chunks,
+            fill_value="" if text else a.fill,
+            dimension_names=list(a.dims),
             attributes=zarr_attrs(a.attrs, a.dtype),
-            compressors=_codecs(a.name), chunk_key_encoding=keys,
-        )  # fmt: skip
+            compressors=_codecs(a.name),
+            chunk_key_encoding=keys,
+        )
         if a.values is not None:
             array[...] = a.values
     record_checksums(tmp, arrays)
@@ -314,17 +319,26 @@ class ZarrTileArrays:
         group = group if group is not None else zarr.open_group(real, mode="r+")
         self.schemas = {a.name: a for a in cell_arrays(job)}
         self.arrays = {name: group[name] for name in self.schemas}
-        self.direct = {name: DirectChunk.for_array(real / name, array)
-                       for name, array in self.arrays.items()}  # fmt: skip
+        self.direct = {
+            name: DirectChunk.for_array(real / name, array) for name, array in self.arrays.items()
+        }
 
     def write(self, tile: Tile, arrays: dict[str, np.ndarray]) -> None:
         try:
             lead = 0 if tile.layer is None else 1
-            write_chunks([
-                (self.arrays[name], self.direct[name], tile.region,
-                 chunk_coords(self.job, tile, self.schemas[name]), lead, values)
-                for name, values in arrays.items()
-            ])  # fmt: skip
+            write_chunks(
+                [
+                    (
+                        self.arrays[name],
+                        self.direct[name],
+                        tile.region,
+                        chunk_coords(self.job, tile, self.schemas[name]),
+                        lead,
+                        values,
+                    )
+                    for name, values in arrays.items()
+                ]
+            )
         except OSError:
             clean_leftovers(self.real, self.job)  # a failed write's .partial files
             raise
@@ -342,8 +356,10 @@ class ZarrStore(Store):
         self._schemas = self._tile_arrays.schemas.values()
         self._checksums = group["checksum"]
         self._flags = group["done"]
-        self._tile_direct = {a.basename: DirectChunk.for_array(real / a.basename, a)
-                             for a in (self._checksums, self._flags)}  # fmt: skip
+        self._tile_direct = {
+            a.basename: DirectChunk.for_array(real / a.basename, a)
+            for a in (self._checksums, self._flags)
+        }
         self._done = np.array(done, bool)
         self._clear(np.flatnonzero(~self._done))
 
@@ -399,8 +415,11 @@ def write_chunks(chunks) -> None:
     leading length-1 axes, values): each by DirectChunk where it can, the rest through
     zarr in one call of its event loop (one call per chunk costs each its own round trip
     through the loop, docs/scaling.md)."""
-    rest = [(array, region, values) for array, direct, region, coords, lead, values in chunks
-            if direct is None or not direct.write(coords, lead, values)]  # fmt: skip
+    rest = [
+        (array, region, values)
+        for array, direct, region, coords, lead, values in chunks
+        if direct is None or not direct.write(coords, lead, values)
+    ]
     if rest:
         sync(_all_at_once(a.async_array.setitem(r, v) for a, r, v in rest))
 

@@ -40,9 +40,20 @@ class PlotError(CamparError):
 
 # What ``plot_map`` / ``campar plot --what`` can draw.
 MAP_VIEWS = (
-    "labels", "kind", "n", "p", "dc", "eps_max", "eps_min", "pn_max", "revolutions", "lyapunov",
-    "hysteresis", "multistability", "attractor_sets",
-)  # fmt: skip
+    "labels",
+    "kind",
+    "n",
+    "p",
+    "dc",
+    "eps_max",
+    "eps_min",
+    "pn_max",
+    "revolutions",
+    "lyapunov",
+    "hysteresis",
+    "multistability",
+    "attractor_sets",
+)
 # What ``campar plot --what`` can draw of a store: the map views, and a basin store's one.
 STORE_VIEWS = (*MAP_VIEWS, "basin")
 

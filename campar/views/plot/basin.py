@@ -23,9 +23,19 @@ from .style import axis_label, figure_style, new_figure, parameter_text, save_fi
 # Attractors get these colours in rank order (qualitative, distinct; Okabe–Ito first);
 # attractors beyond them share the last entry's "other" colour.
 ATTRACTOR_COLOURS = (
-    "#0072b2", "#e69f00", "#009e73", "#cc79a7", "#56b4e9", "#d55e00", "#f0e442",
-    "#7f3c8d", "#11a579", "#3969ac", "#f2b701", "#e73f74",
-)  # fmt: skip
+    "#0072b2",
+    "#e69f00",
+    "#009e73",
+    "#cc79a7",
+    "#56b4e9",
+    "#d55e00",
+    "#f0e442",
+    "#7f3c8d",
+    "#11a579",
+    "#3969ac",
+    "#f2b701",
+    "#e73f74",
+)
 OTHER = "#6b6b6b"
 UNSETTLED = "0.85"
 KIND_WORDS = {Kind.PERIODIC: "", Kind.QUASIPERIODIC: " quasi-periodic", Kind.CHAOTIC: " chaotic"}
@@ -63,20 +73,41 @@ def plot_basin(ds, title: str | None = None):
     with figure_style():
         figure = new_figure(7.2, 4.6)
         ax = figure.add_subplot()
-        draw_codes(ax, xe, ye, np.where(computed, codes, 0), computed, categories,
-                   legend=True, title="attractor reached (starts)", optional=(0,))  # fmt: skip
+        draw_codes(
+            ax,
+            xe,
+            ye,
+            np.where(computed, codes, 0),
+            computed,
+            categories,
+            legend=True,
+            title="attractor reached (starts)",
+            optional=(0,),
+        )
         for (code, _, _), rank in zip(categories[1:], ds["attractor"].values, strict=False):
             if code > len(ATTRACTOR_COLOURS):
                 break
             points = ds["attractor_sections"].sel(attractor=rank).values
             periodic = int(ds["attractor_kind"].sel(attractor=rank)) == Kind.PERIODIC
-            ax.plot(points[:, 0], points[:, 1], linestyle="none",
-                    marker="o" if periodic else ".", markersize=6 if periodic else 2.5,
-                    markerfacecolor="white" if periodic else "black",
-                    markeredgecolor="black", markeredgewidth=0.8)  # fmt: skip
+            ax.plot(
+                points[:, 0],
+                points[:, 1],
+                linestyle="none",
+                marker="o" if periodic else ".",
+                markersize=6 if periodic else 2.5,
+                markerfacecolor="white" if periodic else "black",
+                markeredgecolor="black",
+                markeredgewidth=0.8,
+            )
             for x, y in points[np.isfinite(points[:, 0])][: 8 if periodic else 1]:
-                ax.annotate(f"#{rank}", (x, y), xytext=(4, 3), textcoords="offset points",
-                            fontsize=7, fontweight="bold")  # fmt: skip
+                ax.annotate(
+                    f"#{rank}",
+                    (x, y),
+                    xytext=(4, 3),
+                    textcoords="offset points",
+                    fontsize=7,
+                    fontweight="bold",
+                )
         ax.set_xlim(xe.min(), xe.max())
         ax.set_ylim(ye.min(), ye.max())
         ax.set_xlabel(axis_label(first))

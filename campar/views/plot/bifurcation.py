@@ -36,8 +36,11 @@ def line_title(line, *, parameters=LINE_PARAMETERS) -> str:
     par = line.parameters
     text = parameter_text({name: par[name] for name in parameters if name in par})
     notes = [] if par.get("tensile", "clamp") == "clamp" else ["tensile allowed"]
-    notes += [f"{name.replace('_', ' ')} {par[name]}" for name, default
-              in MODEL_OPTION_DEFAULTS.items() if par.get(name, default) != default]  # fmt: skip
+    notes += [
+        f"{name.replace('_', ' ')} {par[name]}"
+        for name, default in MODEL_OPTION_DEFAULTS.items()
+        if par.get(name, default) != default
+    ]
     return text + "".join(f",  {note}" for note in notes)
 
 
@@ -61,16 +64,25 @@ def draw_label_strip(ax, line) -> list[str]:
     present = sorted(set(categories), key=order_key)
     codes = np.array([present.index(c) for c in categories])[None, :]
     cmap = ListedColormap([label_colour(c) for c in present])
-    ax.pcolormesh(cell_edges(line.omega), [0.0, 1.0], codes, cmap=cmap, vmin=-0.5,
-                  vmax=len(present) - 0.5, shading="flat", rasterized=True)  # fmt: skip
+    ax.pcolormesh(
+        cell_edges(line.omega),
+        [0.0, 1.0],
+        codes,
+        cmap=cmap,
+        vmin=-0.5,
+        vmax=len(present) - 0.5,
+        shading="flat",
+        rasterized=True,
+    )
     ax.set_yticks([])
     for side in ("top", "right", "left"):
         ax.spines[side].set_visible(False)
     return [c for c in present if c != PERIODIC]
 
 
-def plot_line(line, axes=None, *, title: str | None = None, legend: bool = True,
-              y_label: bool = True):  # fmt: skip
+def plot_line(
+    line, axes=None, *, title: str | None = None, legend: bool = True, y_label: bool = True
+):
     """Draw one line into three stacked axes (σn, label strip, p) or a new figure."""
     with figure_style():
         if axes is None:
@@ -95,8 +107,11 @@ def plot_line(line, axes=None, *, title: str | None = None, legend: bool = True,
             top.set_ylabel(r"$\sigma_n$: $y$ (units of $h$)")
             bottom.set_ylabel("$p$ (dimensionless)")
         if legend:
-            top.figure.legend(handles=label_handles(categories), loc="outside lower center",
-                              ncols=min(len(categories), 8))  # fmt: skip
+            top.figure.legend(
+                handles=label_handles(categories),
+                loc="outside lower center",
+                ncols=min(len(categories), 8),
+            )
         top.set_title(line_title(line) if title is None else title, loc="left")
     return top.figure
 
@@ -134,6 +149,10 @@ def plot_lines(lines, titles=None, *, columns: int = 2):
             met.update(category_of(label) for label in line.labels)
         met.discard(PERIODIC)
         handles = label_handles(sorted(met, key=order_key))
-        figure.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 10),
-                      title="n-p label (strip colours, as in the maps)")  # fmt: skip
+        figure.legend(
+            handles=handles,
+            loc="outside lower center",
+            ncols=min(len(handles), 10),
+            title="n-p label (strip colours, as in the maps)",
+        )
     return figure

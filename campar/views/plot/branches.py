@@ -47,18 +47,38 @@ def draw_branch(ax, branch, colour: str) -> None:
     """Every section point's y along the branch, solid where stable, dashed where not."""
     for start, stop, stable in stretches(branch.stable):
         for k in range(branch.n):
-            ax.plot(branch.values[start:stop], branch.sections[start:stop, k, 0], color=colour,
-                    linewidth=1.0 if stable else 0.8, linestyle="-" if stable else (0, (3, 2)),
-                    zorder=3)  # fmt: skip
+            ax.plot(
+                branch.values[start:stop],
+                branch.sections[start:stop, k, 0],
+                color=colour,
+                linewidth=1.0 if stable else 0.8,
+                linestyle="-" if stable else (0, (3, 2)),
+                zorder=3,
+            )
 
 
 def draw_special_points(ax, branch, colour: str) -> None:
     for sp in branch.special:
-        ax.plot([sp.value], [sp.state[0]], marker=MARKERS.get(sp.type, "x"), markersize=4.5,
-                markerfacecolor="white", markeredgecolor=colour, markeredgewidth=1.0,
-                linestyle="none", zorder=5)  # fmt: skip
-        ax.annotate(sp.type, (sp.value, sp.state[0]), xytext=(3, 4), textcoords="offset points",
-                    fontsize=6.5, color=colour, zorder=6)  # fmt: skip
+        ax.plot(
+            [sp.value],
+            [sp.state[0]],
+            marker=MARKERS.get(sp.type, "x"),
+            markersize=4.5,
+            markerfacecolor="white",
+            markeredgecolor=colour,
+            markeredgewidth=1.0,
+            linestyle="none",
+            zorder=5,
+        )
+        ax.annotate(
+            sp.type,
+            (sp.value, sp.state[0]),
+            xytext=(3, 4),
+            textcoords="offset points",
+            fontsize=6.5,
+            color=colour,
+            zorder=6,
+        )
 
 
 def plot_branches(roots, *, line=None, ax=None, title: str | None = None):
@@ -82,18 +102,33 @@ def plot_branches(roots, *, line=None, ax=None, title: str | None = None):
             draw_special_points(ax, branch, colour)
         ax.set_xlabel(axis_label(roots[0].parameter))
         ax.set_ylabel(r"$\sigma_n$: $y$ at $\theta = 0$ (units of $h$)")
-        handles = [Line2D([], [], color="black", linewidth=1.0, label="stable"),
-                   Line2D([], [], color="black", linewidth=0.8, linestyle=(0, (3, 2)),
-                          label="unstable")]  # fmt: skip
-        handles += [Line2D([], [], color=period_colour(n, periods), linewidth=1.0,
-                           label=f"period {n}") for n in periods]  # fmt: skip
+        handles = [
+            Line2D([], [], color="black", linewidth=1.0, label="stable"),
+            Line2D([], [], color="black", linewidth=0.8, linestyle=(0, (3, 2)), label="unstable"),
+        ]
+        handles += [
+            Line2D([], [], color=period_colour(n, periods), linewidth=1.0, label=f"period {n}")
+            for n in periods
+        ]
         types = sorted({sp.type for b in branches for sp in b.special})
-        handles += [Line2D([], [], marker=MARKERS.get(t, "x"), markerfacecolor="white",
-                           markeredgecolor="black", linestyle="none", label=t)
-                    for t in types]  # fmt: skip
+        handles += [
+            Line2D(
+                [],
+                [],
+                marker=MARKERS.get(t, "x"),
+                markerfacecolor="white",
+                markeredgecolor="black",
+                linestyle="none",
+                label=t,
+            )
+            for t in types
+        ]
         if line is not None:
-            handles.append(Line2D([], [], marker=".", color=LINE_GREY, linestyle="none",
-                                  label="simulation (σn)"))  # fmt: skip
+            handles.append(
+                Line2D(
+                    [], [], marker=".", color=LINE_GREY, linestyle="none", label="simulation (σn)"
+                )
+            )
         ax.legend(handles=handles, loc="best", fontsize=6.5, ncols=2)
         ax.set_title(parameter_text(roots[0].parameters) if title is None else title, loc="left")
     return ax.figure
@@ -108,8 +143,11 @@ def draw_bifurcation_curves(ax, curves, *, legend: bool = True) -> dict[str, int
         ax.plot(curve.values[:, 0], curve.values[:, 1], linewidth=1.1, zorder=4, **style)
         counts[curve.type] = counts.get(curve.type, 0) + 1
     if legend and counts:
-        handles = [Line2D([], [], linewidth=1.1, label=f"{t} ({counts[t]})", **CURVE_STYLES[t])
-                   for t in CURVE_STYLES if t in counts]  # fmt: skip
+        handles = [
+            Line2D([], [], linewidth=1.1, label=f"{t} ({counts[t]})", **CURVE_STYLES[t])
+            for t in CURVE_STYLES
+            if t in counts
+        ]
         ax.legend(handles=handles, loc="upper left", fontsize=6.5, title="continued curves")
     return counts
 

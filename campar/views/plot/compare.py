@@ -35,9 +35,16 @@ class Comparison:
 
 
 def plot_compare(
-    a, b, what: str = "labels", output=None, *, difference=False, omega=None, second=None,
+    a,
+    b,
+    what: str = "labels",
+    output=None,
+    *,
+    difference=False,
+    omega=None,
+    second=None,
     direction=None,
-) -> Comparison:  # fmt: skip
+) -> Comparison:
     """Draw two stores' ``what`` maps side by side, or (``difference``) the cells whose
     labels differ, into an image file (default "A-vs-B-WHAT.png" or "A-vs-B-diff.png"
     here). ``omega``, ``second``: zoom ranges; ``direction``: of both-direction stores."""
@@ -47,14 +54,17 @@ def plot_compare(
         raise PlotError(f"--diff compares the n-p labels of two maps, not their {what}")
     name = f"{Path(a).stem}-vs-{Path(b).stem}-{'diff' if difference else what}.png"
     output = figure_file(output or name)
-    first, other = (read_map(path, "labels" if difference else what, omega=omega,
-                             second=second, direction=direction) for path in (a, b))  # fmt: skip
+    first, other = (
+        read_map(
+            path, "labels" if difference else what, omega=omega, second=second, direction=direction
+        )
+        for path in (a, b)
+    )
     check_same_grid(a, b, first.grid, other.grid)
     both = first.arrays["computed"] & other.arrays["computed"]
     if difference:
         differ = label_difference(first.arrays, other.arrays) & both
-        figure = plot_difference(first.grid, differ, both, f"{Path(a).name} against "
-                                 f"{Path(b).name}")  # fmt: skip
+        figure = plot_difference(first.grid, differ, both, f"{Path(a).name} against {Path(b).name}")
         return Comparison(save_figure(figure, output), int(both.sum()), int(differ.sum()))
     with figure_style():
         figure = new_figure(2 * (4.3 + 1.6), 3.6)
@@ -78,8 +88,10 @@ def check_same_grid(a, b, first, other) -> None:
 
 
 def describe(grid) -> str:
-    return (f"{len(grid.second)} {grid.second_name} × {len(grid.omega)} omega, ω "
-            f"{grid.omega[0]:g}…{grid.omega[-1]:g}")  # fmt: skip
+    return (
+        f"{len(grid.second)} {grid.second_name} × {len(grid.omega)} omega, ω "
+        f"{grid.omega[0]:g}…{grid.omega[-1]:g}"
+    )
 
 
 def label_difference(first: dict, other: dict) -> np.ndarray:
@@ -99,13 +111,17 @@ def plot_difference(grid, differ: np.ndarray, computed: np.ndarray, title: str):
     with figure_style():
         ax = new_figure(4.3 + 1.6, 3.4).add_subplot()
         xe, ye = cell_edges(grid.omega), cell_edges(grid.second)
-        draw_codes(ax, xe, ye, codes, computed, DIFFERENCE_CATEGORIES, legend=True,
-                   title="labels (cells)")  # fmt: skip
+        draw_codes(
+            ax, xe, ye, codes, computed, DIFFERENCE_CATEGORIES, legend=True, title="labels (cells)"
+        )
         ax.set_xlim(xe.min(), xe.max())
         ax.set_ylim(ye.min(), ye.max())
         ax.set_xlabel(axis_label("omega"))
         ax.set_ylabel(axis_label(grid.second_name))
         share = differ.sum() / max(computed.sum(), 1)
-        ax.set_title(f"{title}: {int(differ.sum())} of {int(computed.sum())} cells differ "
-                     f"({100 * share:.2g} %)", loc="left")  # fmt: skip
+        ax.set_title(
+            f"{title}: {int(differ.sum())} of {int(computed.sum())} cells differ "
+            f"({100 * share:.2g} %)",
+            loc="left",
+        )
     return ax.figure

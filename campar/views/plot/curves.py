@@ -37,8 +37,9 @@ HALO_WIDTH = 1.2  # pt added around each line
 
 def curve_segments(found, kind: str) -> list:
     """[((x0, y0), (x1, y1)), …] of the segments of one type."""
-    return [((s.edge[0], s.edge[1]), (s.edge[2], s.edge[3]))
-            for s in found.segments if s.type == kind]  # fmt: skip
+    return [
+        ((s.edge[0], s.edge[1]), (s.edge[2], s.edge[3])) for s in found.segments if s.type == kind
+    ]
 
 
 def draw_curves(ax, found, *, legend: bool = True) -> dict[str, int]:
@@ -52,16 +53,27 @@ def draw_curves(ax, found, *, legend: bool = True) -> dict[str, int]:
         lines = curve_segments(found, kind)
         if not lines:
             continue
-        ax.add_collection(LineCollection(
-            lines, colors=colour, linestyles=style, linewidths=width, zorder=3.0,
-            capstyle="butt", path_effects=[withStroke(linewidth=width + HALO_WIDTH,
-                                                      foreground=HALO)],
-        ))  # fmt: skip
+        ax.add_collection(
+            LineCollection(
+                lines,
+                colors=colour,
+                linestyles=style,
+                linewidths=width,
+                zorder=3.0,
+                capstyle="butt",
+                path_effects=[withStroke(linewidth=width + HALO_WIDTH, foreground=HALO)],
+            )
+        )
         drawn[kind] = len(lines)
-        lines_of[kind] = Line2D([], [], color=colour, linestyle=style, linewidth=width,
-                              label=f"{text} ({len(lines)})",
-                              path_effects=[withStroke(linewidth=width + HALO_WIDTH,
-                                                       foreground=HALO)])  # fmt: skip
+        lines_of[kind] = Line2D(
+            [],
+            [],
+            color=colour,
+            linestyle=style,
+            linewidth=width,
+            label=f"{text} ({len(lines)})",
+            path_effects=[withStroke(linewidth=width + HALO_WIDTH, foreground=HALO)],
+        )
     handles = [lines_of[kind] for kind in LEGEND_ORDER if kind in lines_of]
     unknown = sum(1 for s in found.segments if s.type == UNDRAWN)
     if legend:
@@ -69,13 +81,20 @@ def draw_curves(ax, found, *, legend: bool = True) -> dict[str, int]:
         extra += list(getattr(found, "notes", ()))
         handles += [Patch(facecolor="none", edgecolor="none", label=wrap(t)) for t in extra]
         if not drawn and not extra:
-            handles.append(Patch(facecolor="none", edgecolor="none",
-                                 label="no boundary between labels"))  # fmt: skip
+            handles.append(
+                Patch(facecolor="none", edgecolor="none", label="no boundary between labels")
+            )
         if ax.get_legend() is not None:  # keep the map's own legend beside this one
             ax.add_artist(ax.get_legend())
-        box = ax.legend(handles=handles, title="bifurcations (cell edges)", loc="upper left",
-                        bbox_to_anchor=(0.0, -0.16), ncols=1, handlelength=2.4,
-                        alignment="left")  # fmt: skip
+        box = ax.legend(
+            handles=handles,
+            title="bifurcations (cell edges)",
+            loc="upper left",
+            bbox_to_anchor=(0.0, -0.16),
+            ncols=1,
+            handlelength=2.4,
+            alignment="left",
+        )
         box.set_zorder(4.0)
     return drawn
 

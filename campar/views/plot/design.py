@@ -21,8 +21,9 @@ def plot_separation(curves, *, title: str | None = None):
         figure = new_figure(6.6, 2.8)
         speed_ax, force_ax = figure.subplots(1, 2)
         for i, c in enumerate(curves):
-            style = dict(marker=MARKERS[i % len(MARKERS)], markersize=2.5, linewidth=1.0,
-                         label=c.label)  # fmt: skip
+            style = dict(
+                marker=MARKERS[i % len(MARKERS)], markersize=2.5, linewidth=1.0, label=c.label
+            )
             speed_ax.plot(c.values, c.speed, **style)
             force_ax.plot(c.values, c.pn_max, **style)
         speed_ax.set_xlabel(axis_label(parameter))

@@ -98,12 +98,23 @@ def plot_gap_family(rows, *, title: str | None = None):
                 ax = axes[r, j]
                 revolutions = common_revolutions(results)
                 for i, (value, result) in enumerate(zip(values, results, strict=True)):
-                    plot_gap(result, ax, colour=colours[i], label=f"{SYMBOLS[name]} = {value:g}",
-                             phases=i == 0, revolutions=revolutions, marks=False)  # fmt: skip
+                    plot_gap(
+                        result,
+                        ax,
+                        colour=colours[i],
+                        label=f"{SYMBOLS[name]} = {value:g}",
+                        phases=i == 0,
+                        revolutions=revolutions,
+                        marks=False,
+                    )
                 omega = results[0].parameters["omega"]
                 labels = ", ".join(result.label for result in results)
-                ax.set_title(f"({LETTERS[k]}) {SYMBOLS['omega']} = {omega:g}:  {labels}",
-                             loc="left", pad=11, fontsize=8)  # fmt: skip
+                ax.set_title(
+                    f"({LETTERS[k]}) {SYMBOLS['omega']} = {omega:g}:  {labels}",
+                    loc="left",
+                    pad=11,
+                    fontsize=8,
+                )
                 if j:
                     ax.set_ylabel("")
                 k += 1
@@ -133,8 +144,9 @@ def plot_force_row(results, *, title: str | None = None):
             if i:
                 ax.set_ylabel("")
             omega = result.parameters["omega"]
-            ax.set_title(f"({LETTERS[i]}) {SYMBOLS['omega']} = {omega:g}: {result.label}",
-                         loc="left", pad=11)  # fmt: skip
+            ax.set_title(
+                f"({LETTERS[i]}) {SYMBOLS['omega']} = {omega:g}: {result.label}", loc="left", pad=11
+            )
         clamped = any(clamped_intervals(result.trace) for result in results)
         handles = force_legend(clamped)
         figure.legend(handles=handles, loc="outside lower center", ncols=len(handles))

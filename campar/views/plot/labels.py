@@ -322,8 +322,10 @@ def distinct_categories(cells: CategoryMap, max_entries: int | None = None) -> C
     """
     entries = list(cells.entries)
     fixed = [e for e in entries if e.label in DESIGNED]
-    rare = sorted((e for e in entries if e.label not in DESIGNED),
-                  key=lambda e: (-e.count, order_key(e.label)))  # fmt: skip
+    rare = sorted(
+        (e for e in entries if e.label not in DESIGNED),
+        key=lambda e: (-e.count, order_key(e.label)),
+    )
     if not rare:
         return cells
     room = len(rare)
@@ -350,8 +352,9 @@ def distinct_categories(cells: CategoryMap, max_entries: int | None = None) -> C
     new = [LegendEntry(e.label, e.count, coloured.get(e.label, e.colour)) for e in kept]
     if others:
         members = tuple(sorted((e.label for e in others), key=order_key))
-        new.append(LegendEntry(OTHER, sum(e.count for e in others),
-                               to_rgba(DESIGNED[OTHER]), members))  # fmt: skip
+        new.append(
+            LegendEntry(OTHER, sum(e.count for e in others), to_rgba(DESIGNED[OTHER]), members)
+        )
     new.sort(key=lambda e: order_key(e.label))
     index = {e.label: i for i, e in enumerate(new)}
     remap = np.array([index.get(e.label, index.get(OTHER, -1)) for e in entries], np.intp)

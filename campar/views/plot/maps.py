@@ -234,8 +234,9 @@ def plot_map(
                 arrays = {**arrays, what: np.where(periodic, arrays[what], np.nan)}
             if ax is None:
                 ax = new_figure(4.9, height).add_subplot()
-            gaps_legend = draw_quantity(ax, xe, ye, arrays, what, legend=legend, log=log,
-                                        vmin=vmin, vmax=vmax)  # fmt: skip
+            gaps_legend = draw_quantity(
+                ax, xe, ye, arrays, what, legend=legend, log=log, vmin=vmin, vmax=vmax
+            )
         if curves is not None:
             from .curves import draw_curves
 
@@ -256,16 +257,25 @@ def plot_map(
 def draw_categories(ax, xe, ye, cells: CategoryMap) -> None:
     """Categories as flat colours; failed and not computed cells as hatched gaps."""
     colours = [entry.colour for entry in cells.entries]
-    gaps = {label: cells.codes == i for i, label in enumerate(cells.labels_present)
-            if label in (FAILED, NOT_COMPUTED)}  # fmt: skip
+    gaps = {
+        label: cells.codes == i
+        for i, label in enumerate(cells.labels_present)
+        if label in (FAILED, NOT_COMPUTED)
+    }
     codes = np.ma.masked_array(cells.codes, np.zeros(cells.codes.shape, bool))
     for mask in gaps.values():
         codes[mask] = np.ma.masked
     draw_gaps(ax, xe, ye, gaps.get(FAILED), gaps.get(NOT_COMPUTED))
     ax.pcolormesh(
-        xe, ye, codes, cmap=ListedColormap(colours), vmin=-0.5, vmax=len(colours) - 0.5,
-        shading="flat", rasterized=True,
-    )  # fmt: skip
+        xe,
+        ye,
+        codes,
+        cmap=ListedColormap(colours),
+        vmin=-0.5,
+        vmax=len(colours) - 0.5,
+        shading="flat",
+        rasterized=True,
+    )
     if OTHER in cells.labels_present:  # the hatch over the rare labels grouped in "other"
         hatch = {**OTHER_STYLE, "facecolor": "none"}
         for (c0, c1), (r0, r1) in cell_runs(cells.codes == cells.labels_present.index(OTHER)):
@@ -278,8 +288,14 @@ def draw_legend(ax, entries, title: str, columns: int) -> None:
     """Legend right of the map: every category with its cell count ("other" lists its
     labels)."""
     handles = [swatch(e.label, f"{e.text} ({e.count})", e.colour) for e in entries]
-    ax.legend(handles=handles, title=title, loc="upper left", bbox_to_anchor=(1.03, 1.0),
-              ncols=columns, alignment="left")  # fmt: skip
+    ax.legend(
+        handles=handles,
+        title=title,
+        loc="upper left",
+        bbox_to_anchor=(1.03, 1.0),
+        ncols=columns,
+        alignment="left",
+    )
 
 
 def draw_codes(
@@ -290,10 +306,15 @@ def draw_codes(
     cells (the ``optional`` codes only where some cell has them)."""
     draw_gaps(ax, xe, ye, None, ~computed)
     ax.pcolormesh(
-        xe, ye, np.ma.masked_array(codes, ~computed),
+        xe,
+        ye,
+        np.ma.masked_array(codes, ~computed),
         cmap=ListedColormap([colour for _, _, colour in categories]),
-        vmin=-0.5, vmax=len(categories) - 0.5, shading="flat", rasterized=True,
-    )  # fmt: skip
+        vmin=-0.5,
+        vmax=len(categories) - 0.5,
+        shading="flat",
+        rasterized=True,
+    )
     if not legend:
         return
     counts = {value: int(((codes == value) & computed).sum()) for value, _, _ in categories}
@@ -304,8 +325,9 @@ def draw_codes(
     ]
     if not computed.all():
         handles.append(swatch(NOT_COMPUTED, f"not computed ({int((~computed).sum())})", "white"))
-    ax.legend(handles=handles, title=title, loc="upper left", bbox_to_anchor=(1.03, 1.0),
-              alignment="left")  # fmt: skip
+    ax.legend(
+        handles=handles, title=title, loc="upper left", bbox_to_anchor=(1.03, 1.0), alignment="left"
+    )
 
 
 def draw_quantity(ax, xe, ye, arrays, what: str, *, legend: bool, log, vmin, vmax) -> bool:
@@ -319,9 +341,14 @@ def draw_quantity(ax, xe, ye, arrays, what: str, *, legend: bool, log, vmin, vma
     norm, cmap = quantity_scale(quantity, values, log, vmin, vmax)
     draw_gaps(ax, xe, ye, missing, ~computed)
     mesh = ax.pcolormesh(
-        xe, ye, np.ma.masked_invalid(values), cmap=cmap, norm=norm,
-        shading="flat", rasterized=True,
-    )  # fmt: skip
+        xe,
+        ye,
+        np.ma.masked_invalid(values),
+        cmap=cmap,
+        norm=norm,
+        shading="flat",
+        rasterized=True,
+    )
     bar = ax.figure.colorbar(mesh, ax=ax, label=quantity.label, pad=0.02, aspect=30)
     if isinstance(norm, TwoSlopeNorm):
         bar.set_ticks(diverging_ticks(norm.vmin, norm.vmax))
@@ -379,15 +406,22 @@ def draw_gaps(ax, xe, ye, failed=None, pending=None) -> None:
     rectangle with a light hatch per run of such cells.
     """
     if failed is not None and failed.any():
-        ax.add_patch(Rectangle(
-            (xe.min(), ye.min()), np.ptp(xe), np.ptp(ye), zorder=0.5, **GAP_STYLE[FAILED],
-        ))  # fmt: skip
+        ax.add_patch(
+            Rectangle(
+                (xe.min(), ye.min()),
+                np.ptp(xe),
+                np.ptp(ye),
+                zorder=0.5,
+                **GAP_STYLE[FAILED],
+            )
+        )
     if pending is not None and pending.any():
         for (c0, c1), (r0, r1) in cell_runs(pending):
             x0, x1 = sorted((xe[c0], xe[c1]))
             y0, y1 = sorted((ye[r0], ye[r1]))
-            ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, zorder=0.6,
-                                   **GAP_STYLE[NOT_COMPUTED]))  # fmt: skip
+            ax.add_patch(
+                Rectangle((x0, y0), x1 - x0, y1 - y0, zorder=0.6, **GAP_STYLE[NOT_COMPUTED])
+            )
 
 
 def cell_runs(mask: np.ndarray) -> list:

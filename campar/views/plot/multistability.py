@@ -60,8 +60,9 @@ def draw_attractor_sets(ax, xe, ye, arrays, chatter_p: int, *, legend: bool) -> 
 
     count = np.asarray(arrays["n_attractors"])
     computed = computed_cells(arrays, count.shape) & (count >= 0)
-    sets, names = attractor_sets(arrays["attractor_kind"], arrays["attractor_n"],
-                                 arrays["attractor_p"], count, chatter_p)  # fmt: skip
+    sets, names = attractor_sets(
+        arrays["attractor_kind"], arrays["attractor_n"], arrays["attractor_p"], count, chatter_p
+    )
     several = np.array(["+" in name for name in names])[sets] & computed
     cells = np.bincount(sets[several], minlength=len(names))
     ranked = [int(i) for i in np.argsort(-cells, kind="stable") if cells[i] > 0]
@@ -73,7 +74,17 @@ def draw_attractor_sets(ax, xe, ye, arrays, chatter_p: int, *, legend: bool) -> 
     if len(ranked) > MAX_SETS:
         other = 2 + MAX_SETS
         codes[several & (codes == 1)] = other
-        categories.append((other, f"other sets ({len(ranked) - MAX_SETS})",
-                           OTHER_STYLE["facecolor"]))  # fmt: skip
-    draw_codes(ax, xe, ye, codes, computed, categories, legend=legend,
-               title="attractor sets (cells)", optional=(0,))  # fmt: skip
+        categories.append(
+            (other, f"other sets ({len(ranked) - MAX_SETS})", OTHER_STYLE["facecolor"])
+        )
+    draw_codes(
+        ax,
+        xe,
+        ye,
+        codes,
+        computed,
+        categories,
+        legend=legend,
+        title="attractor sets (cells)",
+        optional=(0,),
+    )

@@ -95,8 +95,16 @@ def shade_cam_phases(ax, trace, *, names: bool = False) -> None:
                 ax.axvspan(t0, t1, color=PHASE_SHADE, lw=0, zorder=0)
             if names and k == 0 and revolutions <= MAX_NAMED_REVOLUTIONS:
                 text = name if revolutions == 1 else PHASE_ABBREVIATIONS[name]
-                ax.text(0.5 * (t0 + t1), 1.0, text, transform=ax.get_xaxis_transform(),
-                        ha="center", va="bottom", fontsize=6.5, color="0.4")  # fmt: skip
+                ax.text(
+                    0.5 * (t0 + t1),
+                    1.0,
+                    text,
+                    transform=ax.get_xaxis_transform(),
+                    ha="center",
+                    va="bottom",
+                    fontsize=6.5,
+                    color="0.4",
+                )
     for k in range(revolutions + 1):
         ax.axvline(start + k * period, color="0.6", lw=0.5, ls=":", zorder=0.5)
 
@@ -109,11 +117,27 @@ def plot_phase(result, ax=None, *, legend: bool = True, title: str | None = None
             ax = new_figure(3.2, 2.8).add_subplot()
         ax.plot(trace.y, trace.v, color=ORBIT_COLOUR, lw=0.7, zorder=2)
         sections = np.asarray(result.sections).reshape(-1, 2)
-        ax.plot(sections[:, 0], sections[:, 1], "o", ms=4.5, color=SECTION_COLOUR,
-                mec="white", mew=0.5, zorder=4)  # fmt: skip
+        ax.plot(
+            sections[:, 0],
+            sections[:, 1],
+            "o",
+            ms=4.5,
+            color=SECTION_COLOUR,
+            mec="white",
+            mew=0.5,
+            zorder=4,
+        )
         detach = trace.events_named("detachment")
-        ax.plot(detach[:, 1], detach[:, 2], "o", ms=4.5, color=DETACH_COLOUR,
-                mec="white", mew=0.5, zorder=5)  # fmt: skip
+        ax.plot(
+            detach[:, 1],
+            detach[:, 2],
+            "o",
+            ms=4.5,
+            color=DETACH_COLOUR,
+            mec="white",
+            mew=0.5,
+            zorder=5,
+        )
         ax.set_xlabel(Y_LABEL)
         ax.set_ylabel(V_LABEL)
         if legend:
@@ -166,8 +190,15 @@ def plot_gap(
     return ax.figure
 
 
-def plot_force(result, ax=None, *, phases: bool = True, names: bool = True,
-               right_label: bool = True, last: int | None = None):  # fmt: skip
+def plot_force(
+    result,
+    ax=None,
+    *,
+    phases: bool = True,
+    names: bool = True,
+    right_label: bool = True,
+    last: int | None = None,
+):
     """Pn(t) (red, left axis) and yc(t) (blue, right axis) over the steady orbit,
     impacts as open circles and detachments as stars on the Pn curve (``last``: only the
     last so many revolutions). Returns the Figure; the right axis is ``ax.cam_axis``."""
@@ -183,8 +214,16 @@ def plot_force(result, ax=None, *, phases: bool = True, names: bool = True,
         ax.axhline(0.0, color="0.3", lw=0.5, zorder=1)
         impacts = trace.events_named("impact")[:, 0]
         detach = trace.events_named("detachment")[:, 0]
-        ax.plot(impacts, np.zeros_like(impacts), "o", ms=4.5, mfc="white", mec="black",
-                mew=0.8, zorder=5)  # fmt: skip
+        ax.plot(
+            impacts,
+            np.zeros_like(impacts),
+            "o",
+            ms=4.5,
+            mfc="white",
+            mec="black",
+            mew=0.8,
+            zorder=5,
+        )
         ax.plot(detach, np.zeros_like(detach), "*", ms=6.5, color="black", zorder=5)
         ax.set_xlim(trace.t[0], trace.t[-1])
         ax.set_xlabel(T_LABEL)
@@ -231,8 +270,14 @@ def force_legend(clamped: bool = False) -> list:
         Line2D([], [], marker="*", ls="none", color="black", ms=6.5, label="detachment"),
     ]
     if clamped:
-        handles.append(Patch(facecolor=CLAMP_SHADE, alpha=0.55, lw=0,
-                             label=r"clamp: $P_n = 0$ while $\varepsilon > 0$"))  # fmt: skip
+        handles.append(
+            Patch(
+                facecolor=CLAMP_SHADE,
+                alpha=0.55,
+                lw=0,
+                label=r"clamp: $P_n = 0$ while $\varepsilon > 0$",
+            )
+        )
     return handles
 
 
@@ -252,23 +297,33 @@ def plot_orbit(result, *, title: str | None = None):
         plot_gap(result, gap, last=last)
         plot_force(result, force, names=False, last=last)
         if last:
-            gap.set_title(f"last {last} of {traced} revolutions traced", loc="right",
-                          fontsize=7, color="0.4")  # fmt: skip
+            gap.set_title(
+                f"last {last} of {traced} revolutions traced", loc="right", fontsize=7, color="0.4"
+            )
         gap.set_xlabel("")
         gap.tick_params(labelbottom=False)
         handles = force_legend(bool(clamped_intervals(force_trace(result, last))))
         figure.legend(handles=handles, loc="outside lower center", ncols=len(handles))
         for ax, letter in ((phase, "a"), (gap, "b"), (force, "c")):
             panel_letter(ax, letter)
-        figure.suptitle(orbit_title(result) if title is None else title, x=0.01, ha="left",
-                        fontsize=9)  # fmt: skip
+        figure.suptitle(
+            orbit_title(result) if title is None else title, x=0.01, ha="left", fontsize=9
+        )
     return figure
 
 
 def panel_letter(ax, letter: str) -> None:
     """ "(a)" at the top left corner, outside the axes, as journals set panel labels."""
-    ax.text(-0.02, 1.02, f"({letter})", transform=ax.transAxes, ha="right", va="bottom",
-            fontsize=9, fontweight="bold")  # fmt: skip
+    ax.text(
+        -0.02,
+        1.02,
+        f"({letter})",
+        transform=ax.transAxes,
+        ha="right",
+        va="bottom",
+        fontsize=9,
+        fontweight="bold",
+    )
 
 
 # -- parts of a trace ------------------------------------------------------------------

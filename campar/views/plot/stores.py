@@ -64,8 +64,9 @@ def plot_store(
         return basin_view(path, what, output, basin, zoomed=(omega, second, curves, direction))
     output = figure_file(output or f"{Path(path).stem}-{what}.png")
     drawn = read_map(path, what, omega=omega, second=second, direction=direction)
-    figure = plot_map(drawn.grid, drawn.arrays, what, title=drawn.title, curves=curves,
-                      continued=continued)  # fmt: skip
+    figure = plot_map(
+        drawn.grid, drawn.arrays, what, title=drawn.title, curves=curves, continued=continued
+    )
     return save_figure(figure, output)
 
 
@@ -117,18 +118,24 @@ def read_map(path, what: str = "labels", *, omega=None, second=None, direction=N
     if report.variables:  # the map is drawn from the job's grid: the damage changes nothing here
         log.warning(
             "%s: damaged variables %s (`campar verify %s` says why); drawn from the job's grid",
-            path, ", ".join(report.variables), path,
-        )  # fmt: skip
+            path,
+            ", ".join(report.variables),
+            path,
+        )
     if report.damaged:
         log.warning(
             "%s: %d damaged tiles drawn as not computed (`campar verify %s` says why)",
-            path, len(report.damaged), path,
-        )  # fmt: skip
+            path,
+            len(report.damaged),
+            path,
+        )
     grid = replace(full, omega=full.omega[cols], second=full.second[rows])
     step = (-(-full.shape[0] // len(rows)), -(-full.shape[1] // len(cols)))
-    title = None if step == (1, 1) else (
-        f"{parameter_text(grid.fixed)}   (every {step[0]}th × {step[1]}th cell drawn)"
-    )  # fmt: skip
+    title = (
+        None
+        if step == (1, 1)
+        else (f"{parameter_text(grid.fixed)}   (every {step[0]}th × {step[1]}th cell drawn)")
+    )
     if layer is not None:  # one direction of a both store: say which
         title = f"{title or parameter_text(grid.fixed)}   (ω swept {direction or 'down'})"
     return StoredMap(grid, arrays, title)

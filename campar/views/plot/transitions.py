@@ -29,9 +29,17 @@ def mark_transitions(ax, transitions) -> int:
             continue
         x = (t.omega - lo) / span
         at_top = not at_top if last_x is not None and x - last_x < MIN_GAP else True
-        ax.text(t.omega, 0.99 if at_top else 0.01, t.type, transform=transform, rotation=90,
-                fontsize=LABEL_SIZE, ha="center", va="top" if at_top else "bottom",
-                bbox=LABEL_BOX)  # fmt: skip
+        ax.text(
+            t.omega,
+            0.99 if at_top else 0.01,
+            t.type,
+            transform=transform,
+            rotation=90,
+            fontsize=LABEL_SIZE,
+            ha="center",
+            va="top" if at_top else "bottom",
+            bbox=LABEL_BOX,
+        )
         last_x = x
         labelled += 1
     return labelled

@@ -39,11 +39,29 @@ def outline(ax, key: str, omega, second) -> None:
     """A window of a zoom panel on the main panel: its rectangle and its letter."""
     x0, x1 = sorted(omega)
     y0, y1 = sorted(second)
-    ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor=WINDOW_COLOUR,
-                           linewidth=1.1, zorder=5.0))  # fmt: skip
-    ax.text(x0, y1, f" ({key})", ha="left", va="top", fontsize=9, fontweight="bold",
-            color=WINDOW_COLOUR, zorder=5.0,
-            bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.6, "alpha": 0.8})  # fmt: skip
+    ax.add_patch(
+        Rectangle(
+            (x0, y0),
+            x1 - x0,
+            y1 - y0,
+            fill=False,
+            edgecolor=WINDOW_COLOUR,
+            linewidth=1.1,
+            zorder=5.0,
+        )
+    )
+    ax.text(
+        x0,
+        y1,
+        f" ({key})",
+        ha="left",
+        va="top",
+        fontsize=9,
+        fontweight="bold",
+        color=WINDOW_COLOUR,
+        zorder=5.0,
+        bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.6, "alpha": 0.8},
+    )
 
 
 def plot_zoom_set(main: Panel, zooms: list[Panel], *, title: str | None = None):
@@ -58,9 +76,17 @@ def plot_zoom_set(main: Panel, zooms: list[Panel], *, title: str | None = None):
         for k, panel in enumerate(panels):
             ax = figure.add_subplot(grid[k // 2, 2 * (k % 2)])
             figure.add_subplot(grid[k // 2, 2 * (k % 2) + 1]).set_axis_off()  # the room
-            plot_map(panel.grid, panel.arrays, "labels", omega=panel.omega,
-                     second=panel.second, ax=ax, title=panel.heading,
-                     curves=panel.curves, continued=panel.continued)  # fmt: skip
+            plot_map(
+                panel.grid,
+                panel.arrays,
+                "labels",
+                omega=panel.omega,
+                second=panel.second,
+                ax=ax,
+                title=panel.heading,
+                curves=panel.curves,
+                continued=panel.continued,
+            )
             for key, omega, second in panel.windows:
                 outline(ax, key, omega, second)
         if title:
