@@ -393,8 +393,9 @@ def first_crossing(rhs, events, step, m):
 
     Reads the first m event functions' values and rates at the start (w.g0,
     w.dg0) and at the end (w.g1, w.dg1). Returns (event index or -1, θ of the
-    root). A g that is ≤ 0 at the start by rounding just after a mode switch
-    counts as positive when its rate points into the mode.
+    root). A g on its surface at the start (≤ 0, or rising from within one event
+    tolerance of 0, as just after a mode switch) has its root bracketed from its
+    peak inside the step, not from the start.
     """
     w = step.w
     h = step.h
@@ -409,11 +410,19 @@ def first_crossing(rhs, events, step, m):
         fa = g0
         b = -1.0
         fb = 0.0
+        # on the surface: g is ≤ 0, or rises from within one event tolerance of 0 (the
+        # mode was just entered across it). There g's rounding (~1e-16 for ε = yc − y)
+        # can exceed g itself, and a root found between the start and the first
+        # dense-output points is noise: it ends the step at once, the mode switches
+        # back, and the two modes swap at one instant for ever (a detachment where
+        # 1 + c ε' ≈ 0 did). The step's next crossing lies beyond g's peak.
+        surface = g0 <= 0.0 or (d0 > 0.0 and g0 <= d0 * step.theta_tol)
         if g1 <= 0.0:
             b = 1.0
             fb = g1
-            if g0 <= 0.0:
+            if surface:
                 # the mode holds only inside the step, if at all: bracket from its peak
+                fa = 0.0
                 th, _ = hermite_extremum(g0, d0, g1, d1, MAXIMUM)
                 if th > 0.0:
                     gm = event_value(rhs, events, step, i, th)
@@ -440,7 +449,7 @@ def first_crossing(rhs, events, step, m):
                 continue
             b = th
             fb = gm
-            if g0 <= 0.0:
+            if surface:
                 continue
         if a >= first_theta:
             continue
