@@ -125,6 +125,7 @@ class StepWork(NamedTuple):
 
     K: np.ndarray  # (K_ROWS, n) stage derivatives; K[end_row(method)] = f at the step end
     y_new: np.ndarray  # (n,) state at the step end
+    y_old: np.ndarray  # (n,) state at the start of the last accepted step (its dense output's)
     y_stage: np.ndarray  # (n,) stage argument, dense value
     g0: np.ndarray  # event values and rates at the step start
     dg0: np.ndarray
@@ -144,6 +145,7 @@ def make_work(n, max_events, h0) -> StepWork:
     w = StepWork(
         K=np.zeros((K_ROWS, n)),
         y_new=np.zeros(n),
+        y_old=np.zeros(n),
         y_stage=np.zeros(n),
         g0=np.zeros(max_events),
         dg0=np.zeros(max_events),
@@ -591,6 +593,7 @@ def advance(rhs, events, t, t_end, y, f, p, mode, opt, w):
                 ctrl[CTRL_G1_MODE1] = mode[1]
                 ctrl[CTRL_G1_M] = m
         for i in range(n):
+            w.y_old[i] = y[i]
             y[i] = w.y_new[i]
             f[i] = w.K[end, i]
         w.counts[0] += 1
