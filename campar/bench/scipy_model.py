@@ -360,15 +360,18 @@ def duty_cycle(model, x0, revolutions, by="separation", **options):
     return released / total
 
 
-def extremes(model, x0, revolutions, *, samples=2001, **options):
-    """(min ε, max ε, max Pn) over ``revolutions`` revolutions from x0 (at θ = 0): every
-    piece of the solution (``integrate``'s, ``options`` its own) sampled on its dense
-    output at ``samples`` points, and each piece's extreme sample refined by a bounded
-    scalar search on the dense output between its neighbours."""
+def extremes(model, x0, revolutions, *, skip=0, samples=2001, **options):
+    """(min ε, max ε, max Pn) over ``revolutions`` revolutions from x0 (at θ = 0), after
+    ``skip`` more (a restitution law's impact velocity then comes from the motion, not
+    the floor): every piece of the solution (``integrate``'s, ``options`` its own)
+    sampled on its dense output at ``samples`` points, and each piece's extreme sample
+    refined by a bounded scalar search on the dense output between its neighbours."""
     from scipy.optimize import minimize_scalar
 
     pieces = []
-    integrate(model, x0, revolutions, pieces=pieces, **options)
+    integrate(model, x0, skip + revolutions, pieces=pieces, **options)
+    start = skip * 2 * math.pi / model.omega
+    pieces = [piece for piece in pieces if piece[1] >= start * (1 - 1e-12)]
     found = [math.inf, -math.inf, 0.0]
 
     def values(piece, t):
