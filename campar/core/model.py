@@ -260,7 +260,17 @@ def acceleration(t, y, v, p, mode):
 def rhs(t, y, p, mode, dy):
     """Vector field of the current mode into ``dy``; variational part if len(y) == 6."""
     v = y[1]
-    acc, dfdy, dfdv = acceleration(t, y[0], v, p, mode)
+    acc = -2.0 * p.zeta * v - y[0] - p.f0
+    dfdy = 0.0
+    dfdv = 0.0
+    if mode[1] == PUSH:  # only a pushing contact needs the cam
+        yc, dyc, _ = cam(p.omega * t, mode[0], p.cam)
+        eps = yc - y[0]
+        deps = p.vcam * dyc - v
+        if eps < 0.0:  # a stage point just past an event: extend by zero force
+            eps = 0.0
+        force, dfdy, dfdv = pushing(p.contact, p.k, damping(p.contact, p.c), eps, deps)
+        acc += force
     dy[0] = v
     dy[1] = acc
     if y.shape[0] == N_STATE_VARIATIONAL:
@@ -337,7 +347,16 @@ def contact_kinematics(t, y, f, p, mode):
     Pn is the force of the mode's own field (zero unless pushing), so its rate
     is continuous inside a step.
     """
-    return kinematics(t, y[0], y[1], f[1], p, mode)
+    yc, dyc, d2yc = cam(p.omega * t, mode[0], p.cam)
+    eps = yc - y[0]
+    rate = p.omega * dyc - y[1]
+    accel = p.omega * p.omega * d2yc - f[1]
+    if mode[1] != PUSH or eps <= 0.0:
+        return eps, rate, accel, 0.0, 0.0
+    deps = p.vcam * dyc - y[1]  # the force law's ε'
+    d2eps = p.vcam * p.omega * d2yc - f[1]
+    pn, dpn = force_and_rate(p.contact, p.k, damping(p.contact, p.c), eps, deps, rate, d2eps)
+    return eps, rate, accel, pn, dpn
 
 
 @hot
