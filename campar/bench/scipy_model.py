@@ -268,6 +268,7 @@ def integrate(
     max_step=np.inf,
     mode_time=None,
     pieces=None,
+    impact=None,
 ):
     """Integrate from (y, y') at θ = 0 over whole revolutions.
 
@@ -279,11 +280,12 @@ def integrate(
     "detachment", "force zero", "force resumes"}, ∫ div f dt if asked). A list
     ``mode_time`` of three numbers gets the time spent FREE, PUSH and SLACK added; a list
     ``pieces`` gets (dense solution, t from, t to, mode, θ of the phase, impact velocity)
-    of every piece integrated.
+    of every piece integrated. ``impact``: a restitution law's impact velocity at the start
+    (default: the floor, as before any impact).
     """
     w = model.omega
     bounds = model.bounds
-    model.impact = model.floor  # no impact yet
+    model.impact = model.floor if impact is None else impact  # the floor: no impact yet
     x = np.array([x0[0], x0[1], 0.0] if with_divergence else list(x0[:2]), dtype=float)
     events = []
     t = 0.0
@@ -362,8 +364,7 @@ def duty_cycle(model, x0, revolutions, by="separation", **options):
 
 def extremes(model, x0, revolutions, *, skip=0, samples=2001, **options):
     """(min ε, max ε, max Pn) over ``revolutions`` revolutions from x0 (at θ = 0), after
-    ``skip`` more (a restitution law's impact velocity then comes from the motion, not
-    the floor): every piece of the solution (``integrate``'s, ``options`` its own)
+    ``skip`` more: every piece of the solution (``integrate``'s, ``options`` its own)
     sampled on its dense output at ``samples`` points, and each piece's extreme sample
     refined by a bounded scalar search on the dense output between its neighbours."""
     from scipy.optimize import minimize_scalar
