@@ -42,3 +42,23 @@ def test_kernel_loads_without_scipy_and_numba_blas_is_unchanged():
     assert found["scipy"] is False  # loading the kernel imported no scipy.linalg
     assert found["blas"] is (alone.stdout.strip() == "True")  # as numba itself decides
     assert found["dot"] == 1 * 2 + 2 * 3 + 3 * 4 + 4 * 5  # numba's BLAS still works
+
+
+@pytest.mark.process
+@pytest.mark.mpi
+def test_bench_startup_prints_fixed_cost_and_rank_ratios(capsys, monkeypatch):
+    from pathlib import Path
+
+    from campar.cli import main
+
+    monkeypatch.chdir(Path(__file__).resolve().parents[1])  # the plane is read from jobs/
+    assert main(["bench", "startup", "--quick"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("machine: ") and "load average" in out
+    reference = out.split("reference job")[1].split("\n\n")[0].splitlines()
+    rows = [line.split() for line in reference if line.strip().startswith("this:")]
+    assert [row[1] for row in rows] == ["1", "mpirun"]
+    for row in rows:  # fixed seconds ≥ the run part; CPU of a process is positive
+        fixed, cpu, part = map(float, row[-3:])
+        assert fixed > part >= 0 and cpu > 0
+    assert "whole-command 1/2 by round" in out
