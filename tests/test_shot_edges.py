@@ -98,3 +98,48 @@ def test_same_cycle_at_any_phase_but_not_another_period():
     assert same_cycle(orbit(n=2, state=(0.3, 0.4)), two)  # the other point of the 2-cycle
     assert not same_cycle(orbit(n=2, state=(0.3, 0.41)), two)
     assert not same_cycle(orbit(n=1, state=(0.1, 0.2)), two)
+
+
+# A corner of the (ω, μkn) plane across the 1-1 | 1-2 boundary of the edge above.
+CORNER = {
+    "name": "corner",
+    "sweep": {
+        "omega": {"from": 1.50, "to": 1.43, "points": 6},
+        "mu_kn": {"from": 0.95, "to": 0.945, "points": 2},
+    },
+    "fixed": {"zeta": 0.2, "mu_cn": 0.8, "f0": 0.5},
+    "chains": {"start": "continue"},
+    "outputs": ["label", "dc", "eps", "pn", "multipliers"],
+}
+
+
+def test_plot_bifurcations_shoot_types_the_unknown_edges(tmp_path, capsys):
+    import json
+
+    from campar.cli import main
+    from campar.sweep.job import Job
+    from campar.sweep.runner import run_job
+
+    store = tmp_path / "corner.zarr"
+    run_job(Job.from_dict(CORNER), store)
+    assert (
+        main(["plot", str(store), "--bifurcations", "--json", "-o", str(tmp_path / "a.png")]) == 0
+    )
+    plain = json.loads(capsys.readouterr().out)
+    args = [
+        "plot",
+        str(store),
+        "--bifurcations",
+        "--shoot",
+        "--json",
+        "-o",
+        str(tmp_path / "b.png"),
+    ]
+    assert main(args) == 0
+    shot = json.loads(capsys.readouterr().out)
+    assert plain["counts"]["unknown"] >= 2  # the stored ε extrema cannot tell these
+    assert shot["counts"]["unknown"] == 0
+    assert shot["counts"]["G"] == plain["counts"]["G"] + plain["counts"]["unknown"]
+    for segment in shot["segments"]:
+        assert {segment["from"], segment["to"]} <= {"1-1", "1-2", "1-3"}  # flights added
+        assert segment["evidence"]["critical"] == "graze" and segment["evidence"]["side"]
