@@ -11,8 +11,10 @@ steps, each corrected by Newton, and watches what the cycle meets on the way:
   extremum nearest 0 (``touch``) changes sign — located where ``touch`` = 0;
 - **PD**: a real multiplier crosses −1, or the cycle's minimal period halves (a doubled
   cycle folding back onto the one it doubled from);
-- **SN**: a real multiplier crosses +1, or Newton loses the cycle while its largest
-  multiplier is real and positive (the cycle ends in a fold);
+- **SN**: Newton loses the cycle while its largest multiplier is real and above
+  ``FOLD_MULTIPLIER`` (the cycle ends in a fold), or a real multiplier crosses +1 with the
+  cycle going on (a branch point: natural-parameter steps cannot pass a fold, and a
+  pitchfork or transcritical point is typed SN too);
 - **NS**: a complex pair crosses the unit circle.
 
 The first change met on the path from the cell computed first ("before") types the edge;
