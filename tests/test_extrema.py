@@ -106,6 +106,8 @@ CELLS = [
     for name in LAWS
     for omega, f0 in [(2.0, 1.0), (4.0, 0.5)]
     if (name, omega) != ("table-hunt-crossley-n1.2", 4.0)
+    # a restitution law's cell must be a 1-cycle (below): at ω 4 these are 2- and 12-cycles
+    and not (LAWS[name][2] != "hunt-crossley" and omega == 4.0)
 ]
 CELLS.append(
     pytest.param(
@@ -138,6 +140,8 @@ def test_every_law_from_rest(name, omega, f0):
     model = Model(omega, f0=f0, mu_kn=0.8, mu_cn=0.8, zeta=ZETA, contact=contact, n=n, **peer_cam)
     # a restitution law's state holds the last impact's velocity, which sets the damping
     # of a contact the cycle starts in: the chain's own (law.contact.impact) at its end
-    impact = float(law.contact.impact[0]) if contact != "hunt-crossley" else None
-    assert out.n[0] == 1  # a 1-cycle: its end state is the chain's end, with that impact
+    impact = None
+    if contact != "hunt-crossley":
+        assert out.n[0] == 1  # a 1-cycle: its end state is the chain's end, with that impact
+        impact = float(law.contact.impact[0])
     check_against_scipy(out, 0, model, impact)
