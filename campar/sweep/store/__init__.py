@@ -70,6 +70,7 @@ __all__ = [
     "TileWriter",
     "takes_direct_writes",
     "Verification",
+    "adopt_store",
     "backend_name",
     "cell_arrays",
     "fill_value",
@@ -187,7 +188,7 @@ def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job):
         log.warning("%s: variable %s is damaged (%s): rewritten from the job", path, name, why)
     for index, why in sorted(report.damaged.items()):
         log.warning("%s: tile %d is damaged (%s): computed again", path, index, why)
-    if not report.clean or not report.metadata_checksums:
+    if not report.clean or not report.metadata_checksums or report.stray or report.root is None:
         backend.repair(real, job, report)
     if report.committed:
         log.info(
@@ -198,6 +199,42 @@ def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job):
             len(report.damaged),
         )
     return report.verified
+
+
+def adopt_store(path: str | Path) -> Verification:
+    """Adopt a store written before root records (``_root``): under its lock, check every
+    variable against the stored job and every committed tile against its checksum, rewrite
+    the variables from the job, leave the damaged tiles pending, and write the root record of
+    the tiles that verified. Returns the check; StoreError if the store has a root record
+    already, StoreLocked if a run holds it."""
+    path = Path(path)
+    backend, real = _backend(path), real_path(path)
+    if not real.exists():
+        raise StoreError(f"no store at {path}")
+    lock = StoreLock.acquire(real)
+    try:
+        attrs = backend.read_attrs(real)
+        if attrs is None:
+            raise StoreError(f"{path} is not a campar {backend_name(path)} store")
+        check_readable(path, attrs)
+        if attrs.get("campar_store") != FORMAT:
+            raise StoreError(
+                f"{path} has store format {attrs.get('campar_store')!r}: it is read as it is "
+                f"(readability checks only); only format {FORMAT} stores are adopted"
+            )
+        backend.clean_leftovers(real, None)
+        with _READERS[backend](path, attrs, real, adopting=True) as reader:
+            if reader.root is not None:
+                raise StoreError(f"{path} has a sound root record: nothing to adopt")
+            job = reader.job
+            report = verify_store(reader)
+        report.adopting = True
+        backend.repair(real, job, report)
+        return report
+    except OSError as exc:
+        raise io_error(f"cannot adopt the store {path}", exc) from None
+    finally:
+        lock.release()
 
 
 def takes_direct_writes(path: str | Path) -> bool:

@@ -85,6 +85,7 @@ from ._journal import (  # noqa: F401 (re-exported: the backend's journal)
     write_entry,
 )
 from ._lock import StoreLock
+from ._root import HDF5_ATTR, Root, new_root
 from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests, global_document
 from ._schema import (
     FORMAT,
@@ -211,7 +212,18 @@ def _layout(f: h5py.File, job: Job) -> None:
             for axis, dim in enumerate(a.dims):
                 data.dims[axis].attach_scale(f[dim])
         write_attrs(data, a.attrs, a.dtype)
-    f.attrs[CHECKSUMS_ATTR] = json.dumps(digests(describe_file(f, arrays)))
+    variables = digests(describe_file(f, arrays))
+    f.attrs[CHECKSUMS_ATTR] = json.dumps(variables)
+    root = new_root(decode_attrs(f.attrs), variables, len(plan_tiles(job)))
+    f.attrs[HDF5_ATTR] = root.encode()
+
+
+def file_root(attrs) -> Root | None:
+    """The root record among a file's attributes, None if it has none; RootDamaged."""
+    if HDF5_ATTR not in attrs:
+        return None
+    text = attrs[HDF5_ATTR]
+    return Root.decode(text.decode(errors="replace") if isinstance(text, bytes) else text)
 
 
 # Attributes HDF5 keeps for dimension scales: references to other datasets, which change
@@ -319,22 +331,33 @@ def repair(path: Path, job: Job, report: Verification) -> None:
         build(tmp, job)
         with open(tmp, "ab") as fh:
             reserve(fh, _room(path, journal_entries(path).values()), tmp)
-        with Hdf5Reader(path, None, path) as old, h5py.File(tmp, "r+") as new:
+        with Hdf5Reader(path, None, path, adopting=True) as old, h5py.File(tmp, "r+") as new:
             for key, value in old._file.attrs.items():  # date created, history, run log
-                if key in VOLATILE_ATTRS and key != CHECKSUMS_ATTR:  # the rest: the job's
-                    new.attrs[key] = value
-            sums = old.tile_checksums()[0]
+                if key in VOLATILE_ATTRS and key not in (CHECKSUMS_ATTR, HDF5_ATTR):
+                    set_in_place(new.attrs, key, value)  # the rest: the job's
+            sums = report.sums if report.sums is not None else old.tile_checksums()[0]
             for index in keep:
                 tile = old._tiles[index]
                 for name in old.names:
                     new[name][tile.region] = old.read_tile(name, tile)
                 new["checksum"][index] = sums[index]
                 new["done"][index] = 1
+            root = file_root(new.attrs).with_sums(np.where(report.verified, sums, 0))
+            new.attrs.modify(HDF5_ATTR, root.encode())
     for index, entry in journal_entries(path).items():
         if index in report.damaged:
             set_aside(entry, report.damaged[index])
         else:
             entry.unlink(missing_ok=True)  # in the new file now
+
+
+def set_in_place(attrs, key: str, value) -> None:
+    """Set an attribute where it is in the file's order of attributes (``attrs[key] = …``
+    deletes it and adds it last), or add it last if the file has none of that name."""
+    if key in attrs:
+        attrs.modify(key, value)
+    else:
+        attrs[key] = value
 
 
 def glob_escape(name: str) -> str:
@@ -380,10 +403,17 @@ def apply_journal(path: Path, job: Job, runs: list[dict] | None = None) -> list[
                     for name, values in arrays.items():
                         f[name][tiles[index].region] = values
                     applied.append(entry)
-            for entry in applied:  # the flags last
+            for entry in applied:  # the flags, then the root record
                 f["done"][int(ENTRY.match(entry.name).group(1))] = 1
+            root = file_root(f.attrs)
+            sums = root.checksums.copy()
+            for entry in applied:
+                index = int(ENTRY.match(entry.name).group(1))
+                sums[index] = f["checksum"][index]
+            f.attrs.modify(HDF5_ATTR, root.with_sums(sums).encode())
             if runs is not None:
-                write_attrs(f, run_attrs(job, decode_attrs(f.attrs), runs))
+                for key, value in run_attrs(job, decode_attrs(f.attrs), runs).items():
+                    set_in_place(f.attrs, key, value)
     for entry in applied:
         entry.unlink(missing_ok=True)
     return damaged
@@ -454,7 +484,7 @@ class Hdf5Store(Store):
 
 
 class Hdf5Reader(StoreReader):
-    def __init__(self, path: Path, attrs: dict | None, real: Path):
+    def __init__(self, path: Path, attrs: dict | None, real: Path, *, adopting: bool = False):
         del attrs  # re-read below, after the journal: the file may have been replaced since
         # Journal first, file second: an entry a checkpoint removes meanwhile is then in the file.
         raw = {}
@@ -470,8 +500,9 @@ class Hdf5Reader(StoreReader):
             read_attrs(real)  # StoreDamaged if it is a damaged HDF5 file
             raise StoreDamaged(f"{path} cannot be opened ({describe_exception(exc)})") from None
         try:
-            super().__init__(path, decode_attrs(self._file.attrs), real)
+            super().__init__(path, decode_attrs(self._file.attrs), real, adopting=adopting)
             self._check_layout()
+            self._take_root(lambda: file_root(self._file.attrs))
         except BaseException:
             self.close()
             raise
@@ -529,6 +560,9 @@ class Hdf5Reader(StoreReader):
     @property
     def journaled(self) -> dict[int, dict[str, np.ndarray]]:
         return dict(self._journal)
+
+    def _outside_root(self) -> dict[int, int]:
+        return {index: int(self._sums.get(index, 0)) for index in self._journal}
 
     @property
     def journal_problems(self) -> dict[int, str]:

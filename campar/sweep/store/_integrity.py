@@ -72,6 +72,14 @@ class Verification:
     variables: dict[str, str] = field(default_factory=dict)  # variable → what changed in it
     checksums: bool = True  # the format carries checksums (else: readability only)
     metadata_checksums: bool = True  # the variables carry checksums (``_metadata``)
+    root: object = None  # the sound root record the check went by (``_root.Root``), or None
+    sums: np.ndarray | None = None  # per tile, the checksum the tile was verified against
+    stray: list[int] = field(default_factory=list)  # flags set on pending tiles
+    adopting: bool = False  # a check to adopt a store without a root record
+
+    @property
+    def root_digest(self) -> str | None:
+        return None if self.root is None else self.root.digest
 
     @property
     def verified(self) -> np.ndarray:
@@ -120,6 +128,7 @@ def verify_store(reader, visit: Callable[[TileCheck], None] | None = None) -> Ve
     report.problems += reader.metadata_problems()
     report.variables = reader.variable_damage()
     report.metadata_checksums = reader.metadata_checksums
+    report.root, report.adopting = reader.root, reader.adopting
     if CHECKSUMS_ATTR in reader.attrs and not report.metadata_checksums:
         report.problems.append(
             f"the variables' checksums (attribute {CHECKSUMS_ATTR}) cannot be read: every "
@@ -136,6 +145,9 @@ def verify_store(reader, visit: Callable[[TileCheck], None] | None = None) -> Ve
             report.committed.append(index)
             report.damaged[index] = why
     report.committed.sort()
+    report.sums = reader.tile_checksums()[0]
+    report.problems += reader.root_report()
+    report.stray = list(reader.stray_flags)
     return report
 
 

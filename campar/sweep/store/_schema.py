@@ -32,6 +32,7 @@ from ..job import DIRECTIONS, Job, job_digest
 from ..plan import Tile, plan_tiles
 from ._cf import cell_attrs, checksum_attrs, coordinate_attrs, done_attrs, global_attrs, history
 from ._metadata import CHECKSUMS_ATTR
+from ._root import MARK_ATTR
 
 # Bumped when the layout changes in a way old readers cannot follow. 1: no CF
 # metadata, tail dimension "var" unlabelled, ``done`` bool, Zarr attributes as
@@ -203,6 +204,7 @@ def initial_attrs(job: Job) -> dict:
     return {
         **global_attrs(job, utc_now()),
         "campar_store": FORMAT,
+        MARK_ATTR: 1,
         "job": json.dumps(job.to_dict()),
         "job_hash": job.digest(),
         "versions": json.dumps(versions()),

@@ -42,6 +42,7 @@ from ._base import Store, StoreReader, tile_values
 from ._chunks import DirectChunk
 from ._integrity import Verification, describe_exception
 from ._lock import StoreLock
+from ._root import Root, new_root, read_zarr_root, write_zarr_root
 from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests, global_document
 from ._schema import (
     TILE_ARRAYS,
@@ -129,26 +130,31 @@ def _build(tmp: Path, job: Job, separator: str | None = None) -> None:
         )
         if a.values is not None:
             array[...] = a.values
-    record_checksums(tmp, arrays)
+    variables = record_checksums(tmp, arrays)
+    write_zarr_root(tmp, new_root(initial_attrs(job), variables, len(plan_tiles(job))))
 
 
-def record_checksums(path: Path, arrays) -> None:
+def record_checksums(path: Path, arrays) -> dict[str, str]:
     """Record the checksums of the variables as their own documents hold them
-    (``_metadata``), then consolidate every document into the store's zarr.json."""
+    (``_metadata``), then consolidate every document into the store's zarr.json; returns
+    them (what the root record holds)."""
     group = zarr.open_group(path, mode="r+", use_consolidated=False)
     found = describe_variables(path, arrays, group, consolidated=False)
-    group.attrs[CHECKSUMS_ATTR] = json.dumps(digests(found))
+    recorded = digests(found)
+    group.attrs[CHECKSUMS_ATTR] = json.dumps(recorded)
     with warnings.catch_warnings():
         # "consolidated metadata is not part of the v3 spec": xarray reads it, and we want that.
         warnings.simplefilter("ignore", ZarrUserWarning)
         zarr.consolidate_metadata(path)
+    return recorded
 
 
 # Chunk files named c.<i>.<j> beside the array's zarr.json, not c/<i>/<j>: a tile's first
 # write into c/<i>/ made that folder, and on the 2-rank plane those ~1,300 mkdirs were
 # ~0.5 s of CPU taken from the lanes (docs/scaling.md). Readers follow the metadata.
 CHUNK_KEYS = {"name": "default", "separator": "."}
-CONSOLIDATED = "zarr.json (consolidated)"  # where campar and xarray read a variable's metadata
+CONSOLIDATED = "zarr.json (consolidated)"
+GROUP_KEYS = ("zarr_format", "node_type")  # the group's own, under the global checksum  # where campar and xarray read a variable's metadata
 
 
 def describe_variables(path: Path, arrays, group, consolidated: bool = True) -> dict:
@@ -159,7 +165,8 @@ def describe_variables(path: Path, arrays, group, consolidated: bool = True) -> 
     found: dict = {GLOBAL: "the store's zarr.json cannot be read"}
     try:
         document = json.loads((path / "zarr.json").read_bytes())
-        found[GLOBAL] = Variable({"zarr.json": global_document(document["attributes"])})
+        own = {f"(zarr.json) {key}": document.get(key) for key in GROUP_KEYS}
+        found[GLOBAL] = Variable({"zarr.json": {**global_document(document["attributes"]), **own}})
         if consolidated:
             copies = document["consolidated_metadata"]["metadata"]
     except (OSError, ValueError, KeyError, TypeError):
@@ -222,11 +229,13 @@ def chunk_separator(path: Path, job: Job) -> str:
     return "/" if any((path / a.name / "c").is_dir() for a in cell_arrays(job)) else "."
 
 
-def repair_variables(path: Path, job: Job, names) -> None:
+def repair_variables(path: Path, job: Job, names) -> dict[str, str]:
     """Rewrite the variables ``names`` from the job — metadata documents, and coordinates'
     values — each file written aside and renamed into place, then record the checksums and
     consolidate. The cells' chunks are left as they are (their tiles verify on their own)."""
     arrays = store_arrays(job)
+    if not names:
+        return record_checksums(path, arrays)
     if GLOBAL in names:  # what the store holds, from the job; what its runs wrote is kept
         group = zarr.open_group(path, mode="r+", use_consolidated=False)
         wanted = {k: v for k, v in initial_attrs(job).items() if k not in VOLATILE_ATTRS}
@@ -251,7 +260,7 @@ def repair_variables(path: Path, job: Job, names) -> None:
             os.replace(source / "zarr.json", target / "zarr.json")
     finally:
         shutil.rmtree(fresh, ignore_errors=True)
-    record_checksums(path, arrays)
+    return record_checksums(path, arrays)
 
 
 def _codecs(name: str) -> list:
@@ -291,20 +300,28 @@ def clean_leftovers(path: Path, job: Job) -> list[Path]:
 
 
 def repair(path: Path, job: Job, report: Verification) -> None:
-    """Rewrite the damaged variables from the job (and record the checksums of a store
-    without them); then make the damaged tiles pending: unset the flag, then delete the
-    checksum's and the arrays' chunks (read as the fill from then on)."""
-    if report.variables or not report.metadata_checksums:
-        repair_variables(path, job, report.variables)
+    """Rewrite the damaged variables from the job (every one's metadata, and the group's,
+    for a store being adopted); make the damaged tiles and the flags set on pending tiles
+    pending: unset the flag, then delete the checksum's and the arrays' chunks (read as the
+    fill from then on); then write the root record of what verified."""
+    names = set(report.variables) | ({GLOBAL} if report.adopting else set())
+    variables = repair_variables(path, job, names)
     group = zarr.open_group(path, mode="r+")
     tiles = plan_tiles(job)
-    for index in sorted(report.damaged):
+    for index in sorted(set(report.damaged) | set(report.stray)):
         for name in TILE_ARRAYS[::-1]:  # the flag first
             key = group[name].metadata.encode_chunk_key((index,))
             group.store.delete_sync(f"{name}/{key}")
         for a in cell_arrays(job):
             key = group[a.name].metadata.encode_chunk_key(chunk_coords(job, tiles[index], a))
             group.store.delete_sync(f"{a.name}/{key}")
+    attrs = {"campar_store": report_format(group), "job_hash": job.digest()}
+    sums = np.where(report.verified, report.sums, 0).astype(np.uint64)
+    write_zarr_root(path, new_root(attrs, variables, len(tiles)).with_sums(sums))
+
+
+def report_format(group) -> int:
+    return int(group.attrs["campar_store"])
 
 
 class ZarrTileArrays:
@@ -361,6 +378,7 @@ class ZarrStore(Store):
             for a in (self._checksums, self._flags)
         }
         self._done = np.array(done, bool)
+        self._root = read_zarr_root(real)  # sound: ``open_store`` verified or wrote it
         self._clear(np.flatnonzero(~self._done))
 
     def _clear(self, tiles) -> None:
@@ -388,6 +406,9 @@ class ZarrStore(Store):
         try:
             self._set_each(self._checksums, [(t.index, np.uint64(v)) for t, v in written])
             self._set_each(self._flags, [(t.index, np.int8(1)) for t, _ in written])
+            root = self._root.with_tiles(written)
+            write_zarr_root(self.real, root)  # the commit: readers see the tiles from now on
+            self._root = root
         except OSError:
             clean_leftovers(self.real, self.job)
             raise
@@ -434,10 +455,17 @@ async def _all_at_once(writes) -> None:
 
 
 class ZarrReader(StoreReader):
-    def __init__(self, path: Path, attrs: dict, real: Path):
+    def __init__(self, path: Path, attrs: dict, real: Path, *, adopting: bool = False):
+        # The root record first: everything it holds committed was written before it (the
+        # reader's snapshot); tiles committed after it read as pending.
+        try:
+            root, damaged = read_zarr_root(real), None
+        except ValueError as exc:  # RootDamaged
+            root, damaged = None, exc
         self._group = zarr.open_group(real, mode="r")
-        super().__init__(path, attrs, real)
+        super().__init__(path, attrs, real, adopting=adopting)
         self._check_layout()
+        self._take_root(lambda: _given(root, damaged))
 
     def _shapes(self) -> dict[str, tuple]:
         return {name: tuple(array.shape) for name, array in self._group.arrays()}
@@ -457,3 +485,9 @@ class ZarrReader(StoreReader):
 
     def close(self) -> None:
         pass  # zarr holds no open files between reads
+
+
+def _given(root: Root | None, damaged: Exception | None) -> Root | None:
+    if damaged is not None:
+        raise damaged
+    return root
