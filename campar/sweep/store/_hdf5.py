@@ -85,8 +85,8 @@ from ._journal import (  # noqa: F401 (re-exported: the backend's journal)
     write_entry,
 )
 from ._lock import StoreLock
-from ._root import HDF5_ATTR, Root, new_root
 from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests, global_document
+from ._root import HDF5_ATTR, Root, new_root
 from ._schema import (
     FORMAT,
     TILE_ARRAYS,

@@ -42,8 +42,8 @@ from ._base import Store, StoreReader, tile_values
 from ._chunks import DirectChunk
 from ._integrity import Verification, describe_exception
 from ._lock import StoreLock
-from ._root import Root, new_root, read_zarr_root, write_zarr_root
 from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests, global_document
+from ._root import Root, new_root, read_zarr_root, write_zarr_root
 from ._schema import (
     TILE_ARRAYS,
     cell_arrays,
@@ -153,8 +153,8 @@ def record_checksums(path: Path, arrays) -> dict[str, str]:
 # write into c/<i>/ made that folder, and on the 2-rank plane those ~1,300 mkdirs were
 # ~0.5 s of CPU taken from the lanes (docs/scaling.md). Readers follow the metadata.
 CHUNK_KEYS = {"name": "default", "separator": "."}
-CONSOLIDATED = "zarr.json (consolidated)"
-GROUP_KEYS = ("zarr_format", "node_type")  # the group's own, under the global checksum  # where campar and xarray read a variable's metadata
+CONSOLIDATED = "zarr.json (consolidated)"  # where campar and xarray read a variable's metadata
+GROUP_KEYS = ("zarr_format", "node_type")  # the group's own, under the global checksum
 
 
 def describe_variables(path: Path, arrays, group, consolidated: bool = True) -> dict:
