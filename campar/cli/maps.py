@@ -125,13 +125,20 @@ def add_verify(sub):
         "lists damaged tiles (exit 65 if any)",
     )
     p.add_argument("store", help="result store (Zarr directory or HDF5 file)")
+    p.add_argument(
+        "--adopt",
+        action="store_true",
+        help="adopt a store written before root records: check it against its job, rewrite "
+        "its metadata from the job, leave damaged tiles pending, write its root record "
+        "(docs/restart.md)",
+    )
     p.set_defaults(handler=run_verify)
 
 
 def run_verify(args) -> int:
     from ..errors import StoreDamaged
-    from ..sweep.progress import verify_report
+    from ..sweep.progress import adopt_report, verify_report
 
-    text, intact = verify_report(args.store)
+    text, intact = (adopt_report if args.adopt else verify_report)(args.store)
     print(text)
     return 0 if intact else StoreDamaged.exit_code

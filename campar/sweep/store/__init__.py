@@ -47,6 +47,7 @@ from ._base import Store, StoreReader
 from ._integrity import Verification, tile_checksum, verify_store
 from ._lock import StoreLock, holder_alive, lock_path
 from ._metadata import CHECKSUMS_ATTR
+from ._root import RootDamaged
 from ._schema import (
     FORMAT,
     ArraySchema,
@@ -73,6 +74,7 @@ __all__ = [
     "adopt_store",
     "backend_name",
     "cell_arrays",
+    "committed_tiles",
     "fill_value",
     "job_differences",
     "lock_path",
@@ -285,6 +287,23 @@ def read_store(path: str | Path) -> StoreReader:
             raise StoreError(f"{path} is not a campar {backend_name(path)} store")
         check_readable(path, attrs)
         return _READERS[backend](path, attrs, real)
+    except OSError as exc:
+        raise io_error(f"cannot read the store {path}", exc) from None
+
+
+def committed_tiles(path: str | Path) -> np.ndarray:
+    """Per tile, whether it is committed now, from the root record alone (and an HDF5
+    store's journal): no tile is read or verified, so this is cheap enough to ask every
+    second; ``campar.open`` verifies what it reads. StoreError if there is no campar store
+    with a root record at ``path``, StoreDamaged if the record is damaged."""
+    path = Path(path)
+    backend, real = _backend(path), real_path(path)
+    if not real.exists():
+        raise StoreError(f"no store at {path}")
+    try:
+        return backend.committed_now(real)
+    except RootDamaged as exc:
+        raise StoreDamaged(f"{path}: the root record is damaged ({exc})") from None
     except OSError as exc:
         raise io_error(f"cannot read the store {path}", exc) from None
 

@@ -55,7 +55,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ...errors import StoreDamaged
+from ...errors import StoreDamaged, StoreError
 from ..job import Job
 from ..plan import Tile, plan_tiles
 from ._base import Store, StoreReader, tile_values
@@ -358,6 +358,23 @@ def set_in_place(attrs, key: str, value) -> None:
         attrs.modify(key, value)
     else:
         attrs[key] = value
+
+
+def committed_now(path: Path) -> np.ndarray:
+    """Per tile, committed now: in the file's root record or in the journal
+    (``committed_tiles``). The journal is listed first: an entry a checkpoint folds into the
+    file meanwhile is then in the file."""
+    journaled = list(journal_entries(path))
+    f, state = open_checked(path)
+    if f is None:
+        raise StoreDamaged(f"{path} is damaged ({state}): `campar verify` says more")
+    with f:
+        root = file_root(f.attrs)
+    if root is None:
+        raise StoreError(f"{path} has no root record (see `campar verify --adopt`)")
+    committed = root.committed.copy()
+    committed[[i for i in journaled if i < committed.size]] = True
+    return committed
 
 
 def glob_escape(name: str) -> str:

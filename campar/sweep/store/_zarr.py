@@ -35,7 +35,7 @@ from zarr.codecs import Crc32cCodec, ZstdCodec
 from zarr.core.sync import sync
 from zarr.errors import ZarrUserWarning
 
-from ...errors import StoreDamaged
+from ...errors import StoreDamaged, StoreError
 from ..job import Job
 from ..plan import Tile, plan_tiles
 from ._base import Store, StoreReader, tile_values
@@ -261,6 +261,14 @@ def repair_variables(path: Path, job: Job, names) -> dict[str, str]:
     finally:
         shutil.rmtree(fresh, ignore_errors=True)
     return record_checksums(path, arrays)
+
+
+def committed_now(path: Path) -> np.ndarray:
+    """Per tile, committed in the store's root record now (``committed_tiles``)."""
+    root = read_zarr_root(path)
+    if root is None:
+        raise StoreError(f"{path} has no root record (see `campar verify --adopt`)")
+    return root.committed
 
 
 def _codecs(name: str) -> list:
