@@ -61,7 +61,8 @@ def read_during(proc: subprocess.Popen, store: Path, n_tiles: int, timeout: floa
             continue
         done = ds["done"].values.astype(bool)
         assert done.shape == now.shape == (n_tiles,)
-        rows = rows or [(int(a), int(b)) for a, b in zip(ds.tile_row_start, ds.tile_row_stop)]
+        starts, stops = ds.tile_row_start.values, ds.tile_row_stop.values
+        rows = rows or [(int(a), int(b)) for a, b in zip(starts, stops, strict=True)]
         tiles = {}
         for index, (start, stop) in enumerate(rows):
             part = {name: ds[name].values[start:stop] for name in COMPARED}
