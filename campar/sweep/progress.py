@@ -309,6 +309,7 @@ def verify_report(path) -> tuple[str, bool]:
         ),
         *(f"  {line}" for line in report.lines()),
     ]
+    lines += [f"note    {note}" for note in report.notes]
     if report.root_digest:
         lines.append(f"root    {report.root_digest} (the root record's digest)")
     if not report.clean:

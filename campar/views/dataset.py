@@ -59,6 +59,7 @@ from ..sweep.census import cycle_tolerance
 from ..sweep.store import (
     CHECKSUMS_ATTR,
     FORMAT,
+    ROOT_ATTRS,
     backend_name,
     cell_arrays,
     committed_tiles,
@@ -147,7 +148,8 @@ def open(path: str | Path) -> xr.Dataset:
             warnings.warn(damage_warning(path, report.damaged), StoreDamageWarning, stacklevel=2)
         job = reader.job
     ds = _normalise(ds)
-    ds.attrs.pop(CHECKSUMS_ATTR, None)  # each backend's own, of its own bytes: checked above
+    for key in (CHECKSUMS_ATTR, *ROOT_ATTRS):  # the store's own bookkeeping, checked
+        ds.attrs.pop(key, None)
     if job.kind == "curves":  # its per-point arrays as stored (views.map_curves.read_curves)
         return ds
     c = job.classify.chatter_p

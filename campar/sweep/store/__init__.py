@@ -47,7 +47,7 @@ from ._base import Store, StoreReader
 from ._integrity import Verification, tile_checksum, verify_store
 from ._lock import StoreLock, holder_alive, lock_path
 from ._metadata import CHECKSUMS_ATTR
-from ._root import RootDamaged
+from ._root import HDF5_ATTR, MARK_ATTR, RootDamaged
 from ._schema import (
     FORMAT,
     ArraySchema,
@@ -62,8 +62,11 @@ from ._schema import (
     upgraded_attrs,
 )
 
+ROOT_ATTRS = (HDF5_ATTR, MARK_ATTR)  # attributes of the root record's (``_root``)
+
 __all__ = [
     "CHECKSUMS_ATTR",
+    "ROOT_ATTRS",
     "FORMAT",
     "ArraySchema",
     "Store",

@@ -42,7 +42,7 @@ from ...errors import CamparError, StoreDamaged, StoreError, io_error
 from ..job import Job, job_digest
 from ..plan import Tile, plan_tiles
 from ._integrity import describe_exception, tile_checksum
-from ._lock import StoreLock, _read_holder, holder_alive, lock_path
+from ._lock import StoreLock
 from ._metadata import CHECKSUMS_ATTR, GLOBAL, variable_problems
 from ._root import MARK_ATTR, Root, RootDamaged, root_problems
 from ._schema import (
@@ -129,11 +129,6 @@ class StoreReader(ABC):
         committed[list(self._outside_root())] = True
         return committed
 
-    def writer_alive(self) -> bool:
-        """Whether a live run holds the store's lock (it may be committing a tile now)."""
-        holder = _read_holder(lock_path(self.real))
-        return holder is not None and holder_alive(holder)
-
     def _check_layout(self) -> None:
         """StoreDamaged unless the arrays are as the stored job says (backends call this
         once their file is open); ``array_shapes`` from then on."""
@@ -212,9 +207,7 @@ class StoreReader(ABC):
 
     def root_report(self) -> list[str]:
         """What is wrong with the root record, or with what it vouches for outside the tiles:
-        the ``metadata_checksums`` attribute (a copy of the record's), done flags set on tiles
-        the record holds pending while no run is writing (``stray_flags``: call after
-        ``tile_flags``)."""
+        the ``metadata_checksums`` attribute (a copy of the record's)."""
         problems = [self.root_problem] if self.root_problem else []
         if self.root is None:
             return problems
@@ -222,13 +215,6 @@ class StoreReader(ABC):
             problems.append(
                 f"attribute {CHECKSUMS_ATTR} differs from the root record's checksums "
                 "(edited or lost); the root record's were used"
-            )
-        if self.stray_flags and not self.writer_alive():
-            shown = ", ".join(map(str, self.stray_flags[:8]))
-            problems.append(
-                f"done flag set on tiles the root record holds pending ({shown}"
-                f"{', …' if len(self.stray_flags) > 8 else ''}): a commit a kill interrupted, "
-                "or an edit; pending, and `campar run` clears them"
             )
         return problems
 

@@ -75,6 +75,7 @@ class Verification:
     root: object = None  # the sound root record the check went by (``_root.Root``), or None
     sums: np.ndarray | None = None  # per tile, the checksum the tile was verified against
     stray: list[int] = field(default_factory=list)  # flags set on pending tiles
+    notes: list[str] = field(default_factory=list)  # worth saying, not damage
     adopting: bool = False  # a check to adopt a store without a root record
 
     @property
@@ -148,6 +149,12 @@ def verify_store(reader, visit: Callable[[TileCheck], None] | None = None) -> Ve
     report.sums = reader.tile_checksums()[0]
     report.problems += reader.root_report()
     report.stray = list(reader.stray_flags)
+    if report.stray:
+        shown = ", ".join(map(str, report.stray[:8])) + (", …" if len(report.stray) > 8 else "")
+        report.notes.append(
+            f"done flag set on tiles {shown}, which the root record holds pending: a commit "
+            "under way, or one a kill interrupted; pending (`campar run` clears the flags)"
+        )
     return report
 
 
