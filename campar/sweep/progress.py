@@ -301,11 +301,15 @@ def verify_report(path) -> tuple[str, bool]:
     how = "checksums" if report.checksums else "readability only (a format without checksums)"
     lines = [
         f"store   {path}  (job {job.name}, {report.tiles} tiles)",
-        f"checked {committed} committed tiles ({how}) in {format_duration(seconds)}: "
-        + (
-            f"{damaged} damaged"
-            if damaged
-            else "all intact" + (", but:" if report.problems else "")
+        (
+            f"checked {committed} committed tiles ({how}) in {format_duration(seconds)}: "
+            + (
+                f"{damaged} damaged"
+                if damaged
+                else "all intact" + (", but:" if not report.clean else "")
+            )
+            if report.tiles_checked
+            else "tiles not checked, the metadata they are read through is damaged:"
         ),
         *(f"  {line}" for line in report.lines()),
     ]

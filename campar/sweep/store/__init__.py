@@ -181,6 +181,14 @@ def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job):
     try:
         with _READERS[backend](path, attrs, real) as reader:
             report = verify_store(reader)
+        if not report.tiles_checked:  # damaged metadata of tile arrays: rewritten first
+            for name, why in report.variables.items():
+                log.warning(
+                    "%s: variable %s is damaged (%s): rewritten from the job", path, name, why
+                )
+            backend.repair(real, job, report)
+            with _READERS[backend](path, backend.read_attrs(real), real) as reader:
+                report = verify_store(reader)
     except StoreDamaged as exc:
         if not hasattr(backend, "set_store_aside"):
             raise StoreDamaged(f"{exc}; --overwrite recomputes the store") from None

@@ -77,6 +77,7 @@ class Verification:
     stray: list[int] = field(default_factory=list)  # flags set on pending tiles
     notes: list[str] = field(default_factory=list)  # worth saying, not damage
     adopting: bool = False  # a check to adopt a store without a root record
+    tiles_checked: bool = True  # False: a tile array's metadata is damaged (see verify_store)
 
     @property
     def root_digest(self) -> str | None:
@@ -135,6 +136,18 @@ def verify_store(reader, visit: Callable[[TileCheck], None] | None = None) -> Ve
             f"the variables' checksums (attribute {CHECKSUMS_ATTR}) cannot be read: every "
             "variable was checked against the stored job instead; `campar run` records them"
         )
+    unsure = [n for n in report.variables if n in reader.names or n in ("done", "checksum")]
+    if unsure and reader.rewrites_variables_in_place:
+        # Tiles read through damaged metadata (another data type, codec or chunk shape) would
+        # all fail their checksums, and a resume would recompute them all: the metadata is
+        # rewritten from the job first, then every tile checked (``open_store``).
+        report.tiles_checked = False
+        report.problems.append(
+            f"tiles not checked: the metadata of {', '.join(unsure)} is damaged; `campar run` "
+            "rewrites it from the job, then checks every tile"
+        )
+        report.root = reader.root
+        return report
     for check in check_tiles(reader):
         report.committed.append(check.tile.index)
         if check.problem:

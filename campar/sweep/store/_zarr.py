@@ -26,6 +26,7 @@ import re
 import shutil
 import struct
 import tempfile
+import uuid
 import warnings
 from pathlib import Path
 
@@ -59,7 +60,9 @@ PARTIAL = re.compile(r"\.[0-9a-f]{32}\.partial$")
 
 def read_attrs(path: Path) -> dict | None:
     """Attributes of the campar store at ``path``, or None if it is none; StoreDamaged if it
-    has a campar store's layout but its metadata cannot be read."""
+    has a campar store's layout but its metadata cannot be read. Read from the group's
+    zarr.json as JSON, not through zarr: an array's damaged metadata in the consolidated
+    copy (a data type its fill value does not fit) must not hide which job the store holds."""
     if not (path / "zarr.json").is_file():
         if (path / "done").is_dir() and (path / "checksum").is_dir():
             raise StoreDamaged(
@@ -68,11 +71,14 @@ def read_attrs(path: Path) -> dict | None:
             )
         return None
     try:
-        attrs = zarr.open_group(path, mode="r").attrs.asdict()
+        document = json.loads((path / "zarr.json").read_bytes())
+        attrs = document["attributes"]
+        if not isinstance(attrs, dict):
+            raise TypeError("its attributes are not an object")
         return decode_attrs(attrs) if "job_hash" in attrs else None
     except PermissionError:
         raise
-    except (OSError, ValueError, TypeError) as exc:  # JSON errors are ValueErrors
+    except (OSError, ValueError, TypeError, KeyError) as exc:  # JSON errors are ValueErrors
         if (path / "done").is_dir():
             raise StoreDamaged(
                 f"{path} has a campar store's layout but its metadata (zarr.json) cannot be "
@@ -237,11 +243,7 @@ def repair_variables(path: Path, job: Job, names) -> dict[str, str]:
     if not names:
         return record_checksums(path, arrays)
     if GLOBAL in names:  # what the store holds, from the job; what its runs wrote is kept
-        group = zarr.open_group(path, mode="r+", use_consolidated=False)
-        wanted = {k: v for k, v in initial_attrs(job).items() if k not in VOLATILE_ATTRS}
-        for key in [k for k in group.attrs if k not in wanted and k not in VOLATILE_ATTRS]:
-            del group.attrs[key]
-        group.attrs.update(wanted)
+        _rewrite_group(path, job)
     fresh = Path(tempfile.mkdtemp(prefix=f"{path.name}.creating-", dir=path.parent))
     try:
         _build(fresh / "store", job, chunk_separator(path, job))
@@ -269,6 +271,23 @@ def committed_now(path: Path) -> np.ndarray:
     if root is None:
         raise StoreError(f"{path} has no root record (see `campar verify --adopt`)")
     return root.committed
+
+
+def _rewrite_group(path: Path, job: Job) -> None:
+    """The group's zarr.json as a new store of ``job`` has it — its own keys (the Zarr
+    format) and the attributes that say what it holds — keeping what its runs wrote
+    (``VOLATILE_ATTRS``); written aside and renamed (consolidated again afterwards)."""
+    target = path / "zarr.json"
+    try:
+        document = json.loads(target.read_bytes())
+        kept = {k: v for k, v in document.get("attributes", {}).items() if k in VOLATILE_ATTRS}
+    except (OSError, ValueError, AttributeError):
+        kept = {}
+    wanted = {k: v for k, v in initial_attrs(job).items() if k not in VOLATILE_ATTRS}
+    document = {"zarr_format": 3, "node_type": "group", "attributes": {**wanted, **kept}}
+    aside = path / f"zarr.json.{uuid.uuid4().hex}.partial"
+    aside.write_text(json.dumps(document))
+    os.replace(aside, target)
 
 
 def _codecs(name: str) -> list:
@@ -324,7 +343,10 @@ def repair(path: Path, job: Job, report: Verification) -> None:
             key = group[a.name].metadata.encode_chunk_key(chunk_coords(job, tiles[index], a))
             group.store.delete_sync(f"{a.name}/{key}")
     attrs = {"campar_store": report_format(group), "job_hash": job.digest()}
-    sums = np.where(report.verified, report.sums, 0).astype(np.uint64)
+    if report.tiles_checked:
+        sums = np.where(report.verified, report.sums, 0).astype(np.uint64)
+    else:  # the tiles are checked next, against the record as it stands
+        sums = report.root.checksums if report.root is not None else np.zeros(len(tiles), "u8")
     write_zarr_root(path, new_root(attrs, variables, len(tiles)).with_sums(sums))
 
 
@@ -463,6 +485,8 @@ async def _all_at_once(writes) -> None:
 
 
 class ZarrReader(StoreReader):
+    rewrites_variables_in_place = True
+
     def __init__(self, path: Path, attrs: dict, real: Path, *, adopting: bool = False):
         # The root record first: everything it holds committed was written before it (the
         # reader's snapshot); tiles committed after it read as pending.
@@ -470,17 +494,31 @@ class ZarrReader(StoreReader):
             root, damaged = read_zarr_root(real), None
         except ValueError as exc:  # RootDamaged
             root, damaged = None, exc
-        self._group = zarr.open_group(real, mode="r")
+        self._group = _open_group(path, real)
         super().__init__(path, attrs, real, adopting=adopting)
         self._check_layout()
         self._take_root(lambda: _given(root, damaged))
 
     def _shapes(self) -> dict[str, tuple]:
-        return {name: tuple(array.shape) for name, array in self._group.arrays()}
+        """Each array's shape as its own zarr.json says (read as JSON: an array whose
+        metadata zarr cannot parse still has a shape, and ``variable_damage`` says what)."""
+        shapes = {}
+        for a in store_arrays(self.job):
+            try:
+                shape = json.loads((self.real / a.name / "zarr.json").read_bytes())["shape"]
+                shapes[a.name] = tuple(int(n) for n in shape)
+            except (OSError, ValueError, KeyError, TypeError):
+                continue  # missing, or damaged: ``variable_damage`` names it
+        return shapes
 
     def _tile_values(self, name: str) -> tuple[np.ndarray, dict[int, str]]:
-        array = self._group[name]
-        return tile_values(array.__getitem__, len(plan_tiles(self.job)), array.dtype, name)
+        n_tiles = len(plan_tiles(self.job))
+        try:
+            array = self._group[name]
+        except Exception as exc:  # zarr raises many kinds on damaged metadata
+            why = f"{name} unreadable ({describe_exception(exc)})"
+            return np.zeros(n_tiles, np.uint64), dict.fromkeys(range(n_tiles), why)
+        return tile_values(array.__getitem__, n_tiles, array.dtype, name)
 
     def _read_rows(self, name: str, rows: slice, layer: int | None) -> np.ndarray:
         return self._group[name][self.selection(rows, layer)]
@@ -493,6 +531,20 @@ class ZarrReader(StoreReader):
 
     def close(self) -> None:
         pass  # zarr holds no open files between reads
+
+
+def _open_group(path: Path, real: Path):
+    """The store's group through its consolidated metadata, or through each array's own
+    if that copy is damaged (``variable_damage`` then says how); StoreDamaged if neither."""
+    for consolidated in (None, False):
+        try:
+            return zarr.open_group(real, mode="r", use_consolidated=consolidated)
+        except Exception as exc:  # zarr raises many kinds on damaged metadata
+            failure = exc
+    raise StoreDamaged(
+        f"{path}: its group metadata cannot be read ({describe_exception(failure)}); move it "
+        "away and run again"
+    )
 
 
 def _given(root: Root | None, damaged: Exception | None) -> Root | None:
