@@ -397,6 +397,12 @@ class Store(ABC):
     def _commit(self, written: list[tuple[Tile, int]]) -> None:
         raise NotImplementedError  # backends with direct_writes
 
+    def flush_commits(self, force: bool = True) -> None:
+        """Make every commit so far visible to readers and safe from a kill, where a backend
+        defers that (Zarr: the root record); the run's loop calls it with ``force`` False
+        (the backend writes when due). A no-op where every commit is whole at once."""
+        return None
+
     def log_run(self, entry: dict) -> None:
         """Append one entry to the store's run log (attribute ``runs``)."""
         self._runs.append(dict(entry))
