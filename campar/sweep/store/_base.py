@@ -138,8 +138,8 @@ class StoreReader(ABC):
         once their file is open); ``array_shapes`` from then on."""
         self.array_shapes = self._shapes()
         problems = layout_problems(self.job, self.attrs, self.array_shapes)
-        if self.rewrites_variables_in_place:  # an array's shape is its metadata's: repairable
-            problems = [p for p in problems if not p.startswith("array ")]
+        if self.rewrites_variables_in_place and all(p.startswith("array ") for p in problems):
+            problems = []  # an array's shape is its metadata's: ``variable_damage``, repairable
         if problems:
             raise StoreDamaged(
                 f"{self.path}: its metadata disagrees with itself: " + "; ".join(problems)
