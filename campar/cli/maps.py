@@ -38,7 +38,7 @@ def add_run(sub):
         epilog=RUN_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("job", help="job file (YAML)")
+    p.add_argument("job", help="job file (YAML), or a store: resume it with its own job")
     p.add_argument(
         "--set",
         action="append",

@@ -78,6 +78,8 @@ __all__ = [
     "backend_name",
     "cell_arrays",
     "committed_tiles",
+    "is_store",
+    "stored_job",
     "fill_value",
     "job_differences",
     "lock_path",
@@ -300,6 +302,21 @@ def read_store(path: str | Path) -> StoreReader:
         return _READERS[backend](path, attrs, real)
     except OSError as exc:
         raise io_error(f"cannot read the store {path}", exc) from None
+
+
+def is_store(path: str | Path) -> bool:
+    """Whether ``path`` looks like a result store (a Zarr group, an HDF5 file), not a job file."""
+    path = Path(path)
+    if backend_name(path) == "hdf5":
+        return path.is_file()
+    return (path / "zarr.json").is_file()
+
+
+def stored_job(path: str | Path) -> Job:
+    """The job a store holds, writing into that store (``campar run STORE`` resumes it from
+    any directory: a tabulated cam's table comes from the store)."""
+    with read_store(path) as reader:
+        return reader.job.model_copy(update={"store": str(path)})
 
 
 def committed_tiles(path: str | Path) -> np.ndarray:

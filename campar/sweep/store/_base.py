@@ -52,6 +52,7 @@ from ._schema import (
     check_tile_arrays,
     coordinates,
     layout_problems,
+    remember_stored_table,
     store_arrays,
 )
 
@@ -70,6 +71,7 @@ class StoreReader(ABC):
         self.real = real or path  # symbolic links resolved
         self.attrs = attrs
         self.adopting = adopting  # a store without a root record is read, to adopt it
+        remember_stored_table(path, attrs)  # its job then reads without the table's file
         self.root: Root | None = None  # the root record, once ``_take_root`` found it sound
         self.root_problem: str | None = None  # why the record cannot vouch for the store
         self.stray_flags: list[int] = []  # done flags set where the record holds tiles pending
