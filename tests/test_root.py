@@ -81,6 +81,27 @@ def test_a_record_reads_back_and_its_digest_sees_every_field():
             Root.decode(text)
 
 
+def test_zarr_commits_are_chained_lines_after_the_record_folded_at_close(tmp_path):
+    job, path = make_job(), tmp_path / "s.zarr"
+    tiles = plan_tiles(job)
+    with open_store(path, job) as store:
+        for tile in tiles[:2]:
+            store.write_tile(tile, fake_tile(job, tile, tile.index))
+        text = (path / ZARR_FILE).read_bytes()
+        assert text.count(b"\n") == 3  # the record, then a line per commit
+        assert campar.committed(path).tolist() == [True, True, False]
+        head, first, second, _ = text.split(b"\n")
+        assert Root.decode(text).problem is None
+        cut = Root.decode(text + b"2 0000000000000abc 12")  # a kill cut the write short
+        assert cut.committed.tolist() == [True, True, False] and cut.problem is None
+        edited = first.replace(first.split(b" ")[1][:2], b"ff" if first[2:4] != b"ff" else b"ee")
+        broken = Root.decode(b"\n".join([head, edited, second, b""]))
+        assert broken.committed.tolist() == [False, False, False]
+        assert "commit line 1 fails its chain" in broken.problem
+    folded = (path / ZARR_FILE).read_bytes()
+    assert folded.count(b"\n") == 1 and Root.decode(folded).committed.tolist() == [1, 1, 0]
+
+
 # -- what the record vouches for: lost or edited, it is damage -------------------------
 
 

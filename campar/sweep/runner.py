@@ -245,7 +245,6 @@ class Master:
         written = [(self.tiles[o.index], o.checksum) for o in outcomes if o.checksum is not None]
         if written:
             self.store.commit_tiles(written)
-        self.store.flush_commits(force=False)  # a commit's root record, once it is due
         for out in outcomes:
             self.tiles_by_lane[out.lane] += 1
             self.progress.tile_done(self.tiles[out.index].n_rows * self.job.shape[1])

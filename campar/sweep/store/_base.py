@@ -219,6 +219,11 @@ class StoreReader(ABC):
         problems = [self.root_problem] if self.root_problem else []
         if self.root is None:
             return problems
+        if self.root.problem:
+            problems.append(
+                f"the root record's {self.root.problem}: the tiles committed after it read as "
+                "pending; `campar run` writes the record anew"
+            )
         if self.attrs.get(CHECKSUMS_ATTR) != self.root.variables:
             problems.append(
                 f"attribute {CHECKSUMS_ATTR} differs from the root record's checksums "
@@ -398,12 +403,6 @@ class Store(ABC):
 
     def _commit(self, written: list[tuple[Tile, int]]) -> None:
         raise NotImplementedError  # backends with direct_writes
-
-    def flush_commits(self, force: bool = True) -> None:
-        """Make every commit so far visible to readers and safe from a kill, where a backend
-        defers that (Zarr: the root record); the run's loop calls it with ``force`` False
-        (the backend writes when due). A no-op where every commit is whole at once."""
-        return None
 
     def log_run(self, entry: dict) -> None:
         """Append one entry to the store's run log (attribute ``runs``)."""

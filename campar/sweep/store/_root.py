@@ -19,13 +19,22 @@ a lost or edited checksum, a lost or edited ``metadata_checksums`` attribute
 are damage, never a pending tile or a store without checksums.
 
 The commit of a tile is, in order: its arrays, its ``checksum`` element, its
-``done`` flag, the root record (Zarr: the file ``campar-root.json`` at the
-store's root, written aside and renamed; HDF5: the attribute ``campar_root``,
-written with every checkpoint, the journal's entries carrying their own
-checksums until then). A kill before the record leaves the tile pending; a
-reader during a run sees the tiles of the record it read, each whole — its
-snapshot. A flag set where the record holds the tile pending is a commit a kill
-interrupted (or an edit): pending, and cleared by the next run.
+``done`` flag, the root record. Zarr: the file ``campar-root.json`` at the
+store's root, its first line the record, then one line a commit appended to it,
+``<tile> <checksum> <chain>``, each line's chain the BLAKE2b of the one before
+and of its own tile and checksum, the first chained to the record's digest — a
+hash chain, as an append-only log keeps one: a commit costs one small write,
+not a rewrite of the record. The lines are folded into a new record (written
+aside and renamed) every ``FOLD_LINES`` commits and when the run closes the
+store. HDF5: the attribute ``campar_root``, written with every checkpoint, the
+journal's entries carrying their own checksums until then.
+
+A kill before the record (its line) leaves the tile pending, and a line a kill
+cut short is no commit; a reader during a run sees the tiles of the record as
+it read it, each whole — its snapshot. A flag set where the record holds the
+tile pending is a commit a kill interrupted (or an edit): pending, and cleared
+by the next run. A line whose chain fails before the last is damage: the
+record stops vouching there.
 """
 
 import base64
@@ -46,6 +55,7 @@ HDF5_ATTR = "campar_root"  # the record of an HDF5 store: an attribute of its ro
 # written before root records and is read only once adopted (``campar verify --adopt``).
 MARK_ATTR = "root_record"
 DIGEST_BYTES = 16
+FOLD_LINES = 256  # commit lines appended before they are folded into a new record
 
 
 class RootDamaged(ValueError):
@@ -60,6 +70,9 @@ class Root:
     job_hash: str
     variables: dict[str, str]
     checksums: np.ndarray  # uint64 per tile; 0: not committed
+    lines: int = 0  # commit lines read after the record (Zarr)
+    chain: str = ""  # the last line's chain (the record's digest if none)
+    problem: str | None = None  # why the lines stop before the file's end, if damaged
 
     @property
     def committed(self) -> np.ndarray:
@@ -71,6 +84,10 @@ class Root:
         for tile, checksum in written:
             sums[tile.index] = checksum
         return Root(self.format, self.job_hash, self.variables, sums)
+
+    def folded(self) -> "Root":
+        """This record with its commit lines folded in (what a new record file holds)."""
+        return Root(self.format, self.job_hash, self.variables, self.checksums.copy())
 
     def with_sums(self, sums: np.ndarray) -> "Root":
         """This record with every tile's checksum ``sums`` (0: pending)."""
@@ -98,7 +115,29 @@ class Root:
 
     @classmethod
     def decode(cls, text: str | bytes) -> "Root":
-        """The record from its text; RootDamaged saying why if it cannot be trusted."""
+        """The record from its text — its first line, and the commit lines after it (Zarr)
+        up to the first that fails its chain (a last line a kill cut short is no commit);
+        RootDamaged saying why if the record itself cannot be trusted."""
+        if isinstance(text, str):
+            text = text.encode()
+        head, _, rest = text.partition(b"\n")
+        root = cls._decode_head(head)
+        sums, chain, lines = root.checksums.copy(), root.digest, rest.split(b"\n")
+        count, problem = 0, None
+        for number, line in enumerate(lines):
+            parsed = _commit_line(line, chain, sums.size)
+            if parsed is None:
+                torn = number == len(lines) - 1  # no newline yet: a write a kill cut short
+                if line and not torn:
+                    problem = f"commit line {number + 1} fails its chain (edited or damaged)"
+                break
+            index, checksum, chain = parsed
+            sums[index] = checksum
+            count += 1
+        return Root(root.format, root.job_hash, root.variables, sums, count, chain, problem)
+
+    @classmethod
+    def _decode_head(cls, text: bytes) -> "Root":
         try:
             data = json.loads(text)
         except (TypeError, ValueError, UnicodeDecodeError) as exc:
@@ -124,6 +163,33 @@ class Root:
         except (KeyError, TypeError, ValueError, AttributeError):
             raise RootDamaged("its fields are not those of a root record") from None
         return root
+
+
+def commit_lines(chain: str, written) -> tuple[bytes, str]:
+    """The lines appended for the tiles ``written`` ((tile, checksum) pairs) after the line
+    whose chain is ``chain`` (the record's digest first): (their bytes, the last chain)."""
+    out = []
+    for tile, checksum in written:
+        entry = f"{tile.index} {int(checksum):016x}"
+        chain = _chain(chain, entry)
+        out.append(f"{entry} {chain}\n")
+    return "".join(out).encode(), chain
+
+
+def _chain(previous: str, entry: str) -> str:
+    return hashlib.blake2b(f"{previous} {entry}".encode(), digest_size=DIGEST_BYTES).hexdigest()
+
+
+def _commit_line(line: bytes, chain: str, n_tiles: int):
+    """(tile, checksum, chain) of a commit line that follows ``chain``; None if it does not."""
+    try:
+        index, checksum, link = line.decode("ascii").split(" ")
+        entry = f"{int(index)} {int(checksum, 16):016x}"
+    except (UnicodeDecodeError, ValueError):
+        return None
+    if link != _chain(chain, entry) or not 0 <= int(index) < n_tiles or int(checksum, 16) == 0:
+        return None
+    return int(index), int(checksum, 16), link
 
 
 def _digest(body: dict) -> str:
@@ -169,13 +235,55 @@ def read_zarr_root(path: Path) -> Root | None:
     return Root.decode(text)
 
 
+class RootLog:
+    """The writer's side of a Zarr store's record: commits appended as chained lines,
+    folded into a new record every ``FOLD_LINES`` and at ``close``."""
+
+    def __init__(self, path: Path, root: Root):
+        self.path, self.root = path, root
+        self._file = None
+        if root.problem is not None or root.lines:
+            self.fold()  # a damaged or long tail: start from a clean record
+
+    def commit(self, written) -> None:
+        """Append the lines committing ``written`` ((tile, checksum) pairs), in one write."""
+        if self.root.lines + len(written) > FOLD_LINES:
+            self.root = self.root.with_tiles(written)
+            self.fold()
+            return
+        data, chain = commit_lines(self.root.chain or self.root.digest, written)
+        if self._file is None:
+            self._file = open(self.path / ZARR_FILE, "ab", buffering=0)  # noqa: SIM115
+        self._file.write(data)  # one write(2): a kill leaves whole lines and at most one cut
+        root = self.root.with_tiles(written)
+        self.root = Root(
+            root.format,
+            root.job_hash,
+            root.variables,
+            root.checksums,
+            self.root.lines + len(written),
+            chain,
+        )
+
+    def fold(self) -> None:
+        """Write the record with every commit in it (aside, renamed); the lines start anew."""
+        self.close()
+        self.root = self.root.folded()
+        write_zarr_root(self.path, self.root)
+
+    def close(self) -> None:
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+
 def write_zarr_root(path: Path, root: Root) -> None:
     """Replace the record of the Zarr store at ``path`` whole (written aside, renamed)."""
     final = path / ZARR_FILE
     tmp = path / f"{ZARR_FILE}.{uuid.uuid4().hex}.partial"  # as zarr's: clean_leftovers
     try:
         with open(tmp, "w") as fh:
-            fh.write(root.encode())
+            fh.write(root.encode() + "\n")
         os.replace(tmp, final)
     except BaseException:
         tmp.unlink(missing_ok=True)

@@ -26,7 +26,6 @@ import re
 import shutil
 import struct
 import tempfile
-import time
 import uuid
 import warnings
 from pathlib import Path
@@ -37,7 +36,7 @@ from zarr.codecs import Crc32cCodec, ZstdCodec
 from zarr.core.sync import sync
 from zarr.errors import ZarrUserWarning
 
-from ...errors import StoreDamaged, StoreError, io_error
+from ...errors import StoreDamaged, StoreError
 from ..job import Job
 from ..plan import Tile, plan_tiles
 from ._base import Store, StoreReader, tile_values
@@ -45,7 +44,7 @@ from ._chunks import DirectChunk
 from ._integrity import Verification, describe_exception
 from ._lock import StoreLock
 from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests, global_document
-from ._root import Root, new_root, read_zarr_root, write_zarr_root
+from ._root import Root, RootLog, new_root, read_zarr_root, write_zarr_root
 from ._schema import (
     TILE_ARRAYS,
     cell_arrays,
@@ -57,9 +56,6 @@ from ._schema import (
 )
 
 PARTIAL = re.compile(r"\.[0-9a-f]{32}\.partial$")
-# A burst of commits writes the root record once (its write costs about what a chunk's
-# does); the run's loop writes a record still due (``Store.flush_commits``).
-ROOT_SECONDS = 0.25
 
 
 def read_attrs(path: Path) -> dict | None:
@@ -412,9 +408,7 @@ class ZarrStore(Store):
             for a in (self._checksums, self._flags)
         }
         self._done = np.array(done, bool)
-        self._root = read_zarr_root(real)  # sound: ``open_store`` verified or wrote it
-        self._root_due = False  # commits whose flags are set and the record not yet written
-        self._root_written = 0.0
+        self._root = RootLog(real, read_zarr_root(real))  # sound: ``open_store`` checked it
         self._clear(np.flatnonzero(~self._done))
 
     def _clear(self, tiles) -> None:
@@ -442,30 +436,12 @@ class ZarrStore(Store):
         try:
             self._set_each(self._checksums, [(t.index, np.uint64(v)) for t, v in written])
             self._set_each(self._flags, [(t.index, np.int8(1)) for t, _ in written])
-            self._root = self._root.with_tiles(written)
-            self._root_due = True
-            self.flush_commits(force=False)
+            self._root.commit(written)  # the commit: readers see the tiles from now on
         except OSError:
             clean_leftovers(self.real, self.job)
             raise
         for tile, _ in written:
             self._done[tile.index] = True
-
-    def flush_commits(self, force: bool = True) -> None:
-        """Write the root record — the commit of the tiles flagged since it was last written:
-        readers see them from then on, and a kill before it leaves them pending. Unless
-        ``force``, at most once in ``ROOT_SECONDS``: a burst of commits writes it once."""
-        if not self._root_due:
-            return
-        now = time.monotonic()
-        if not force and now - self._root_written < ROOT_SECONDS:
-            return
-        try:
-            write_zarr_root(self.real, self._root)
-        except OSError as exc:
-            clean_leftovers(self.real, self.job)
-            raise io_error(f"cannot commit tiles to the store {self.path}", exc) from None
-        self._root_due, self._root_written = False, now
 
     def _set_each(self, array, values: list[tuple[int, np.generic]]) -> None:
         """Set elements of a per-tile array, one chunk each (``write_chunks``)."""
@@ -480,7 +456,7 @@ class ZarrStore(Store):
             raise
 
     def _close(self) -> None:
-        self.flush_commits()  # every other write is already a whole file on disk
+        self._root.fold()  # every other write is already a whole file on disk
 
 
 def write_chunks(chunks) -> None:
