@@ -224,10 +224,12 @@ class StoreReader(ABC):
                 f"the root record's {self.root.problem}: the tiles committed after it read as "
                 "pending; `campar run` writes the record anew"
             )
-        if self.attrs.get(CHECKSUMS_ATTR) != self.root.variables:
+        copy = self.attrs.get(CHECKSUMS_ATTR)
+        if copy != self.root.variables:
+            what = "differs from" if isinstance(copy, dict) else "cannot be read, unlike"
             problems.append(
-                f"attribute {CHECKSUMS_ATTR} differs from the root record's checksums "
-                "(edited or lost); the root record's were used"
+                f"attribute {CHECKSUMS_ATTR} (the variables' checksums) {what} the root "
+                "record's copy; the root record's were used"
             )
         return problems
 
