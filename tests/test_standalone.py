@@ -112,12 +112,38 @@ def special_files(tmp_path):
     }
 
 
-def test_a_job_file_that_is_no_regular_file_is_refused_unread(tmp_path, capsys):
-    for path, said in special_files(tmp_path).items():
-        for command in (["run", path], ["run", path, "--dry-run"]):
-            assert main(command) == JobError.exit_code, command
+def bad_job_files(tmp_path) -> dict[str, str]:
+    """{path: what the refusal says} of job files that are no job: special files, and text
+    that is not UTF-8, not YAML, bounded YAML or a mapping."""
+    found = special_files(tmp_path)
+    for name, data, said in [
+        ("latin1.yaml", b"name: caf\xe9\n", "not UTF-8 text"),
+        ("unclosed.yaml", b"name: [x\n", "not valid YAML"),
+        ("binary.yaml", b"name: !!binary aGk=\n", "not allowed in a job"),
+        ("twice.yaml", b"name: a\nname: b\n", "given twice"),
+        ("list.yaml", b"- 1\n- 2\n", "a mapping of keys"),
+        ("empty.yaml", b"", "a mapping of keys"),
+    ]:
+        (tmp_path / name).write_bytes(data)
+        found[str(tmp_path / name)] = said
+    return found
+
+
+def test_bad_job_files_are_refused_in_one_line_by_every_command_that_reads_one(tmp_path, capsys):
+    """The bad-input matrix: input kind × command, every cell refused in one line, exit 2."""
+    commands = (["run"], ["run", "--dry-run"], ["run", "--set", "name=x"])
+    cells = 0
+    for path, said in bad_job_files(tmp_path).items():
+        for command in commands:
+            assert main([command[0], path, *command[1:]]) == JobError.exit_code, (command, path)
             err = capsys.readouterr().err.strip().splitlines()
-            assert len(err) == 1 and said in err[0], (command, err)
+            assert len(err) == 1 and said in err[0], (command, path, err)
+            cells += 1
+    with capsys.disabled():
+        print(
+            f"BAD-INPUT job files: {cells} cells ({cells // len(commands)} kinds × "
+            f"{len(commands)} commands), {cells} refused in one line"
+        )
 
 
 def test_a_cam_table_that_is_no_regular_file_is_refused_unread(tmp_path, capsys):
