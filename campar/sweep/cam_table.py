@@ -77,7 +77,7 @@ class CamTable:
 def read_table(path: str | Path, sha256: str | None = None) -> CamTable:
     """The checked table at ``path`` (ValueError with one line naming the problem); the
     table of that ``sha256`` a store keeps if one was read (``remember_table``): a stored
-    job reads as it was computed, wherever the file is and whatever it holds now."""
+    job reads as it was computed with, wherever the file is and whatever it holds."""
     if sha256 is not None and sha256 in _KNOWN:
         return _KNOWN[sha256]
     path = Path(path)
