@@ -107,7 +107,7 @@ def special_files(tmp_path):
         "/dev/zero": "a character device",
         str(fifo): "a FIFO",
         str(tmp_path): "a directory",
-        str(big): "bytes; at most",
+        str(big): "is at most 1048576",
         str(tmp_path / "absent.yaml"): "No such file",
     }
 

@@ -27,7 +27,7 @@ def read_bounded(path, limit: int, what: str) -> bytes:
             raise ValueError(f"{what} {path} is {_kind(mode)}, not a regular file")
         size = os.fstat(fd).st_size
         if size > limit:
-            raise ValueError(f"{what} {path}: {size} bytes; at most {limit}")
+            raise ValueError(f"{what} {path}: {size} bytes; a {what} is at most {limit}")
         chunks, total = [], 0
         while total <= limit:
             chunk = os.read(fd, limit + 1 - total)
@@ -36,7 +36,10 @@ def read_bounded(path, limit: int, what: str) -> bytes:
             chunks.append(chunk)
             total += len(chunk)
         if total > limit:
-            raise ValueError(f"{what} {path}: more than {limit} bytes (it grew as it was read)")
+            raise ValueError(
+                f"{what} {path}: more than {limit} bytes (it grew as it was read); a {what} is "
+                f"at most {limit}"
+            )
         return b"".join(chunks)
     except OSError as exc:
         raise ValueError(f"cannot read {what} {path}: {exc.strerror}") from None
