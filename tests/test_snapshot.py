@@ -1,9 +1,9 @@
 """Snapshot reads: ``campar.open`` on a store a run is writing gives each tile whole as it is
 committed in the finished store, or not computed; ``campar.committed`` follows the run.
 
-Each test starts one run (serial, or ``mpirun -n 2``; Zarr or HDF5) of a job whose tiles
-take a fraction of a second, reads the store in a loop until the run ends, keeps every
-tile each read held as committed, and compares them with the finished store."""
+Each test starts one run (serial, or ``mpirun -n 2``; Zarr or HDF5) of a job of 40 short
+tiles, reads the store in a loop until the run ends, keeps every tile each read held as
+committed, and compares them with the finished store."""
 
 import os
 import subprocess
@@ -24,11 +24,11 @@ MPIRUN = Path(sys.executable).parent / "mpirun"
 JOB = {
     "name": "snapshot",
     "sweep": {
-        "omega": {"from": 6.0, "to": 1.0, "points": 12},
-        "mu_cn": {"from": 0.9, "to": 0.6, "points": 6},
+        "omega": {"from": 6.0, "to": 1.0, "points": 24},
+        "mu_cn": {"from": 0.9, "to": 0.6, "points": 40},
     },
     "classify": {"window_revolutions": 16},
-    "transient": {"mode": "fixed", "max_revolutions": 1500},  # a tile: a fraction of a second
+    "transient": {"mode": "fixed", "max_revolutions": 300},  # commits come fast
     "tiles": {"rows": 1},
 }
 COMPARED = ("kind", "status", "n", "p", "dc", "label")  # codes, a float, and the derived text
