@@ -32,7 +32,7 @@ from ..core.tracer import compile_tracer, trace_orbit
 from .arrays import array_names, array_spec
 from .curves_job import runner as curves_runner
 from .job import Job
-from .laws import LAW_PARAMETERS
+from ..model.laws import LAW_PARAMETERS
 from .plan import Tile, chain_order, chain_parameters, first_column_parameters
 
 
