@@ -220,8 +220,7 @@ def field_key(name: str) -> str:
     if name in _KEYS:
         return _KEYS[name]
     raise JobError(
-        f"{name}: not a key of the model (its keys: jobs/README.md; its flags: "
-        "campar point --help)"
+        f"{name}: not a key of the model (its keys: jobs/README.md; its flags: campar point --help)"
     )
 
 
