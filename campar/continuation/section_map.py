@@ -27,8 +27,10 @@ from ..core.shooting import (
     compile_shooter,
 )
 from ..errors import ContinuationError, JobError
-from ..sweep.job import PAPER_VALUES, Job, check_parameter
-from ..sweep.tile import cell_settings, solver_options
+from ..model import Model
+from ..model.compute import cell_settings, model_law, output_bits, solver_options
+from ..model.sections import PAPER_VALUES
+from ..model.settings import check_parameter
 
 # The model's parameters in the order the compiled core takes them (model.make_params).
 PARAMETER_ORDER = ("omega", "zeta", "f0", "mu_kn", "mu_cn")
@@ -119,32 +121,25 @@ def in_range(name: str, value: float) -> bool:
 class SectionMap:
     """Pⁿ(x; λ), DPⁿ and ∂Pⁿ/∂λ for one force law at one precision.
 
-    ``model``: the job model's options (``model_settings``); ``precision``: a Precision.
+    ``model``: a Model (its ``model`` section: the force law's options, cam and contact),
+    or that section as a mapping (``model_settings``); ``precision``: a Precision, whose
+    integrator settings replace the model's.
     """
 
-    def __init__(self, model: dict | None = None, precision: Precision | None = None):
+    def __init__(self, model=None, precision: Precision | None = None):
+        if isinstance(model, Model):
+            model = model.model.model_dump(mode="json")
         self.model = model_settings(**(model or {}))
         self.precision = precision or Precision()
-        job = self._job()
-        self.law = job.model.law
-        solver = solver_options(job)
-        settings = cell_settings(job)
+        pr = self.precision
+        integrator = {"method": pr.method, "rtol": pr.rtol, "atol": pr.atol}
+        # validates the options and the integrator settings (ω: any value in range)
+        cell = Model.build({"omega": 1.0, "model": self.model, "integrator": integrator})
+        self.law = model_law(cell)
+        solver = solver_options(cell)
+        settings = cell_settings(cell, output_bits(("dc", "eps", "pn")))
         compile_shooter(self.law, solver, settings)
         self._shooter = Shooter(self.law, solver, settings)
-
-    def _job(self) -> Job:
-        """A one-cell job: validates the model's options and the integrator settings."""
-        pr = self.precision
-        data = {
-            "name": "continuation",
-            "sweep": {
-                "omega": {"from": 1.0, "to": 1.0, "points": 1},
-                "f0": {"from": 0.5, "to": 0.5, "points": 1},
-            },
-            "model": self.model,
-            "integrator": {"method": pr.method, "rtol": pr.rtol, "atol": pr.atol},
-        }
-        return Job.from_dict(data, source="continuation")
 
     def with_precision(self, **changes) -> "SectionMap":
         return SectionMap(self.model, replace(self.precision, **changes))

@@ -6,6 +6,8 @@ The settings functions take anything with a model's sections (``integrator``,
 classes, so a map's tile and a single cell hand the kernel the same values.
 """
 
+import threading
+
 import numpy as np
 
 from ..core import split_compile
@@ -32,6 +34,9 @@ from .laws import kernel_law
 from .model import Model
 
 METHODS = {"dp54": DP54, "dop853": DOP853, "rk4": RK4}  # integrator.method
+# One compile at a time in a process: threads (a web server's) that ask for the same
+# kernel wait for it rather than compiling it twice.
+_COMPILING = threading.Lock()
 
 
 def output_bits(outputs) -> int:
@@ -133,6 +138,12 @@ def compile_cells(spec, law, bits: int, n_sections: int, share=None, trace: bool
     solver = solver_options(spec)
     if chain_loaded(solver, law):
         return
+    with _COMPILING:
+        if not chain_loaded(solver, law):
+            _compile(spec, law, bits, n_sections, solver, share, trace)
+
+
+def _compile(spec, law, bits, n_sections, solver, share, trace) -> None:
     settings = cell_settings(spec, bits)
     out = allocate_outputs(0, settings.output_bits, n_sections)
     x_init = np.array([spec.initial.y, spec.initial.v])
@@ -152,7 +163,9 @@ def run_cells(model: Model, omega=None, start=None, outputs=(), law=None, **colu
     one before, the first from ``start`` (default the model's ``initial``). ``columns``:
     other parameters that vary along the chain (arrays as long as ``omega``); ``law``:
     the kernel's Law (default the model's). The outputs named (a job's ``outputs``
-    names) are computed beside the label, state and counts."""
+    names) are computed beside the label, state and counts. ``compile``: load or compile
+    the kernel first (``compile_cells``: on two cores when the cache is empty); else
+    numba compiles it on the first call, on this thread."""
     omega = np.atleast_1d(np.asarray(model.omega if omega is None else omega, float))
     values = {
         name: np.asarray(columns[name], float)
@@ -162,7 +175,8 @@ def run_cells(model: Model, omega=None, start=None, outputs=(), law=None, **colu
     }
     law = model_law(model) if law is None else law
     bits = output_bits(outputs)
-    compile_cells(model, law, bits, model.n_sections)
+    if compile:
+        compile_cells(model, law, bits, model.n_sections)
     x0 = np.array(model.start if start is None else start, dtype=float)
     settings = cell_settings(model, bits)
     out = allocate_outputs(len(omega), bits, model.n_sections)

@@ -243,7 +243,7 @@ def draw_lines(g: Gallery) -> None:
     recipe = {
         "command": f"campar line --omega 6:0.02 --points {points} --mu-kn {mu_list} "
         f"--tensile {g.tensile} -o {g.name('fig5_lines')}.png",
-        "jobs": [
+        "lines": [
             setups.paper_line_job(mu, g.size, g.tensile).to_dict() for mu in setups.FIG5_MU_KN
         ],
     }

@@ -18,6 +18,7 @@ import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from ..errors import JobError
+from ..model import Model
 from ..model.laws import LAW_PARAMETERS, check_law_axis
 from ..model.sections import (  # noqa: F401 (the model's sections, the job's too)
     DEFAULT_CLASSIFY,
@@ -51,6 +52,9 @@ from .curves_job import CURVE_AXES, CurvesSettings, check_curves_axes, check_cur
 from .job_file import check_store_path, format_validation_error, parse_job_text
 
 MAP_AXES = (*PARAMETERS, *LAW_PARAMETERS)
+# The job's sections that are a Model's (campar.model.Model): with the grid's parameters
+# they make each cell's model.
+MODEL_SECTIONS = ("model", "integrator", "transient", "classify", "initial")
 # The axes of a basin job: the initial state (y, y') at θ = 0, y along the first
 # (columns), y' along the second (rows); its parameters are all fixed.
 BASIN_AXES = ("y0", "ydot0")
@@ -352,6 +356,34 @@ class Job(Settings):
         """Value of a parameter that is not swept."""
         return self.fixed[name]
 
+    def model_at(self, first: float, second: float) -> Model:
+        """The Model of the cell at (``first``, ``second``) on the job's axes: a map's ω
+        and second parameter (a law parameter set in the model's cam or contact), the
+        rest the job's; a basin's start (y0, ydot0) at its fixed parameters."""
+        sections = {name: getattr(self, name) for name in MODEL_SECTIONS}
+        if self.kind == "basin":
+            start = InitialState(y=float(first), v=float(second))
+            return Model(**self.fixed, **{**sections, "initial": start})
+        if self.kind != "map":
+            raise ValueError(f"job {self.name} is a {self.kind} job: its cells have no model")
+        values = {**self.fixed, "omega": float(first)}
+        name, value = self.second, float(second)
+        if name in LAW_PARAMETERS:
+            options = self.model
+            if LAW_PARAMETERS[name] == "cam":
+                options = options.model_copy(update={"cam": options.cam.with_angle(name, value)})
+            else:
+                contact = options.contact.model_copy(update={name: value})
+                options = options.model_copy(update={"contact": contact})
+            sections["model"] = options
+        else:
+            values[name] = value
+        return Model(**values, **sections)
+
+    def cell_model(self, row: int, col: int) -> Model:
+        """The Model of cell (row, col) of the job's grid (``model_at``)."""
+        return self.model_at(self.first_values[col], self.second_values[row])
+
     def law(self, row: int = 0):
         """The kernel's Law (core.model.Law) of chain ``row`` (``laws.row_law``)."""
         from ..model.laws import row_law
@@ -475,3 +507,19 @@ def load_job(path: str | Path) -> Job:
     except ValueError as exc:  # a NUL byte in the path
         raise JobError(f"cannot read job file {path!r}: {exc}") from None
     return Job.from_dict(parse_job_text(data, f"job file {path}"), source=f"job file {path}")
+
+
+def cell_job(model: Model, outputs=DEFAULT_OUTPUTS, name: str = "cell") -> Job:
+    """The 1 × 1 map of a Model (ω and f0 swept over one value each): a map whose one
+    cell computes what ``campar.simulate_point(model)`` computes."""
+    data = model.to_dict()
+    fixed = {key: data.pop(key) for key in ("mu_kn", "mu_cn", "zeta")}
+    sweep = {
+        key: {"from": v, "to": v, "points": 1}
+        for key, v in (("omega", data.pop("omega")), ("f0", data.pop("f0")))
+    }
+    data["model"]["cam"].pop("table_sha256", None)  # computed again as the job is read
+    return Job.from_dict(
+        {"name": name, "sweep": sweep, "fixed": fixed, **data, "outputs": list(outputs)},
+        source=name,
+    )

@@ -257,14 +257,14 @@ def line_structure(
     (its state within 1e-6 of a branch point at the same ω, up to a cyclic shift) starts
     none.
     """
-    from .line import compute_line, line_job
+    from .line import compute_line, line_spec
 
     began = time.perf_counter()
     model = dict(model or {})
     smap = section_map or SectionMap(model)
     shots0 = smap.shots
     others = {k: v for k, v in fixed.items() if k != "omega"}
-    line = compute_line(line_job(window, points, **model, **others), transitions=False)
+    line = compute_line(line_spec(window, points, **model, **others), transitions=False)
     runs, start = [], 0
     labels = list(line.labels)
     for i in range(1, len(labels) + 1):
