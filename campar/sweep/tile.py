@@ -56,31 +56,40 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     for name in names:
         dtype, tail = array_spec(job, name)
         result[name] = np.zeros((tile.n_rows, n_omega, *tail), dtype)
-    solver = solver_options(job)
-    settings = cell_settings(job)
-    starts = chain_starts(job)
     order = chain_order(job)
     for r, row in enumerate(range(tile.row_start, tile.row_stop)):
-        par = chain_parameters(job, row)
-        out = allocate_outputs(n_omega, settings.output_bits, job.n_sections)
-        run_chain(
-            par["omega"],
-            par["zeta"],
-            par["f0"],
-            par["mu_kn"],
-            par["mu_cn"],
-            job.law(row),
-            starts[row],
-            solver,
-            settings,
-            out,
-        )
-        extra = census_of(job, par, out.state, job.law(row))
+        par, out, law = run_row(job, row)
+        extra = census_of(job, par, out.state, law)
         if job.wants("separation"):
-            extra.update(separation_of(job, par, out, job.law(row), solver, settings))
+            extra.update(separation_of(job, par, out, law, solver_options(job), cell_settings(job)))
         for name in names:
             result[name][r][order] = extra[name] if name in extra else getattr(out, name)
     return result
+
+
+def run_row(job: Job, row: int, cells: int | None = None):
+    """(parameters, outputs, law) of chain ``row`` of a one-direction map job, its cells in
+    the order the chain runs: all of them, or its first ``cells`` (each cell depends on
+    those before it alone, so a chain's first cells are the whole chain's bit for bit)."""
+    par = chain_parameters(job, row)
+    if cells is not None:
+        par = {name: values[:cells] for name, values in par.items()}
+    settings = cell_settings(job)
+    out = allocate_outputs(len(par["omega"]), settings.output_bits, job.n_sections)
+    law = job.law(row)
+    run_chain(
+        par["omega"],
+        par["zeta"],
+        par["f0"],
+        par["mu_kn"],
+        par["mu_cn"],
+        law,
+        chain_starts(job)[row],
+        solver_options(job),
+        settings,
+        out,
+    )
+    return par, out, law
 
 
 def load_kernel(job: Job, share=None) -> None:
