@@ -19,6 +19,7 @@ from ..continuation.orbit import PeriodicOrbit, find_cycle
 from ..continuation.section_map import PARAMETER_ORDER, SectionMap
 from ..continuation.switching import continue_with_switching
 from ..errors import ContinuationError, JobError
+from ..model import Model
 from .point import simulate_point
 
 
@@ -83,8 +84,11 @@ def continue_from_cell(
         The period solved for; by default the simulated cell's period.
     switch : int
         Period doublings to follow from each PD point (0: none).
-    model : dict, optional
-        The force law's options (tensile, duty_cycle, cam_velocity).
+    model : Model or dict, optional
+        The cell's model (``campar.model.Model``: the force law, cam, contact and
+        settings of the simulated start), or the force law's options (tensile,
+        duty_cycle, cam_velocity). The parameters in ``fixed`` and ``span`` take
+        precedence over its own.
     settings : BranchSettings, optional
         Step control of the branches.
     curve_types : iterable of str
@@ -125,12 +129,13 @@ def continue_from_cell(
     if curve_types and (second is None or second_window is None or second == parameter):
         raise JobError("curves need a second parameter and its range (--second NAME:A:B)")
     began = time.perf_counter()
-    model = dict(model or {})
-    smap = section_map or SectionMap(model)
-    shots0 = smap.shots
     values = {**fixed, parameter: span[0]}
-    omega = values.pop("omega")
-    cell = simulate_point(omega, y0=y0, v0=v0, **model, **values)
+    base = model if isinstance(model, Model) else Model.build({"omega": values["omega"]})
+    if isinstance(model, dict):  # the force law's options (the model section's keys)
+        base = base.replace(**model)
+    smap = section_map or SectionMap(base)
+    shots0 = smap.shots
+    cell = simulate_point(base, y0=y0, v0=v0, **values)
     period = cycle or cell.n
     if not period:
         raise ContinuationError(

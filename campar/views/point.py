@@ -277,7 +277,7 @@ def point_result(model: Model, cell: dict) -> PointResult:
     exponent where they were computed)."""
     kind = Kind(int(cell["kind"]))
     n = int(cell["n"])
-    sections = cell["sections"][: n if n else model.n_sections]
+    sections = cell.get("sections", np.empty((0, 2)))[: n if n else model.n_sections]
     sections = sections[~np.isnan(sections[:, 0])]
     return PointResult(
         parameters=point_parameters(model),
