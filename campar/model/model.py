@@ -215,8 +215,9 @@ _KEYS = {
 
 
 def field_key(name: str) -> str:
-    """The dotted key of a field's name, flag's name or key; JobError if none."""
-    name = name.removeprefix("--").replace("-", "_")
+    """The dotted key of a field's name, flag's name or key (a parameter also as a job
+    writes it, ``fixed.mu_kn``); JobError if none."""
+    name = name.removeprefix("--").replace("-", "_").removeprefix("fixed.")
     if name in _KEYS:
         return _KEYS[name]
     raise JobError(
