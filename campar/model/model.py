@@ -249,6 +249,8 @@ def model_error(exc: ValidationError) -> str:
             problems.append(message)
         elif err["type"] == "missing":
             problems.append(f"{where}: required")
+        elif isinstance(err.get("input"), dict):  # a section's own check: the message says
+            problems.append(f"{where}: {message}")
         else:
             problems.append(f"{where}: {message}, got {short_repr(err.get('input'))}")
     return "; ".join(problems)
