@@ -87,14 +87,17 @@ def run_from(args) -> int:
         print(header)
         print(format_point(result))
         n = len(stored.stored)
-        if reproduced:
-            print(f"  reproduces the store's {n} values of the cell bit for bit")
-        elif stored.current_kernel:
-            print(f"  differs from the store: {changed_values(differences)}")
-        else:
+        if stored.current_kernel:
             print(
-                f"  with kernel {KERNEL_VERSION} (the store's: {stored.kernel or 'unknown'}) "
-                f"changed: {changed_values(differences)}"
+                f"  reproduces the store's {n} values of the cell bit for bit"
+                if reproduced
+                else f"  differs from the store: {changed_values(differences)}"
+            )
+        else:
+            changed = changed_values(differences) if differences else "none of its values"
+            print(
+                f"  computed with kernel {KERNEL_VERSION} (the store's: "
+                f"{stored.kernel or 'unknown'}); changed: {changed}"
             )
     if args.plot:
         save_orbit(result, args.plot)

@@ -7,9 +7,9 @@ tiles, chains, store, outputs, attractors, curves). It is built and validated in
 place (``Model.build``) from a job's sections, from command-line flags and from Python
 keywords, with one error message per bad value whatever the entry.
 
-Layering: core < model < sweep, continuation, views. Importing this package loads
-pydantic and numpy only; ``campar.model.compute`` turns a Model into kernel calls
-(numba loads there).
+May import: campar.core, campar.errors (core < model < sweep, continuation, views).
+Importing this package loads pydantic and numpy only; ``campar.model.compute`` turns a
+Model into kernel calls (numba loads there).
 """
 
 from .model import FIELDS, Model, ModelField  # noqa: F401
