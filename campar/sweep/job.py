@@ -509,14 +509,15 @@ def load_job(path: str | Path) -> Job:
     return Job.from_dict(parse_job_text(data, f"job file {path}"), source=f"job file {path}")
 
 
-def cell_job(model: Model, outputs=DEFAULT_OUTPUTS, name: str = "cell") -> Job:
-    """The 1 × 1 map of a Model (ω and f0 swept over one value each): a map whose one
-    cell computes what ``campar.simulate_point(model)`` computes."""
-    data = model.to_dict()
+def cell_job(model: Model | None = None, outputs=DEFAULT_OUTPUTS, name="cell", **fields) -> Job:
+    """The 1 × 1 map of a Model (``fields`` changing it, as ``Model.build`` takes them; ω
+    and f0 swept over one value each): a map whose one cell computes what
+    ``campar.simulate_point(model)`` computes."""
+    data = Model.build(model, **fields).to_dict()
     fixed = {key: data.pop(key) for key in ("mu_kn", "mu_cn", "zeta")}
     sweep = {
-        key: {"from": v, "to": v, "points": 1}
-        for key, v in (("omega", data.pop("omega")), ("f0", data.pop("f0")))
+        key: {"from": value, "to": value, "points": 1}
+        for key, value in (("omega", data.pop("omega")), ("f0", data.pop("f0")))
     }
     data["model"]["cam"].pop("table_sha256", None)  # computed again as the job is read
     return Job.from_dict(
