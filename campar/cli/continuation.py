@@ -3,7 +3,16 @@
 import argparse
 
 from ..errors import JobError
-from .options import PARAMETER_HELP, add_model_fields, flag_of, launched_rank, model_of
+from ..model.laws import LAW_PARAMETERS
+from .options import (
+    FIELD_DEST,
+    PARAMETER_HELP,
+    add_model_fields,
+    flag_of,
+    given_fields,
+    launched_rank,
+    model_of,
+)
 
 CONTINUATION_PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 HELP = {"omega": "cam speed / natural frequency", **PARAMETER_HELP}
@@ -44,7 +53,8 @@ def add_continue(sub):
         "solve for its periodic orbit by Newton's method on the section map, and follow "
         "the orbit's branch by pseudo-arclength continuation through folds; PD, SN, BP, "
         "NS and G points are located to 1e-10 in the parameter. Exactly one parameter "
-        "takes a range A:B (the branch starts at A).",
+        "takes a range A:B (the branch starts at A): omega, f0, mu_kn, mu_cn, zeta, or a "
+        "law parameter of the model (--phi1 … --phi4, --n, --restitution).",
     )
     p.add_argument(
         "--omega", type=value_or_range, required=True, metavar="W or A:B", help=HELP["omega"]
@@ -105,6 +115,11 @@ def split_parameters(args) -> tuple[str, tuple[float, float], dict]:
     """(the parameter with a range, its range, the other parameters' values)."""
     values = {name: getattr(args, name) for name in CONTINUATION_PARAMETERS}
     values = {name: value for name, value in values.items() if value is not None}
+    for key, text in given_fields(args).items():  # a law parameter's range: --phi1 0.9:1.3
+        name = key.rsplit(".", 1)[-1]
+        if name in LAW_PARAMETERS and ":" in text:
+            values[name] = value_or_range(text)
+            delattr(args, FIELD_DEST + key)
     ranged = [name for name, value in values.items() if isinstance(value, tuple)]
     if len(ranged) != 1:
         raise JobError(

@@ -9,12 +9,14 @@ from keywords, flags or a job's sections, so a bad value gives one message whate
 entry.
 """
 
+import math
 import typing
 from dataclasses import dataclass
 
 from pydantic import ValidationError, field_validator
 
 from ..errors import JobError
+from .laws import ANGLES, TAKES_UP, CamSettings
 from .sections import (
     DEFAULT_CLASSIFY,
     DEFAULT_INITIAL,
@@ -117,7 +119,9 @@ class Model(Settings):
         """A validated Model: ``base`` (a Model, a mapping of a job's keys, or ω as a
         number; None: the defaults) with ``fields`` set, each named by its key
         (``"model.cam.rise"``), its name (``rise``) or its flag's name (``y0``,
-        ``revolutions``). JobError with one line, "[SOURCE: ]KEY: problem", for a key
+        ``revolutions``). A cam angle given alone leaves the others and the near dwell
+        (the far dwell, when the near dwell is given) takes up the difference, as when a
+        map sweeps it. JobError with one line, "[SOURCE: ]KEY: problem", for a key
         unknown or a value out of range."""
         if isinstance(base, Model):
             data = base.to_dict()
@@ -134,6 +138,9 @@ class Model(Settings):
             raise JobError(f"a model is a Model, a mapping or ω, got {type(base).__name__}")
         for name, value in fields.items():
             assign(data, field_key(name), value)
+        angles = [field_key(name) for name in fields if field_key(name) in ANGLE_KEYS]
+        if len(angles) == 1:
+            take_up(data, angles[0].rsplit(".", 1)[-1], base)
         try:
             return cls.model_validate(data)
         except ValidationError as exc:
@@ -234,6 +241,26 @@ def assign(data: dict, key: str, value) -> None:
         node[part] = child = dict(child) if isinstance(child, dict) else {}
         node = child
     node[parts[-1]] = value
+
+
+ANGLE_KEYS = tuple(f"model.cam.{name}" for name in ANGLES)
+
+
+def take_up(data: dict, name: str, base) -> None:
+    """An angle given alone: TAKES_UP's angle takes up the difference, so the four still
+    sum to 2π — as when a map sweeps it (``CamSettings.with_angle``, the same sum, so the
+    same bits)."""
+    cam = data["model"]["cam"]
+    before = base.model.cam if isinstance(base, Model) else CamSettings()
+    value = cam[name]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return  # the schema's message for a value that is no number
+    if value == getattr(before, name):
+        return  # the angles as they are, bit for bit
+    other = TAKES_UP[name]
+    current = {key: cam.get(key, getattr(before, key)) for key in ANGLES}
+    rest = sum(current[key] for key in ANGLES if key not in (name, other))
+    cam[other] = 2.0 * math.pi - rest - value
 
 
 def model_error(exc: ValidationError) -> str:

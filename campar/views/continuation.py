@@ -15,11 +15,12 @@ import numpy as np
 
 from ..continuation.branch import Branch, BranchSettings
 from ..continuation.curves import CURVE_TYPES, BifurcationCurve, continue_curve
-from ..continuation.orbit import PeriodicOrbit, find_cycle
+from ..continuation.orbit import PeriodicOrbit, find_cycle, solve_cycle
 from ..continuation.section_map import PARAMETER_ORDER, SectionMap
 from ..continuation.switching import continue_with_switching
 from ..errors import ContinuationError, JobError
 from ..model import Model
+from ..model.laws import LAW_PARAMETERS
 from .point import simulate_point
 
 
@@ -73,7 +74,8 @@ def continue_from_cell(
     Parameters
     ----------
     parameter : str
-        The continuation parameter: omega, f0, mu_kn, mu_cn or zeta.
+        The continuation parameter: omega, f0, mu_kn, mu_cn, zeta, or a law parameter of
+        the model (phi1 … phi4, n, restitution; campar.model.laws.LAW_PARAMETERS).
     span : (float, float)
         Where the branch starts and the far end of its window.
     fixed : dict
@@ -119,8 +121,9 @@ def continue_from_cell(
     JobError
         A parameter or option out of range.
     """
-    if parameter not in PARAMETER_ORDER:
-        raise JobError(f"cannot continue along {parameter!r}; one of {', '.join(PARAMETER_ORDER)}")
+    if parameter not in (*PARAMETER_ORDER, *LAW_PARAMETERS):
+        allowed = ", ".join((*PARAMETER_ORDER, *LAW_PARAMETERS))
+        raise JobError(f"cannot continue along {parameter!r}; one of {allowed}")
     if span[0] == span[1]:
         raise JobError(f"the range of {parameter} is empty: {span[0]}:{span[1]}")
     unknown = sorted(set(curve_types) - set(CURVE_TYPES))
@@ -133,7 +136,8 @@ def continue_from_cell(
     base = model if isinstance(model, Model) else Model.build({"omega": values["omega"]})
     if isinstance(model, dict):  # the force law's options (the model section's keys)
         base = base.replace(**model)
-    smap = section_map or SectionMap(base)
+    law = parameter if parameter in LAW_PARAMETERS else None
+    smap = section_map or SectionMap(base, law_parameter=law)
     shots0 = smap.shots
     cell = simulate_point(base, y0=y0, v0=v0, **values)
     period = cycle or cell.n
@@ -144,7 +148,7 @@ def continue_from_cell(
         )
     if not all(map(math.isfinite, cell.state)):
         raise ContinuationError(f"the cell at {parameter}={span[0]} failed: {cell.status}")
-    start = find_cycle(period, cell.state, section_map=smap, **{**fixed, parameter: span[0]})
+    start = solve_cycle(period, cell.state, {**fixed, parameter: span[0]}, section_map=smap)
     direction = 1.0 if span[1] > span[0] else -1.0
     root = continue_with_switching(
         start, parameter, span, switch, direction=direction, section_map=smap, settings=settings
