@@ -50,8 +50,8 @@ class StoredCell:
     Examples
     --------
     >>> import campar
-    >>> c = campar.cell("results/smoke.zarr", omega=3.0, mu_cn=0.5)  # doctest: +SKIP
-    >>> c.simulate().label, c.differences()  # doctest: +SKIP
+    >>> c = campar.cell("results/smoke.zarr", omega=3.0, mu_cn=0.7)
+    >>> c.simulate().label, c.differences()
     ('1-1', {})
     """
 
@@ -163,6 +163,13 @@ def cell(store, direction: str | None = None, **coordinates) -> StoredCell:
         An axis unknown or missing, the cell not computed yet, a curves store.
     campar.errors.StoreError
         The store cannot be read.
+
+    Examples
+    --------
+    >>> import campar
+    >>> c = campar.cell("results/smoke.zarr", omega=3.0, mu_cn=0.7)  # the nearest cell
+    >>> round(c.coordinates["omega"], 4), round(c.coordinates["mu_cn"], 4), c.model.model.tensile
+    (2.9333, 0.6917, 'clamp')
     """
     from ..sweep.store import read_store
 
