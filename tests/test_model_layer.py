@@ -198,6 +198,15 @@ def test_bad_input_is_one_line_exit_2_before_computing(argv, message, capsys, mo
     assert message in err and err.count("\n") == 1
 
 
+def test_a_misspelled_word_names_the_one_meant_from_every_entry(capsys):
+    with pytest.raises(JobError) as python:
+        Model.build(omega=1.0, tensile="alow")
+    assert str(python.value).endswith("got 'alow' (did you mean allow?)")
+    for argv in (["--tensile", "alow"], ["--set", "model.tensile=alow"]):
+        assert campar.cli.main(["point", "--omega", "1", *argv]) == 2
+        assert capsys.readouterr().err == f"campar point: {python.value}\n"
+
+
 def test_the_same_value_in_python_and_in_a_job_gives_the_same_error(tmp_path):
     with pytest.raises(JobError) as python:
         Model.build(omega=3.0, mu_kn=2.0)

@@ -182,7 +182,7 @@ class SectionMap:
     def vector(self, parameters: dict) -> np.ndarray:
         """The parameter vector (``order``) of a dict: ``parameter_vector``'s, and the law
         parameter's value (default the model's) when one is continued."""
-        par = parameter_vector({k: v for k, v in parameters.items() if k in PARAMETER_ORDER})
+        par = parameter_vector({k: v for k, v in parameters.items() if k != self.law_parameter})
         if self.law_parameter is None:
             return par
         value = parameters.get(self.law_parameter)

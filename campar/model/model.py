@@ -9,6 +9,7 @@ from keywords, flags or a job's sections, so a bad value gives one message whate
 entry.
 """
 
+import difflib
 import math
 import typing
 from dataclasses import dataclass
@@ -274,6 +275,11 @@ def model_error(exc: ValidationError) -> str:
             problems.append(f"{where}: unknown key")
         elif where in PARAMETERS and err["type"] == "value_error":
             problems.append(message)
+        elif err["type"] == "literal_error" and where in FIELDS:
+            got = err.get("input")
+            near = difflib.get_close_matches(str(got), FIELDS[where].choices, n=1)
+            hint = f" (did you mean {near[0]}?)" if near else ""
+            problems.append(f"{where}: {message}, got {short_repr(got)}{hint}")
         elif err["type"] == "missing":
             problems.append(f"{where}: required")
         elif isinstance(err.get("input"), dict):  # a section's own check: the message says
