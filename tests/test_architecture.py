@@ -164,6 +164,7 @@ def test_cells_are_computed_from_a_model_not_through_the_sweep(name):
         assert "Job.from_dict(" not in code, name
 
 
+@pytest.mark.process
 def test_the_model_layer_loads_no_numba():
     code = (
         "import sys, campar.model\nprint(sorted(m for m in sys.modules if m.startswith('numba')))"
