@@ -13,7 +13,7 @@ import yaml
 import campar
 from campar.cli import main
 from campar.errors import JobError, StoreMismatch
-from campar.sweep.cam_table import _KNOWN
+from campar.model.cam_table import _KNOWN
 
 GRID = {
     "omega": {"from": 4.0, "to": 3.0, "points": 3},
