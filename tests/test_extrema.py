@@ -19,7 +19,7 @@ from campar.core.cam import PAPER_ANGLES, phase_bounds, phased_cam, tabulated_ca
 from campar.core.contact import contact_law
 from campar.core.kernel import CONVERGED, OUT_STATS, run_chain
 from campar.core.model import LAW_CLAMP, PAPER_LAW, Law
-from campar.sweep.cam_table import periodic_spline
+from campar.model.cam_table import periodic_spline
 from campar.sweep.job import load_job
 from campar.sweep.tile import allocate_outputs, cell_settings, solver_options
 

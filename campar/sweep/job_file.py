@@ -10,13 +10,13 @@ the problem; the numbers are YAML 1.2's (``1e-8`` is a float, not text).
 """
 
 import re
-import reprlib
 import typing
 from pathlib import Path
 
 import yaml
 
 from ..errors import JobError
+from ..model.settings import short_repr
 
 
 def format_validation_error(exc, source: str, allowed_keys) -> str:
@@ -58,23 +58,6 @@ def format_validation_error(exc, source: str, allowed_keys) -> str:
         else:
             lines.append(text)
     return f"{source}: " + "; ".join(lines)
-
-
-SHOWN_CHARS = 60  # of a bad value in a message: a value may be huge (a list from aliases)
-
-
-def short_repr(value) -> str:
-    """``repr(value)`` cut to SHOWN_CHARS, without building the whole of a huge value."""
-    if isinstance(value, (list, tuple, dict, set)) and len(value) > 8:
-        return f"a {type(value).__name__} of {len(value)} items"
-    text = reprlib_repr(value)
-    return text if len(text) <= SHOWN_CHARS else text[: SHOWN_CHARS - 1] + "…"
-
-
-def reprlib_repr(value) -> str:
-    shown = reprlib.Repr()
-    shown.maxstring, shown.maxother, shown.maxlevel = SHOWN_CHARS, SHOWN_CHARS, 3
-    return shown.repr(value)
 
 
 def check_store_path(path) -> str:
@@ -145,6 +128,17 @@ def _bounded_int(loader: UniqueKeyLoader, node: yaml.ScalarNode):
     return loader.construct_yaml_int(node)
 
 
+def _refused_tag(loader: UniqueKeyLoader, node: yaml.Node):
+    line = node.start_mark.line + 1
+    raise yaml.YAMLError(
+        f"line {line}: a {node.tag.replace('tag:yaml.org,2002:', '!!')} value is not allowed in "
+        "a job (numbers, text, true/false, lists and mappings only; quote it to make it text)"
+    )
+
+
+# The safe loader's other types (bytes, dates, sets, ordered pairs) are no job's values.
+for _tag in ("binary", "timestamp", "set", "omap", "pairs"):
+    UniqueKeyLoader.add_constructor(f"tag:yaml.org,2002:{_tag}", _refused_tag)
 UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _unique_mapping)
 UniqueKeyLoader.add_constructor("tag:yaml.org,2002:int", _bounded_int)
 

@@ -1,7 +1,7 @@
 """The job's cam and contact laws (``model.cam``, ``model.contact``): their settings, the
 law parameters a map may sweep, and the kernel's Law built from them (docs/design.md).
 
-Validation needs numpy alone (campar.sweep.cam_table); ``kernel_law`` loads the compiled
+Validation needs numpy alone (campar.model.cam_table); ``kernel_law`` loads the compiled
 core's law classes.
 """
 
@@ -45,7 +45,7 @@ class CamSettings(Settings):
     phi4: float = PAPER_ANGLES[3]
     table: str | None = None
     """A CSV of (θ in radians, S in units of the stroke) over one revolution: the cam is the
-    periodic C² cubic spline through it (campar.sweep.cam_table); rise and fall then have
+    periodic C² cubic spline through it (campar.model.cam_table); rise and fall then have
     no say, the angles only say where the revolution's steps end."""
     table_joins: Literal["smooth", "phases"] = "smooth"
     """smooth: one periodic C² spline through the table; phases: a C² spline on each
@@ -65,7 +65,7 @@ class CamSettings(Settings):
             return self
         if (self.rise, self.fall) != ("cosine", "cosine"):
             raise ValueError("a cam is either a table or rise/fall laws, not both")
-        table = read_table(self.table)
+        table = read_table(self.table, self.table_sha256)
         if self.table_joins == "phases":
             table.spline("phases", phase_bounds(self.angles))  # its boundaries are points
         digest = table.sha256
@@ -166,7 +166,8 @@ def kernel_law(model, name: str | None = None, value: float | None = None, swept
         con = con.model_copy(update={name: value})
     if settings.table is not None:
         bounds = cam.phase_bounds(settings.angles)
-        knots, coef = read_table(settings.table).spline(settings.table_joins, bounds)
+        table = read_table(settings.table, settings.table_sha256)
+        knots, coef = table.spline(settings.table_joins, bounds)
         the_cam = cam.tabulated_cam(knots, coef, bounds)
     else:
         the_cam = cam.phased_cam(settings.rise, settings.fall, settings.angles)
