@@ -11,6 +11,13 @@ across a cycloidal fall is one long DOP853 step, over which ε = S(ωt) − y(t)
 quintic at all while y(t) is as accurate as the integration: the models alone left
 min ε up to 7e-3 too shallow there.
 
+Only a step whose extremum can change the revolution's statistics is refined: the
+search moves the model's value by less than the step's own variation (its ends' values,
+slopes and curvatures, ``model_reach``), so a model extremum that stays on the losing
+side of the running statistic (analysis.add_step_stats: ε's extremes, the smallest |ε|
+at an interior extremum, the largest Pn in contact) by that margin leaves every stored
+number as it is, and its search is skipped.
+
 Where the ends do not bracket the root (the model sees two extrema in one step), Newton
 runs from the model's place and its result is kept only if it converges inside the step
 to an extremum of the right kind; else the model's value stands.
@@ -18,10 +25,11 @@ to an extremum of the right kind; else the model's value stands.
 
 import math
 
+from .analysis import REV_EPS_MAX, REV_EPS_MIN, REV_GRAZE, REV_PN_MAX, REV_TOUCH
 from .hermite import MAXIMUM, MINIMUM, hermite_extremum, quintic_extremum
 from .integrator import dense_eval, prepare_dense
 from .jit import hot
-from .model import N_STATE, PUSH, acceleration, kinematics
+from .model import N_STATE, PUSH, cam, damping, force_and_rate, pushing
 
 EXTREMUM_ITER = 16  # Newton or Illinois iterations at most
 # Located to this fraction of the step: the value's error is ~ ε'' (h δθ)², far below
@@ -33,16 +41,37 @@ PEAK_THETA_TOL = 1e-4
 
 
 @hot
-def dense_kinematics(rhs, method, w, t0, h, theta, p, mode):
+def dense_kinematics(rhs, method, w, t0, h, theta, p, mode, want_force):
     """model.kinematics (ε, dε/dt, d²ε/dt², Pn, dPn/dt) at t0 + θh on the dense output of
-    the step just accepted from t0 (w.y_old → w.y_new)."""
+    the step just accepted from t0 (w.y_old → w.y_new); Pn and its rate 0 unless
+    ``want_force``.
+
+    One body with one cam evaluation, the arithmetic of model.acceleration and
+    model.kinematics term for term (the same numbers): as separate calls (numba inlines
+    none) they evaluated the cam twice, the search's main cost."""
     prepare_dense(rhs, method, t0, w.y_old[:N_STATE], h, p, mode, w)
     dense_eval(method, w, w.y_old, w.y_new, h, theta, N_STATE, w.y_stage)
     t = t0 + theta * h
     y = w.y_stage[0]
     v = w.y_stage[1]
-    acc, _, _ = acceleration(t, y, v, p, mode)
-    return kinematics(t, y, v, acc, p, mode)
+    yc, dyc, d2yc = cam(p.omega * t, mode[0], p.cam)
+    acc = -2.0 * p.zeta * v - y - p.f0
+    eps = yc - y
+    if mode[1] == PUSH:
+        deps = p.vcam * dyc - v
+        pen = eps
+        if pen < 0.0:  # a point just past an event: extend by zero force
+            pen = 0.0
+        force, _, _ = pushing(p.contact, p.k, damping(p.contact, p.c), pen, deps)
+        acc += force
+    rate = p.omega * dyc - v
+    accel = p.omega * p.omega * d2yc - acc
+    if not want_force or mode[1] != PUSH or eps <= 0.0:
+        return eps, rate, accel, 0.0, 0.0
+    deps = p.vcam * dyc - v  # the force law's ε'
+    d2eps = p.vcam * p.omega * d2yc - acc
+    pn, dpn = force_and_rate(p.contact, p.k, damping(p.contact, p.c), eps, deps, rate, d2eps)
+    return eps, rate, accel, pn, dpn
 
 
 @hot
@@ -55,7 +84,7 @@ def eps_extremum(rhs, method, w, t0, h, p, mode, guess, de0, de1, want_min):
     bracketed = sign * de0 < 0.0 < sign * de1
     theta = guess
     for _ in range(EXTREMUM_ITER):
-        eps, rate, accel, _, _ = dense_kinematics(rhs, method, w, t0, h, theta, p, mode)
+        eps, rate, accel, _, _ = dense_kinematics(rhs, method, w, t0, h, theta, p, mode, False)
         if bracketed:
             if sign * rate < 0.0:
                 a = theta
@@ -76,7 +105,7 @@ def eps_extremum(rhs, method, w, t0, h, p, mode, guess, de0, de1, want_min):
         if abs(step) < THETA_TOL or (bracketed and b - a < THETA_TOL):
             return theta, eps  # ε at theta is off by ~ ε'' (h step)² / 2: negligible
         theta = nxt
-    eps, _, _, _, _ = dense_kinematics(rhs, method, w, t0, h, theta, p, mode)
+    eps, _, _, _, _ = dense_kinematics(rhs, method, w, t0, h, theta, p, mode, False)
     return theta, eps
 
 
@@ -93,7 +122,7 @@ def force_peak(rhs, method, w, t0, h, p, mode, guess):
     best = 0.0
     side = 0
     for _ in range(EXTREMUM_ITER):
-        _, _, _, pn, dpn = dense_kinematics(rhs, method, w, t0, h, theta, p, mode)
+        _, _, _, pn, dpn = dense_kinematics(rhs, method, w, t0, h, theta, p, mode, True)
         best = max(best, pn)
         if dpn > 0.0:
             a, fa = theta, dpn
@@ -114,32 +143,49 @@ def force_peak(rhs, method, w, t0, h, p, mode, guess):
 
 
 @hot
+def model_reach(v0, dv0, ddv0, v1, dv1, ddv1, h):
+    """How far the dense output's extremum inside a step can lie from the Hermite model's:
+    the step's whole variation from its ends (value change, slopes · h, curvatures · h²),
+    a generous multiple of any model error the search has corrected."""
+    return abs(v1 - v0) + h * (abs(dv0) + abs(dv1)) + h * h * (abs(ddv0) + abs(ddv1))
+
+
+@hot
 def step_extremes(
-    rhs, method, w, t0, h, p, mode, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1
+    rhs, method, w, t0, h, p, mode, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1, row
 ):
     """ε's interior minimum and maximum (NaN: none) and Pn's largest value over the step
     just accepted from t0 (size h), from the values and rates at its ends (model.kinematics)
-    and its dense output."""
+    and its dense output; a model extremum that cannot change the revolution's statistics
+    in ``row`` so far (analysis.add_step_stats) is returned unrefined."""
     h2 = h * h
     dip = math.nan
     peak = math.nan
+    reach = model_reach(e0, de0, dde0, e1, de1, dde1, h)
+    # |ε| at an interior extremum counts while below both REV_GRAZE and |REV_TOUCH|
+    near = max(row[REV_GRAZE], abs(row[REV_TOUCH]))
     th, val = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MINIMUM)
     if th > 0.0:
         dip = val
-        th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MINIMUM)
-        if th > 0.0:
-            dip = val
+        lowest = min(row[REV_EPS_MIN], e0, e1)
+        if not (val - reach >= lowest and abs(val) - reach >= near):  # NaN: refine
+            th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MINIMUM)
+            if th > 0.0:
+                dip = val
     th, val = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MAXIMUM)
     if th > 0.0:
         peak = val
-        th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MAXIMUM)
-        if th > 0.0:
-            peak = val
+        highest = max(row[REV_EPS_MAX], e0, e1)
+        if not (val + reach <= highest and abs(val) - reach >= abs(row[REV_TOUCH])):
+            th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MAXIMUM)
+            if th > 0.0:
+                peak = val
     pn_hi = max(pn0, pn1)
     if mode[1] == PUSH:
         th, val = hermite_extremum(pn0, dpn0 * h, pn1, dpn1 * h, MAXIMUM)
         if th > 0.0:
-            if dpn0 > 0.0 > dpn1:
+            pn_reach = model_reach(pn0, dpn0, 0.0, pn1, dpn1, 0.0, h)
+            if dpn0 > 0.0 > dpn1 and not val + pn_reach <= max(row[REV_PN_MAX], pn_hi):
                 val = force_peak(rhs, method, w, t0, h, p, mode, th)
             pn_hi = max(pn_hi, val)
     return dip, peak, pn_hi
