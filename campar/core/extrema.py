@@ -11,13 +11,6 @@ across a cycloidal fall is one long DOP853 step, over which ε = S(ωt) − y(t)
 quintic at all while y(t) is as accurate as the integration: the models alone left
 min ε up to 7e-3 too shallow there.
 
-Only a step whose extremum can change the revolution's statistics is refined: the
-search moves the model's value by less than the step's own variation (its ends' values,
-slopes and curvatures, ``model_reach``), so a model extremum that stays on the losing
-side of the running statistic (analysis.add_step_stats: ε's extremes, the smallest |ε|
-at an interior extremum, the largest Pn in contact) by that margin leaves every stored
-number as it is, and its search is skipped.
-
 Where the ends do not bracket the root (the model sees two extrema in one step), Newton
 runs from the model's place and its result is kept only if it converges inside the step
 to an extremum of the right kind; else the model's value stands.
@@ -25,7 +18,6 @@ to an extremum of the right kind; else the model's value stands.
 
 import math
 
-from .analysis import REV_EPS_MAX, REV_EPS_MIN, REV_GRAZE, REV_PN_MAX, REV_TOUCH
 from .hermite import MAXIMUM, MINIMUM, hermite_extremum, quintic_extremum
 from .integrator import dense_eval, prepare_dense
 from .jit import hot
@@ -143,49 +135,32 @@ def force_peak(rhs, method, w, t0, h, p, mode, guess):
 
 
 @hot
-def model_reach(v0, dv0, ddv0, v1, dv1, ddv1, h):
-    """How far the dense output's extremum inside a step can lie from the Hermite model's:
-    the step's whole variation from its ends (value change, slopes · h, curvatures · h²),
-    a generous multiple of any model error the search has corrected."""
-    return abs(v1 - v0) + h * (abs(dv0) + abs(dv1)) + h * h * (abs(ddv0) + abs(ddv1))
-
-
-@hot
 def step_extremes(
-    rhs, method, w, t0, h, p, mode, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1, row
+    rhs, method, w, t0, h, p, mode, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1
 ):
     """ε's interior minimum and maximum (NaN: none) and Pn's largest value over the step
     just accepted from t0 (size h), from the values and rates at its ends (model.kinematics)
-    and its dense output; a model extremum that cannot change the revolution's statistics
-    in ``row`` so far (analysis.add_step_stats) is returned unrefined."""
+    and its dense output."""
     h2 = h * h
     dip = math.nan
     peak = math.nan
-    reach = model_reach(e0, de0, dde0, e1, de1, dde1, h)
-    # |ε| at an interior extremum counts while below both REV_GRAZE and |REV_TOUCH|
-    near = max(row[REV_GRAZE], abs(row[REV_TOUCH]))
     th, val = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MINIMUM)
     if th > 0.0:
         dip = val
-        lowest = min(row[REV_EPS_MIN], e0, e1)
-        if not (val - reach >= lowest and abs(val) - reach >= near):  # NaN: refine
-            th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MINIMUM)
-            if th > 0.0:
-                dip = val
+        th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MINIMUM)
+        if th > 0.0:
+            dip = val
     th, val = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MAXIMUM)
     if th > 0.0:
         peak = val
-        highest = max(row[REV_EPS_MAX], e0, e1)
-        if not (val + reach <= highest and abs(val) - reach >= abs(row[REV_TOUCH])):
-            th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MAXIMUM)
-            if th > 0.0:
-                peak = val
+        th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MAXIMUM)
+        if th > 0.0:
+            peak = val
     pn_hi = max(pn0, pn1)
     if mode[1] == PUSH:
         th, val = hermite_extremum(pn0, dpn0 * h, pn1, dpn1 * h, MAXIMUM)
         if th > 0.0:
-            pn_reach = model_reach(pn0, dpn0, 0.0, pn1, dpn1, 0.0, h)
-            if dpn0 > 0.0 > dpn1 and not val + pn_reach <= max(row[REV_PN_MAX], pn_hi):
+            if dpn0 > 0.0 > dpn1:
                 val = force_peak(rhs, method, w, t0, h, p, mode, th)
             pn_hi = max(pn_hi, val)
     return dip, peak, pn_hi

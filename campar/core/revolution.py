@@ -175,7 +175,6 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                         dpn0,
                         pn1,
                         dpn1,
-                        row,
                     )
                     free = released(contact, p)
                     add_step_stats(row, t - t_prev, free, e0, e1, dip, peak, pn_hi)
