@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
-from conftest import short_curves
+from support.jobs import short_curves
 
 from campar.core.codes import Kind, Status
 from campar.paper import setups as paper

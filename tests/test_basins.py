@@ -11,15 +11,9 @@ store; bad jobs are refused with a message naming the key.
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import (
-    assert_mpirun_store_equals,
-    assert_same_store,
-    computed_store,
-    merge,
-    resume_after_interrupt,
-    run_campar,
-    stored,
-)
+from support.jobs import computed_store, merge, resume_after_interrupt
+from support.processes import assert_mpirun_store_equals, run_campar
+from support.stores import assert_same_store, stored
 
 import campar
 import campar.sweep.runner as runner

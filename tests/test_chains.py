@@ -14,7 +14,8 @@ import textwrap
 
 import numpy as np
 import pytest
-from conftest import MPIRUN, SMALL_JOB, assert_same_map, merge, reference_arrays
+from support.jobs import SMALL_JOB, assert_same_map, merge, reference_arrays
+from support.processes import MPIRUN
 
 from campar.bench.scipy_model import Model
 from campar.bench.scipy_peer import scipy_cell
@@ -88,7 +89,7 @@ def test_continue_gives_the_same_tile_in_a_process_that_computed_no_other():
 @pytest.mark.mpi
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
 def test_a_continued_map_under_mpirun_equals_the_serial_one(write_job):
-    from conftest import CAMPAR, subprocess_env
+    from support.processes import CAMPAR, subprocess_env
 
     path, job = write_job(name="cont", chains={"start": "continue"})
     result = subprocess.run(

@@ -8,7 +8,7 @@ import subprocess
 import sys
 
 import pytest
-from conftest import case_arguments, reference_case
+from support.jobs import case_arguments, reference_case
 
 CAMPAR = [sys.executable, "-m", "campar.cli"]
 

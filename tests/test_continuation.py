@@ -9,7 +9,7 @@ agreeing estimates must be one SciPy confirms.
 
 import numpy as np
 import pytest
-from conftest import reference_case
+from support.jobs import reference_case
 
 from campar import simulate_point
 from campar.bench import scipy_shooting

@@ -15,7 +15,7 @@ import h5py
 import numpy as np
 import pytest
 import zarr
-from conftest import reference_arrays
+from support.jobs import reference_arrays
 from test_store import fake_tile, make_job, snapshot
 from zarr.errors import ZarrUserWarning
 

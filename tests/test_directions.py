@@ -14,15 +14,9 @@ import signal
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import (
-    MPIRUN,
-    SMALL_JOB,
-    assert_mpirun_store_equals,
-    assert_same_store,
-    merge,
-    run_campar,
-    stored,
-)
+from support.jobs import SMALL_JOB, merge
+from support.processes import MPIRUN, assert_mpirun_store_equals, run_campar
+from support.stores import assert_same_store, stored
 
 import campar
 import campar.sweep.runner as runner

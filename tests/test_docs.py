@@ -13,7 +13,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from conftest import CAMPAR
+from support.processes import CAMPAR
 
 from campar.cli import build_parser
 

@@ -12,8 +12,7 @@ import time
 
 import numpy as np
 import pytest
-from conftest import CAMPAR, MPIRUN, start_campar
-from damage import (
+from support.damage import (
     assert_synthetic,
     finish,
     leftovers,
@@ -22,6 +21,7 @@ from damage import (
     small_disk,
     synthetic_store,
 )
+from support.processes import CAMPAR, MPIRUN, start_campar, wait_until_guarded
 from test_store import fake_tile, make_job
 
 from campar.cli import main
@@ -113,7 +113,7 @@ def test_hdf5_never_meets_a_full_disk_inside_the_library(tmp_path):
         import campar.sweep.store._hdf5 as h5
         Usage = collections.namedtuple("Usage", "total used free")
         h5.shutil.disk_usage = lambda path: Usage(1 << 40, 0, 1 << 40)
-        from damage import synthetic_store
+        from support.damage import synthetic_store
         from test_store import make_job
         synthetic_store({str(disk / "s.h5")!r}, make_job(sweep__omega__points=200))
     """)
@@ -169,7 +169,7 @@ def test_outputs_are_checked_before_anything_is_computed(tmp_path):
 def test_an_output_in_a_missing_folder_is_one_line_and_creates_no_folder(
     tmp_path, monkeypatch, capsys, args
 ):
-    from damage import synthetic_store
+    from support.damage import synthetic_store
 
     from campar.cli import main
 
@@ -256,8 +256,11 @@ def test_a_signal_before_the_start_is_one_interrupted_and_after_the_end_nothing(
 
 @pytest.mark.parametrize("delay", [0.15, pytest.param(0.6, marks=pytest.mark.slow)])
 def test_campar_run_interrupted_early_says_so_in_one_line(write_job, delay):
+    # from campar's first line on (before it, Python's own start-up, which takes longer
+    # than a fixed delay on a loaded machine, handles a SIGINT with its own traceback)
     path, job = write_job()
     proc = start_campar("run", path)
+    wait_until_guarded(proc, ranks=1)
     time.sleep(delay)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
@@ -409,7 +412,7 @@ def test_status_and_verify_memory_does_not_grow_with_the_grid(tmp_path):
 def test_an_hdf5_store_with_a_second_name_is_refused_untouched(tmp_path):
     """A hard link is another name the lock does not know: a second run through it would
     write the same file. Refused, the store left as it was."""
-    from damage import synthetic_store
+    from support.damage import synthetic_store
     from test_store import snapshot
 
     from campar.errors import StoreError

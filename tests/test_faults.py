@@ -22,8 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import MPIRUN, assert_same_map, kill_tree, subprocess_env, wait_until_guarded
-from damage import (
+from support.damage import (
     DAMAGE,
     assert_synthetic,
     damage_file,
@@ -33,6 +32,8 @@ from damage import (
     synthetic_store,
     zarr_chunks,
 )
+from support.jobs import assert_same_map
+from support.processes import MPIRUN, kill_tree, subprocess_env, wait_until_guarded
 from test_store import make_job
 
 from campar.errors import StoreDamaged
@@ -62,7 +63,7 @@ WRITER = """
 import os, signal, sys, threading, time
 import campar.sweep.store._hdf5 as h5
 h5.CHECKPOINT_TILES = 1  # every tile goes through a checkpoint: kills land inside them too
-from damage import finish
+from support.damage import finish
 from test_store import make_job
 job = make_job(**{JOB!r})
 threading.Timer(float(sys.argv[2]), os.kill, (os.getpid(), signal.SIGKILL)).start()

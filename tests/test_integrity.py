@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import zarr
-from conftest import assert_same_map, run_campar
-from damage import assert_synthetic, damage_file, finish, synthetic_store, zarr_chunks
+from support.damage import assert_synthetic, damage_file, finish, synthetic_store, zarr_chunks
+from support.jobs import assert_same_map
+from support.processes import run_campar
 from test_store import fake_tile, make_job
 
 import campar

@@ -7,7 +7,8 @@ import subprocess
 
 import numpy as np
 import pytest
-from conftest import CAMPAR, MPIRUN, run_campar, stored, subprocess_env
+from support.processes import CAMPAR, MPIRUN, run_campar, subprocess_env
+from support.stores import stored
 
 from campar.continuation.orbit import find_cycle
 from campar.errors import JobError

@@ -13,10 +13,10 @@ import textwrap
 import time
 
 import pytest
-from conftest import (
+from support.jobs import assert_same_map
+from support.processes import (
     CAMPAR,
     MPIRUN,
-    assert_same_map,
     kill_tree,
     run_campar,
     start_campar,

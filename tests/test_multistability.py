@@ -13,16 +13,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
-    MPIRUN,
-    assert_mpirun_store_equals,
-    assert_same_store,
-    computed_store,
-    merge,
-    resume_after_interrupt,
-    run_campar,
-    stored,
-)
+from support.jobs import computed_store, merge, resume_after_interrupt
+from support.processes import MPIRUN, assert_mpirun_store_equals, run_campar
+from support.stores import assert_same_store, stored
 
 import campar
 import campar.sweep.runner as runner

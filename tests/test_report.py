@@ -14,7 +14,7 @@ from functools import cache
 
 import numpy as np
 import pytest
-from conftest import reference_case, short_curves
+from support.jobs import reference_case, short_curves
 
 from campar.bench.scipy_model import Model, integrate
 from campar.bench.scipy_peer import scipy_cell

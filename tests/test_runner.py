@@ -10,14 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
-    assert_same_map,
-    kill_tree,
-    reference_arrays,
-    run_campar,
-    start_campar,
-    wait_for_tiles,
-)
+from support.jobs import assert_same_map, reference_arrays
+from support.processes import kill_tree, run_campar, start_campar, wait_for_tiles
 
 import campar.sweep.runner as runner
 import campar.sweep.wire as wire

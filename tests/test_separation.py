@@ -6,7 +6,7 @@ import subprocess
 import numpy as np
 import pytest
 import yaml
-from conftest import CAMPAR
+from support.processes import CAMPAR
 
 import campar
 from campar.bench.scipy_model import Model, integrate

@@ -6,7 +6,7 @@ import os
 import subprocess
 
 import pytest
-from conftest import CAMPAR
+from support.processes import CAMPAR
 
 
 def cached_functions(cache) -> set[str]:
