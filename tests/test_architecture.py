@@ -131,6 +131,7 @@ def test_modules_stay_small():
     assert not grown, "past 600 lines:\n" + "\n".join(grown)
 
 
+@pytest.mark.process
 def test_importing_campar_has_no_side_effects():
     code = (
         "import sys, campar\n"

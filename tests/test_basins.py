@@ -170,6 +170,8 @@ def test_an_interrupted_basin_resumes_bitwise_and_both_backends_open_alike(
 
 
 @pytest.mark.slow  # the quick tier's MPI run is tests/test_mpi.py's
+@pytest.mark.process
+@pytest.mark.mpi
 def test_a_basin_under_mpirun_equals_the_serial_one(basin, tmp_path):
     whole, _ = basin
     assert_mpirun_store_equals(BASIN, tmp_path, whole)
@@ -193,6 +195,7 @@ def test_a_bad_basin_job_is_refused_naming_the_key(change, message):
         Job.from_dict(data)
 
 
+@pytest.mark.process
 def test_the_basin_figure_and_its_refusals(basin, tmp_path):
     path, _ = basin
     out = plot_store(path, output=tmp_path / "basin.png")

@@ -17,6 +17,7 @@ def campar(*args):
     return subprocess.run([*CAMPAR, *args], capture_output=True, text=True, timeout=300)
 
 
+@pytest.mark.process
 def test_point_json_has_the_documented_keys_and_the_reference_cells_values():
     case = reference_case(112)  # ω = 3.15, μkn = 0.91: a 2-2 with the clamp active
     expected = case["expected"]
@@ -53,6 +54,7 @@ def test_point_json_has_the_documented_keys_and_the_reference_cells_values():
     assert 0 < abs(complex(re1, im1) * complex(re2, im2)) <= bound
 
 
+@pytest.mark.process
 def test_point_summary_is_human_readable():
     case = reference_case(102)  # ω = 1, the paper's base values: 1-1
     out = campar("point", *case_arguments(case))
@@ -74,6 +76,7 @@ def test_point_summary_is_human_readable():
         (["--omega", "1", "--revolutions", "0"], "--revolutions"),
     ],
 )
+@pytest.mark.process
 def test_bad_input_exits_2_naming_the_parameter(args, needle):
     out = campar("point", *args)
     assert out.returncode == 2
@@ -82,6 +85,7 @@ def test_bad_input_exits_2_naming_the_parameter(args, needle):
 
 
 @pytest.mark.parametrize("preset", [None, "3"])
+@pytest.mark.process
 def test_the_campar_process_runs_one_blas_thread_unless_told_otherwise(preset):
     """OpenBLAS's idle pools spin beside the kernel's threads (campar.cli): the command's
     process starts one BLAS thread, or what the caller's OPENBLAS_NUM_THREADS says."""
@@ -110,6 +114,7 @@ def test_the_campar_process_runs_one_blas_thread_unless_told_otherwise(preset):
     assert (int(threads) == 1) == (preset is None)
 
 
+@pytest.mark.process
 def test_the_readme_tour_shows_what_campar_point_prints():
     """The README's first example is this kernel's output, character for character (it
     went stale once: 209 steps in the README where the DOP853 kernel takes 233)."""
@@ -127,6 +132,7 @@ def test_the_readme_tour_shows_what_campar_point_prints():
     assert out.stdout.splitlines() == shown
 
 
+@pytest.mark.process
 def test_the_program_spares_its_exit_the_collector_but_a_call_from_python_does_not():
     """`campar …` freezes the garbage collector once its work is over (its exit would
     otherwise walk everything numba built: ~0.5 s after a cold compile, ~0.1 s warm);

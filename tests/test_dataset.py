@@ -196,6 +196,7 @@ def netcdf_dump() -> str | None:
     return shutil.which("ncdump")
 
 
+@pytest.mark.process
 def test_netcdf_tools_read_the_hdf5_store(stores):
     ncdump = netcdf_dump()
     if ncdump is None:

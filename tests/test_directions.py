@@ -87,6 +87,7 @@ def test_tiles_of_a_both_job_run_every_row_range_down_then_up():
 
 
 @pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+@pytest.mark.process
 def test_a_both_store_is_the_down_and_the_up_store_bit_for_bit(tmp_path, suffix):
     paths = {d: tmp_path / f"{d}{suffix}" for d in ("both", "down", "up")}
     for direction, path in paths.items():
@@ -209,6 +210,7 @@ def damage_chunk(path, tile) -> None:
 
 
 @pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+@pytest.mark.process
 def test_a_damaged_up_tile_is_found_and_recomputed_alone(tmp_path, suffix):
     job = job_of("both")
     path = tmp_path / f"both{suffix}"
@@ -250,6 +252,7 @@ def test_journaled_tiles_of_both_directions_read_in_place_before_a_checkpoint(tm
 @pytest.mark.slow
 @pytest.mark.mpi
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
+@pytest.mark.process
 def test_a_both_map_under_mpirun_equals_the_serial_one(tmp_path):
     data = merge(GRID, {"name": "mpi", "chains": {"direction": "both", "start": "continue"}})
     for suffix in (".zarr", ".h5"):
@@ -324,6 +327,7 @@ def test_the_tolerance_is_the_cycles_own_accuracy():
 # -- figures -------------------------------------------------------------------------------
 
 
+@pytest.mark.process
 def test_plot_draws_hysteresis_and_either_direction(tmp_path):
     both, down = tmp_path / "both.zarr", tmp_path / "down.zarr"
     runner.run_job(job_of("both"), both)

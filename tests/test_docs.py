@@ -52,6 +52,7 @@ def example_dir(tmp_path_factory):
 
 
 @pytest.mark.parametrize("dotted", api_objects())
+@pytest.mark.process
 def test_every_api_example_runs_and_prints_what_it_shows(dotted, example_dir, monkeypatch):
     obj = resolve(dotted)
     assert re.search(r"\n\s*Examples\n\s*-{8}\n", obj.__doc__ or ""), f"{dotted}: no Examples"
@@ -147,6 +148,7 @@ def shown_outputs():
 
 
 @pytest.mark.parametrize(("page", "command", "shown"), shown_outputs(), ids=str)
+@pytest.mark.process
 def test_a_command_shown_with_its_output_prints_it(page, command, shown):
     out = subprocess.run(
         [*CAMPAR, *shlex.split(command)[1:]], text=True, capture_output=True, timeout=300
@@ -185,6 +187,7 @@ def test_the_version_follows_the_changelog():
 
 
 @pytest.mark.slow
+@pytest.mark.process
 def test_the_site_builds_without_a_warning(tmp_path):
     sphinx = Path(sys.executable).parent / "sphinx-build"
     run = subprocess.run(
@@ -197,6 +200,7 @@ def test_the_site_builds_without_a_warning(tmp_path):
     assert run.returncode == 0, run.stderr[-5000:]
 
 
+@pytest.mark.process
 def test_the_readme_tour_runs_as_shown(example_dir):
     """The tour after its first command (shown with its output above): the map exists (the
     fixture ran `campar run jobs/smoke.yaml` there), its plot is drawn, and the Python line

@@ -85,6 +85,7 @@ def test_overwrite_through_a_link_replaces_the_target_and_keeps_the_link(tmp_pat
 
 
 @pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+@pytest.mark.process
 def test_a_full_disk_is_one_error_74_then_a_resume_completes_the_same_store(tmp_path, suffix):
     disk = tmp_path / "disk"
     job = make_job(sweep__omega__points=200, tiles__rows=1)  # tiles of ~60 kB
@@ -104,6 +105,7 @@ def test_a_full_disk_is_one_error_74_then_a_resume_completes_the_same_store(tmp_
         assert_synthetic(path, job)
 
 
+@pytest.mark.process
 def test_hdf5_never_meets_a_full_disk_inside_the_library(tmp_path):
     """Even if the free-space check is fooled, HDF5 does not write into a full disk: the
     blocks are reserved first (measured before: thousands of HDF5 errors, then a crash)."""
@@ -128,6 +130,7 @@ def test_hdf5_never_meets_a_full_disk_inside_the_library(tmp_path):
         assert leftovers(disk) == []
 
 
+@pytest.mark.process
 def test_a_read_only_store_path_is_one_line_74_before_any_computation(tmp_path):
     folder = tmp_path / "ro"
     with small_disk(folder, 64):
@@ -223,6 +226,7 @@ def test_an_empty_lock_file_is_refused_naming_the_file_not_pid_none(tmp_path):
     assert "None" not in str(err.value)
 
 
+@pytest.mark.process
 def test_lock_files_a_killed_run_was_writing_are_removed(tmp_path):
     path = tmp_path / "s.zarr"
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
@@ -255,6 +259,7 @@ def test_a_signal_before_the_start_is_one_interrupted_and_after_the_end_nothing(
 
 
 @pytest.mark.parametrize("delay", [0.15, pytest.param(0.6, marks=pytest.mark.slow)])
+@pytest.mark.process
 def test_campar_run_interrupted_early_says_so_in_one_line(write_job, delay):
     # from campar's first line on (before it, Python's own start-up, which takes longer
     # than a fixed delay on a loaded machine, handles a SIGINT with its own traceback)
@@ -374,6 +379,8 @@ def test_a_store_of_synthetic_tiles_resumes_after_a_kill_inside_a_write(tmp_path
 
 @pytest.mark.slow  # mpirun: ~3 s
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
+@pytest.mark.process
+@pytest.mark.mpi
 def test_under_mpirun_a_bad_job_or_store_is_reported_once(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text(
@@ -397,6 +404,7 @@ def test_under_mpirun_a_bad_job_or_store_is_reported_once(tmp_path):
 
 
 @pytest.mark.slow  # builds stores of 2.25 and 9 million cells, ~20 s
+@pytest.mark.process
 def test_status_and_verify_memory_does_not_grow_with_the_grid(tmp_path):
     """Both read the store tile by tile: 4× the cells (some 500 MB more of arrays), about the
     same memory. Measured here (peak RSS, MB): 500² 87, 1500² 136, 3000² 148, 4000² 167 —

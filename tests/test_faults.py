@@ -92,6 +92,7 @@ def kill_writers(path: Path, kills: int, seed: int, span: float = 0.6) -> int:
 
 
 @pytest.mark.parametrize("suffix", BACKENDS)
+@pytest.mark.process
 def test_writers_killed_at_random_moments_lose_no_committed_tile(tmp_path, suffix):
     path = tmp_path / f"k{suffix}"
     kill_writers(path, 1, seed=len(suffix))
@@ -266,6 +267,8 @@ def interrupt_until_complete(job_file, job, mpi: bool, rng, how: str, timing) ->
 @pytest.mark.parametrize("mpi", [False, True], ids=["serial", "mpi"])
 @pytest.mark.parametrize("suffix", BACKENDS)
 @pytest.mark.parametrize("how", ["kill", "signal"])
+@pytest.mark.process
+@pytest.mark.mpi
 def test_runs_interrupted_at_random_moments_resume_bitwise_identical(
     write_job, tmp_path, suffix, mpi, how
 ):
@@ -293,6 +296,8 @@ def test_runs_interrupted_at_random_moments_resume_bitwise_identical(
     # under mpirun a Zarr store's worker writes its own tiles: its full disk ends the run too
     [*((suffix, False) for suffix in BACKENDS), (".zarr", True)],
 )
+@pytest.mark.process
+@pytest.mark.mpi
 def test_runs_on_a_full_disk_fail_in_one_line_and_resume_identical(
     write_job, tmp_path, suffix, mpi
 ):

@@ -187,6 +187,7 @@ def test_line_command_draws_and_saves(tmp_path, capsys):
     assert "80 cells in" in capsys.readouterr().out
 
 
+@pytest.mark.process
 def test_point_command_writes_a_png(tmp_path):
     out = tmp_path / "orbit.png"
     done = subprocess.run(
@@ -211,6 +212,7 @@ def test_point_command_writes_a_png(tmp_path):
     assert out.read_bytes().startswith(PNG)
 
 
+@pytest.mark.process
 def test_importing_the_views_stays_light():
     code = (
         "import sys, campar.views.plot, campar.views.plot.orbit; "

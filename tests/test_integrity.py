@@ -184,6 +184,7 @@ def test_a_damaged_journal_entry_is_set_aside_and_its_tile_recomputed(tmp_path, 
     assert_synthetic(path, job)
 
 
+@pytest.mark.process
 def test_metadata_that_disagrees_with_the_arrays_is_reported_not_an_index_error(tmp_path):
     path = tmp_path / "s.zarr"
     synthetic_store(path)
@@ -198,6 +199,7 @@ def test_metadata_that_disagrees_with_the_arrays_is_reported_not_an_index_error(
     assert "Traceback" not in status.stderr and len(status.stderr.splitlines()) == 1
 
 
+@pytest.mark.process
 def test_status_reports_damage_and_verify_lists_it_then_run_repairs(write_job, caplog):
     """The issue's recipe: chunks deleted from a finished store (the CLI reads it)."""
     _, job = write_job(tiles={"rows": 2})

@@ -44,6 +44,7 @@ def tongue(tmp_path_factory):
     return path
 
 
+@pytest.mark.process
 def test_seeds_are_the_maps_pd_edges_grouped_by_curve(tongue):
     tasks = store_seeds(tongue, ("PD",))
     edges = store_boundaries(tongue).of_type("PD")
@@ -52,6 +53,7 @@ def test_seeds_are_the_maps_pd_edges_grouped_by_curve(tongue):
     assert all(seed.type == "PD" and seed.axis in ("omega", "mu_kn") for t in tasks for seed in t)
 
 
+@pytest.mark.process
 def test_the_pd_curves_are_made_of_pd_points(tongue):
     """The window cuts the tongue's PD curve above its bottom (μkn ≈ 0.843): two curves of
     1-cycles, the tongue's two sides. At points along each the 1-cycle, solved for afresh
@@ -69,6 +71,7 @@ def test_the_pd_curves_are_made_of_pd_points(tongue):
             assert abs(orbit.multipliers[0] + 1.0) < 1e-7, (omega, mu_kn, orbit.multipliers)
 
 
+@pytest.mark.process
 def test_the_maps_pd_edges_lie_on_the_curve(tongue):
     """Every PD-typed edge of the map within a cell of the continued PD curve; of the
     curve's stretch inside the periodic map, most beside PD edges. On this coarse grid
@@ -88,6 +91,7 @@ def test_the_maps_pd_edges_lie_on_the_curve(tongue):
     assert a.length_near >= 0.75, a
 
 
+@pytest.mark.process
 def test_the_curves_store_is_verified_and_resumes_to_the_same_bytes(tongue):
     curves = tongue.with_name("tongue-curves.zarr")
     assert run_campar("verify", curves).returncode == 0
@@ -107,6 +111,7 @@ def test_the_curves_store_is_verified_and_resumes_to_the_same_bytes(tongue):
 
 @pytest.mark.mpi
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
+@pytest.mark.process
 def test_curves_under_mpirun_equal_the_serial_ones(tongue, tmp_path):
     out = subprocess.run(
         [
@@ -135,6 +140,7 @@ def test_curves_under_mpirun_equal_the_serial_ones(tongue, tmp_path):
         assert np.array_equal(serial[name], parallel[name], equal_nan=True), name
 
 
+@pytest.mark.process
 def test_bad_curves_requests_are_one_line(tongue, tmp_path):
     data = curves_job(tongue, ("PD",), points=50, store=tmp_path / "c.zarr").to_dict()
     data.pop("curves")

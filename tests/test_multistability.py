@@ -194,6 +194,7 @@ def test_campar_open_offers_the_census_with_cf_attributes(census, tmp_path):
         assert (has.sum(axis=-1) == stored_count).all()
 
 
+@pytest.mark.process
 def test_plot_multistability_draws_the_counts_and_refuses_a_store_without(census, tmp_path):
     path, _ = census
     out = plot_store(path, "multistability", tmp_path / "m.png")
@@ -305,6 +306,7 @@ def test_a_both_direction_map_has_a_census_per_direction_equal_to_each_one(tmp_p
 @pytest.mark.slow
 @pytest.mark.mpi
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
+@pytest.mark.process
 def test_a_census_map_under_mpirun_equals_the_serial_one(census, tmp_path):
     serial, _ = census
     assert_mpirun_store_equals(GRID, tmp_path, serial)

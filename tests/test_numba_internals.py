@@ -80,6 +80,7 @@ COLD_POINT = textwrap.dedent("""
 
 
 @pytest.mark.slow
+@pytest.mark.process
 def test_a_cold_compile_without_the_internals_gives_the_same_cell(tmp_path):
     """A numba whose cache campar cannot ask: a cold ``simulate_point`` forks no helper,
     compiles everything itself, and gives the cell this process gives."""

@@ -234,6 +234,7 @@ def test_progress_line_counts_rate_and_eta():
 # -- the command line, in subprocesses --------------------------------------------------
 
 
+@pytest.mark.process
 def test_run_then_status_reports_tiles_cells_and_runs(write_job):
     path, job = write_job()
     done = run_campar("run", path)
@@ -248,6 +249,7 @@ def test_run_then_status_reports_tiles_cells_and_runs(write_job):
     assert f"periodic {periodic}" in status.stdout
 
 
+@pytest.mark.process
 def test_status_of_a_missing_store_exits_3(tmp_path):
     result = run_campar("status", tmp_path / "none.zarr")
     assert result.returncode == 3 and "no store" in result.stderr
@@ -255,6 +257,7 @@ def test_status_of_a_missing_store_exits_3(tmp_path):
 
 @pytest.mark.slow  # ~4 s each; the store suite kills writers quickly, per backend
 @pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+@pytest.mark.process
 def test_sigkill_mid_run_then_resume_gives_the_same_map(write_job, tmp_path, suffix):
     path, job = write_job(slow=True, store=str(tmp_path / f"slow{suffix}"))
     proc = start_campar("run", path)
@@ -271,6 +274,7 @@ def test_sigkill_mid_run_then_resume_gives_the_same_map(write_job, tmp_path, suf
         assert reader.attrs["runs"][-1]["tiles"] == 6 - sum(done)
 
 
+@pytest.mark.process
 def test_sigterm_exits_75_and_the_same_command_resumes(write_job):
     path, job = write_job(slow=True)
     proc = start_campar("run", path)
@@ -288,6 +292,7 @@ def test_sigterm_exits_75_and_the_same_command_resumes(write_job):
 
 
 @pytest.mark.slow  # ~4 s; the store suite checks the lock of another process in 0.5 s
+@pytest.mark.process
 def test_a_concurrent_run_is_refused_with_host_and_pid(write_job):
     # 24 tiles: the first run is still busy when the second has started (with 6 it once
     # finished them all first, on a loaded machine); SIGTERM ends it either way
@@ -303,6 +308,7 @@ def test_a_concurrent_run_is_refused_with_host_and_pid(write_job):
         first.communicate(timeout=60)
 
 
+@pytest.mark.process
 def test_a_store_of_another_job_is_refused_untouched_unless_overwrite(write_job):
     path, job = write_job()
     assert run_campar("run", path).returncode == 0
@@ -323,6 +329,7 @@ def test_a_store_of_another_job_is_refused_untouched_unless_overwrite(write_job)
 
 @pytest.mark.slow  # six runs killed at random moments, ~5 s per backend
 @pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+@pytest.mark.process
 def test_repeated_sigkills_at_random_moments_then_resume_give_the_same_map(
     write_job, tmp_path, suffix
 ):

@@ -103,6 +103,7 @@ def test_a_row_detaching_everywhere_has_no_separation_speed_on_its_grid():
     assert np.isnan(cells["separation_omega"][0]).all()
 
 
+@pytest.mark.process
 def test_campar_open_gives_one_separation_speed_a_row(tmp_path):
     data = {
         **ROW,

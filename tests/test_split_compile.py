@@ -68,6 +68,7 @@ def cold_point(mode: str, cache) -> dict:
 
 
 @pytest.mark.slow
+@pytest.mark.process
 def test_split_compile_loads_the_helpers_revolution_and_matches_a_serial_compile(tmp_path):
     split = cold_point("split", tmp_path / "split")
     serial = cold_point("serial", tmp_path / "serial")
@@ -162,6 +163,7 @@ def in_cache_run(cache, mode: str) -> list[str]:
     return run.stdout.split()
 
 
+@pytest.mark.process
 def test_in_cache_reads_the_cache_numba_reads(tmp_path):
     """The helper forks where the job's revolution is missing from the cache numba will
     read (``numba_internals.cache_indexes``, ``split_compile.cold_for``): under
@@ -171,6 +173,7 @@ def test_in_cache_reads_the_cache_numba_reads(tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.process
 def test_in_cache_finds_what_was_compiled(tmp_path):
     assert in_cache_run(tmp_path / "cache", "compile") == ["False", "True"]
 

@@ -52,6 +52,7 @@ def assert_one_line_stop(code: int, err: str, expected: tuple[int, ...]) -> None
 
 @pytest.mark.parametrize("imported", ["argparse", "numpy"])
 @pytest.mark.parametrize("signame,code", [("SIGINT", 130), ("SIGTERM", 143), ("SIGUSR1", 75)])
+@pytest.mark.process
 def test_a_signal_while_campar_imports_is_one_line(write_job, imported, signame, code):
     path, _ = write_job()
     env = {**subprocess_env(), "IMPORT": imported, "SIGNAL": signame}
@@ -67,6 +68,7 @@ def test_a_signal_while_campar_imports_is_one_line(write_job, imported, signame,
 
 
 @pytest.mark.mpi
+@pytest.mark.process
 def test_a_signal_while_one_rank_imports_stops_every_rank_together(write_job):
     """Under mpirun the ranks keep the signal until the run starts (a rank leaving MPI_Init
     alone would leave the other waiting for ever); then every rank stops: exit 130 for the
@@ -113,6 +115,7 @@ def assert_one_line_stop_or_done(code: int, err: str, store: Path, tiles: int) -
     [("guarded", 0.0), ("guarded", 0.15), ("guarded", 0.4), ("first tile", 0.0)],
     ids=["guarded", "guarded+0.15", "guarded+0.4", "first-tile"],
 )
+@pytest.mark.process
 def test_a_group_sigint_during_start_up_under_mpirun_is_one_line_no_crash(write_job, moment, after):
     """A terminal's Ctrl-C (to mpirun and both ranks) once both ranks run campar's first
     line, a moment later (imports, MPI start, the kernel, the store: where it lands depends
@@ -133,6 +136,7 @@ def test_a_group_sigint_during_start_up_under_mpirun_is_one_line_no_crash(write_
         assert outcome in ("running", "complete"), err
 
 
+@pytest.mark.process
 def test_the_program_guard_is_not_installed_by_importing_the_cli():
     code = (
         "import signal, campar.cli\n"
