@@ -51,3 +51,19 @@ def write_job(tmp_path):
         return path, Job.from_dict(data)
 
     return write
+
+
+@pytest.fixture(scope="session")
+def warm_numba_cache() -> None:
+    """The kernel compiled into the session's numba cache once, in this process, before a
+    test starts campar in a child: every child then loads it (about a second) instead of
+    compiling it (about 20 s), and children started together do not compile it each."""
+    from campar.sweep.tile import warm_up
+
+    warm_up()
+
+
+@pytest.fixture(autouse=True)
+def _warm_cache_for_children(request: pytest.FixtureRequest) -> None:
+    if request.node.get_closest_marker("process"):
+        request.getfixturevalue("warm_numba_cache")

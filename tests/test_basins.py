@@ -11,8 +11,9 @@ store; bad jobs are refused with a message naming the key.
 import numpy as np
 import pytest
 import xarray as xr
+from support.cli import call_campar
 from support.jobs import computed_store, merge, resume_after_interrupt
-from support.processes import assert_mpirun_store_equals, run_campar
+from support.processes import assert_mpirun_store_equals
 from support.stores import assert_same_store, stored
 
 import campar
@@ -195,14 +196,13 @@ def test_a_bad_basin_job_is_refused_naming_the_key(change, message):
         Job.from_dict(data)
 
 
-@pytest.mark.process
-def test_the_basin_figure_and_its_refusals(basin, tmp_path):
+def test_the_basin_figure_and_its_refusals(capsys, basin, tmp_path):
     path, _ = basin
     out = plot_store(path, output=tmp_path / "basin.png")
     assert out.stat().st_size > 10_000
     with pytest.raises(PlotError, match="basin store: it draws --what basin"):
         plot_store(path, "dc", output=tmp_path / "dc.png")
-    result = run_campar("plot", path, "--bifurcations", "-o", tmp_path / "b.png")
+    result = call_campar(capsys, "plot", path, "--bifurcations", "-o", tmp_path / "b.png")
     assert result.returncode != 0 and "basin store" in result.stderr
-    status = run_campar("status", path)
+    status = call_campar(capsys, "status", path)
     assert "6 ydot0 × 7 y0" in status.stdout

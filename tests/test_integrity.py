@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import zarr
+from support.cli import call_campar
 from support.damage import assert_synthetic, damage_file, finish, synthetic_store, zarr_chunks
 from support.jobs import assert_same_map
-from support.processes import run_campar
 from test_store import fake_tile, make_job
 
 import campar
@@ -184,8 +184,7 @@ def test_a_damaged_journal_entry_is_set_aside_and_its_tile_recomputed(tmp_path, 
     assert_synthetic(path, job)
 
 
-@pytest.mark.process
-def test_metadata_that_disagrees_with_the_arrays_is_reported_not_an_index_error(tmp_path):
+def test_metadata_that_disagrees_with_the_arrays_is_reported_not_an_index_error(capsys, tmp_path):
     path = tmp_path / "s.zarr"
     synthetic_store(path)
     group = zarr.open_group(path, mode="r+")
@@ -194,23 +193,22 @@ def test_metadata_that_disagrees_with_the_arrays_is_reported_not_an_index_error(
     group.attrs["job"] = json.dumps(stored)
     with pytest.raises(StoreDamaged, match="disagrees with itself.*hash.*array n has shape"):
         read_store(path)
-    status = run_campar("status", path)
+    status = call_campar(capsys, "status", path)
     assert status.returncode == StoreDamaged.exit_code, status.stderr
     assert "Traceback" not in status.stderr and len(status.stderr.splitlines()) == 1
 
 
-@pytest.mark.process
-def test_status_reports_damage_and_verify_lists_it_then_run_repairs(write_job, caplog):
+def test_status_reports_damage_and_verify_lists_it_then_run_repairs(capsys, write_job, caplog):
     """The issue's recipe: chunks deleted from a finished store (the CLI reads it)."""
     _, job = write_job(tiles={"rows": 2})
     runner.run_job(job)
     path = Path(job.store)
     for name, index in (("n", 1), ("dc", 2)):
         (path / name / f"c.{index}.0").unlink()  # rm S.zarr/n/c.1.0 …
-    status = run_campar("status", path)
+    status = call_campar(capsys, "status", path)
     assert status.returncode == 0, status.stderr
     assert "tiles   1/3 done, 2 damaged (tiles 1, 2" in status.stdout
-    verify = run_campar("verify", path)
+    verify = call_campar(capsys, "verify", path)
     assert verify.returncode == StoreDamaged.exit_code
     assert "tile 1: checksum mismatch" in verify.stdout and "tile 2: checksum" in verify.stdout
     assert runner.run_job(job).outcome == "complete"

@@ -13,8 +13,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support.cli import call_campar
 from support.jobs import computed_store, merge, resume_after_interrupt
-from support.processes import MPIRUN, assert_mpirun_store_equals, run_campar
+from support.processes import MPIRUN, assert_mpirun_store_equals
 from support.stores import assert_same_store, stored
 
 import campar
@@ -194,8 +195,7 @@ def test_campar_open_offers_the_census_with_cf_attributes(census, tmp_path):
         assert (has.sum(axis=-1) == stored_count).all()
 
 
-@pytest.mark.process
-def test_plot_multistability_draws_the_counts_and_refuses_a_store_without(census, tmp_path):
+def test_plot_multistability_draws_the_counts_and_refuses_a_store_without(capsys, census, tmp_path):
     path, _ = census
     out = plot_store(path, "multistability", tmp_path / "m.png")
     assert out.stat().st_size > 0
@@ -203,7 +203,7 @@ def test_plot_multistability_draws_the_counts_and_refuses_a_store_without(census
     runner.run_job(plain, tmp_path / "plain.zarr")
     with pytest.raises(PlotError, match="holds no n_attractors.*attractors key"):
         plot_store(tmp_path / "plain.zarr", "multistability", tmp_path / "p.png")
-    result = run_campar("plot", path, "--what", "multistability", "-o", tmp_path / "c.png")
+    result = call_campar(capsys, "plot", path, "--what", "multistability", "-o", tmp_path / "c.png")
     assert result.returncode == 0, result.stderr
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support.cli import call_campar
 from support.jobs import assert_same_map, reference_arrays
 from support.processes import kill_tree, run_campar, start_campar, wait_for_tiles
 
@@ -234,12 +235,11 @@ def test_progress_line_counts_rate_and_eta():
 # -- the command line, in subprocesses --------------------------------------------------
 
 
-@pytest.mark.process
-def test_run_then_status_reports_tiles_cells_and_runs(write_job):
+def test_run_then_status_reports_tiles_cells_and_runs(capsys, write_job):
     path, job = write_job()
-    done = run_campar("run", path)
+    done = call_campar(capsys, "run", path)
     assert done.returncode == 0, done.stderr
-    status = run_campar("status", job.store)
+    status = call_campar(capsys, "status", job.store)
     assert status.returncode == 0, status.stderr
     assert "tiles   6/6 done" in status.stdout
     assert "cells   72/72 done, 0 failed" in status.stdout
@@ -249,9 +249,8 @@ def test_run_then_status_reports_tiles_cells_and_runs(write_job):
     assert f"periodic {periodic}" in status.stdout
 
 
-@pytest.mark.process
-def test_status_of_a_missing_store_exits_3(tmp_path):
-    result = run_campar("status", tmp_path / "none.zarr")
+def test_status_of_a_missing_store_exits_3(capsys, tmp_path):
+    result = call_campar(capsys, "status", tmp_path / "none.zarr")
     assert result.returncode == 3 and "no store" in result.stderr
 
 
@@ -308,20 +307,19 @@ def test_a_concurrent_run_is_refused_with_host_and_pid(write_job):
         first.communicate(timeout=60)
 
 
-@pytest.mark.process
-def test_a_store_of_another_job_is_refused_untouched_unless_overwrite(write_job):
+def test_a_store_of_another_job_is_refused_untouched_unless_overwrite(capsys, write_job):
     path, job = write_job()
-    assert run_campar("run", path).returncode == 0
+    assert call_campar(capsys, "run", path).returncode == 0
     with read_store(job.store) as reader:
         before = reader.read("n").copy()
     changed, _ = write_job(integrator={"rtol": 1e-9}, store=job.store)
-    refused = run_campar("run", changed)
+    refused = call_campar(capsys, "run", changed)
     assert refused.returncode == 3
     assert "integrator.rtol: 1e-07 in the store, 1e-09 in the job" in refused.stderr
     with read_store(job.store) as reader:
         np.testing.assert_array_equal(reader.read("n"), before)
         assert reader.attrs["job"]["integrator"]["rtol"] == 1e-7
-    replaced = run_campar("run", changed, "--overwrite")
+    replaced = call_campar(capsys, "run", changed, "--overwrite")
     assert replaced.returncode == 0, replaced.stderr
     with read_store(job.store) as reader:
         assert reader.attrs["job"]["integrator"]["rtol"] == 1e-9
