@@ -2,6 +2,7 @@
 of the API reference runs and prints what it shows, every `campar` command in README.md
 and docs/ is one the CLI accepts, and the commands shown with their output print it."""
 
+import contextlib
 import doctest
 import importlib
 import os
@@ -13,7 +14,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from support.processes import CAMPAR
+from support.cli import call_campar
 
 from campar.cli import build_parser
 
@@ -44,15 +45,13 @@ def example_dir(tmp_path_factory):
     """A working directory as the examples assume: the jobs, and the smoke map computed."""
     where = tmp_path_factory.mktemp("examples")
     (where / "jobs").symlink_to(ROOT / "jobs")
-    run = subprocess.run(
-        [*CAMPAR, "run", "jobs/smoke.yaml"], cwd=where, text=True, capture_output=True, timeout=600
-    )
+    with contextlib.chdir(where):
+        run = call_campar(None, "run", "jobs/smoke.yaml")
     assert run.returncode == 0, run.stderr
     return where
 
 
 @pytest.mark.parametrize("dotted", api_objects())
-@pytest.mark.process
 def test_every_api_example_runs_and_prints_what_it_shows(dotted, example_dir, monkeypatch):
     obj = resolve(dotted)
     assert re.search(r"\n\s*Examples\n\s*-{8}\n", obj.__doc__ or ""), f"{dotted}: no Examples"
@@ -148,11 +147,8 @@ def shown_outputs():
 
 
 @pytest.mark.parametrize(("page", "command", "shown"), shown_outputs(), ids=str)
-@pytest.mark.process
-def test_a_command_shown_with_its_output_prints_it(page, command, shown):
-    out = subprocess.run(
-        [*CAMPAR, *shlex.split(command)[1:]], text=True, capture_output=True, timeout=300
-    )
+def test_a_command_shown_with_its_output_prints_it(capsys, page, command, shown):
+    out = call_campar(capsys, *shlex.split(command)[1:])
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines() == shown, page
 

@@ -7,7 +7,8 @@ import subprocess
 
 import numpy as np
 import pytest
-from support.processes import CAMPAR, MPIRUN, run_campar, subprocess_env
+from support.cli import call_campar
+from support.processes import CAMPAR, MPIRUN, subprocess_env
 from support.stores import stored
 
 from campar.continuation.orbit import find_cycle
@@ -39,12 +40,11 @@ def tongue(tmp_path_factory):
     where = tmp_path_factory.mktemp("tongue")
     path = where / "tongue.zarr"
     run_job(Job.from_dict(TONGUE), path)
-    out = run_campar("curves", path, "--types", "PD", "--points", "200", timeout=900)
+    out = call_campar(None, "curves", path, "--types", "PD", "--points", "200")
     assert out.returncode == 0, out.stderr
     return path
 
 
-@pytest.mark.process
 def test_seeds_are_the_maps_pd_edges_grouped_by_curve(tongue):
     tasks = store_seeds(tongue, ("PD",))
     edges = store_boundaries(tongue).of_type("PD")
@@ -53,7 +53,6 @@ def test_seeds_are_the_maps_pd_edges_grouped_by_curve(tongue):
     assert all(seed.type == "PD" and seed.axis in ("omega", "mu_kn") for t in tasks for seed in t)
 
 
-@pytest.mark.process
 def test_the_pd_curves_are_made_of_pd_points(tongue):
     """The window cuts the tongue's PD curve above its bottom (μkn ≈ 0.843): two curves of
     1-cycles, the tongue's two sides. At points along each the 1-cycle, solved for afresh
@@ -71,7 +70,6 @@ def test_the_pd_curves_are_made_of_pd_points(tongue):
             assert abs(orbit.multipliers[0] + 1.0) < 1e-7, (omega, mu_kn, orbit.multipliers)
 
 
-@pytest.mark.process
 def test_the_maps_pd_edges_lie_on_the_curve(tongue):
     """Every PD-typed edge of the map within a cell of the continued PD curve; of the
     curve's stretch inside the periodic map, most beside PD edges. On this coarse grid
@@ -91,20 +89,21 @@ def test_the_maps_pd_edges_lie_on_the_curve(tongue):
     assert a.length_near >= 0.75, a
 
 
-@pytest.mark.process
-def test_the_curves_store_is_verified_and_resumes_to_the_same_bytes(tongue):
+def test_the_curves_store_is_verified_and_resumes_to_the_same_bytes(capsys, tongue):
     curves = tongue.with_name("tongue-curves.zarr")
-    assert run_campar("verify", curves).returncode == 0
-    status = run_campar("status", curves)
+    assert call_campar(capsys, "verify", curves).returncode == 0
+    status = call_campar(capsys, "status", curves)
     assert "PD of 1-cycles" in status.stdout
     before = stored(curves)
-    again = run_campar("curves", tongue, "--types", "PD", "--points", "200", "--json")
+    again = call_campar(capsys, "curves", tongue, "--types", "PD", "--points", "200", "--json")
     assert again.returncode == 0, again.stderr
     assert json.loads(again.stdout)["curves"][0]["type"] == "PD"
     after = stored(curves)
     assert all(np.array_equal(before[k], after[k], equal_nan=True) for k in before)
     # another map's seeds make another job: its store is refused, nothing overwritten
-    other = run_campar("curves", tongue, "--types", "PD", "--points", "100", "--store", curves)
+    other = call_campar(
+        capsys, "curves", tongue, "--types", "PD", "--points", "100", "--store", curves
+    )
     assert other.returncode == 3 and "different job" in other.stderr, other.stderr
     assert all(np.array_equal(before[k], stored(curves)[k], equal_nan=True) for k in before)
 
@@ -140,8 +139,7 @@ def test_curves_under_mpirun_equal_the_serial_ones(tongue, tmp_path):
         assert np.array_equal(serial[name], parallel[name], equal_nan=True), name
 
 
-@pytest.mark.process
-def test_bad_curves_requests_are_one_line(tongue, tmp_path):
+def test_bad_curves_requests_are_one_line(capsys, tongue, tmp_path):
     data = curves_job(tongue, ("PD",), points=50, store=tmp_path / "c.zarr").to_dict()
     data.pop("curves")
     with pytest.raises(JobError, match="is a curves job"):
@@ -150,7 +148,7 @@ def test_bad_curves_requests_are_one_line(tongue, tmp_path):
         (["--types", "XX"], "--types"),
         (["--points", "1"], "--points"),
     ):
-        out = run_campar("curves", tongue, *argv)
+        out = call_campar(capsys, "curves", tongue, *argv)
         assert out.returncode == 2 and message in out.stderr, out.stderr
         assert len(out.stderr.strip().splitlines()) == 1
     basin = {
@@ -162,5 +160,5 @@ def test_bad_curves_requests_are_one_line(tongue, tmp_path):
         "fixed": {"omega": 3.0},
     }
     run_job(Job.from_dict(basin), tmp_path / "basin.zarr")
-    out = run_campar("curves", tmp_path / "basin.zarr")
+    out = call_campar(capsys, "curves", tmp_path / "basin.zarr")
     assert out.returncode == 2 and "basin store" in out.stderr
