@@ -184,6 +184,7 @@ def test_the_version_follows_the_changelog():
 
 @pytest.mark.slow
 @pytest.mark.process
+@pytest.mark.timeout(900)  # sphinx builds the whole site, every API page
 def test_the_site_builds_without_a_warning(tmp_path):
     sphinx = Path(sys.executable).parent / "sphinx-build"
     run = subprocess.run(

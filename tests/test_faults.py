@@ -269,6 +269,7 @@ def interrupt_until_complete(job_file, job, mpi: bool, rng, how: str, timing) ->
 @pytest.mark.parametrize("how", ["kill", "signal"])
 @pytest.mark.process
 @pytest.mark.mpi
+@pytest.mark.timeout(1200)  # runs again and again until one completes (up to 60)
 def test_runs_interrupted_at_random_moments_resume_bitwise_identical(
     write_job, tmp_path, suffix, mpi, how
 ):

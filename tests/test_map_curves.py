@@ -111,6 +111,7 @@ def test_the_curves_store_is_verified_and_resumes_to_the_same_bytes(capsys, tong
 @pytest.mark.mpi
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
 @pytest.mark.process
+@pytest.mark.timeout(900)  # 200-point curves on two ranks, each started cold
 def test_curves_under_mpirun_equal_the_serial_ones(tongue, tmp_path):
     out = subprocess.run(
         [

@@ -281,6 +281,7 @@ COLD_RUN = textwrap.dedent("""
 @slow
 @pytest.mark.process
 @pytest.mark.mpi
+@pytest.mark.timeout(600)  # a cold compile on two ranks: minutes on a loaded machine
 def test_ranks_of_a_node_split_a_cold_compile_and_load_each_others_half(write_job, tmp_path):
     path, job = write_job()
     env = {**subprocess_env(), "NUMBA_CACHE_DIR": str(tmp_path / "empty cache")}
