@@ -126,3 +126,12 @@ def test_ci_runs_exactly_the_readmes_test_command():
     ]
     assert command in (ROOT / ".ci" / "run").read_text().splitlines()
     assert "--all-tiers" in command and "--durations=20" in command
+
+
+@pytest.mark.parametrize("load, expected", [(0.5, 1.0), (2.0, 1.0), (6.0, 3.0), (100.0, 10.0)])
+def test_the_timeout_stretches_with_the_load_per_core(monkeypatch, load, expected):
+    from support import tiers
+
+    monkeypatch.setattr(tiers.os, "getloadavg", lambda: (load, load, load))
+    monkeypatch.setattr(tiers.os, "cpu_count", lambda: 2)
+    assert tiers.stretch() == expected

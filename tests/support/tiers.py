@@ -24,6 +24,11 @@ lock that every other test takes shared, so its ranks get the machine's cores in
 sharing them with another worker's test (a pending exclusive request stops new shared
 ones, so the MPI tests are not starved).
 
+Every test has 120 s (pytest-timeout; longer where a test says why with
+``@pytest.mark.timeout``). The timeout catches a hang, not a slow machine: on a machine
+whose load average exceeds its cores the timer is stretched by load / cores (at most 10×),
+measured as the test starts.
+
 At the end, one line gives each tier's test count and summed test time.
 """
 
@@ -272,3 +277,24 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         "terminalreporter"
     ):
         config.pluginmanager.register(TierTimes(), "campar-tier-times")
+
+
+# A hang detector, not a speed check: what a test does in 120 s on free cores takes
+# load / cores times as long when the cores are shared.
+MAX_STRETCH = 10.0
+
+
+def stretch() -> float:
+    """How much longer than on free cores a test takes now: the 1-minute load average per
+    core, between 1 and MAX_STRETCH."""
+    return min(MAX_STRETCH, max(1.0, os.getloadavg()[0] / (os.cpu_count() or 1)))
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_timeout_set_timer(item: pytest.Item, settings):
+    timeout, factor = item.config.pluginmanager.get_plugin("timeout"), stretch()
+    if timeout is None or factor == 1.0:
+        return None  # pytest-timeout sets the timer as configured
+    return timeout.pytest_timeout_set_timer(
+        item, settings._replace(timeout=settings.timeout * factor)
+    )
