@@ -46,6 +46,7 @@ def test_every_benchmark_is_registered_and_listed(capsys):
 # modules have quick tests of their own below and in test_stress.py.
 MARKS = {
     "precision": [pytest.mark.slow],
+    "peers": [pytest.mark.slow],
     "outputs": [pytest.mark.slow],
     "stress": [pytest.mark.slow, pytest.mark.process],
     "map": [pytest.mark.slow, pytest.mark.process],

@@ -87,7 +87,7 @@ def test_tiles_of_a_both_job_run_every_row_range_down_then_up():
 # -- the store: bitwise the two one-direction jobs, on both backends ----------------------
 
 
-@pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+@pytest.mark.parametrize("suffix", [".zarr", pytest.param(".h5", marks=pytest.mark.slow)])
 def test_a_both_store_is_the_down_and_the_up_store_bit_for_bit(capsys, tmp_path, suffix):
     paths = {d: tmp_path / f"{d}{suffix}" for d in ("both", "down", "up")}
     for direction, path in paths.items():
