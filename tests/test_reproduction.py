@@ -114,7 +114,7 @@ def test_a_store_of_another_kernel_is_named_and_recomputed_on_request(stores, ca
     monkeypatch.setattr(campar.views.cell.StoredCell, "replay", changed)
     assert campar.cli.main([*argv, "--recompute"]) == 0
     out = capsys.readouterr().out
-    assert "computed with kernel 999 (the store's: 1); changed: dc:" in out
+    assert f"computed with kernel 999 (the store's: {written_by}); changed: dc:" in out
 
 
 def test_from_refuses_what_would_change_the_stored_model(stores, capsys):
