@@ -1,0 +1,266 @@
+"""One map cell computed again, and the worker process that computes it within a time limit.
+
+``cell_at(path, row, col)`` is the explorer's one way to a cell's motion: the store's job
+at that cell, started from the cell's stored final state (a point of its attractor), as
+``campar point`` simulates a cell — the same model, settings and label — with the
+multipliers and the steady orbit traced densely. The other actions of the cell panel
+(its attractors from K starts, its n-cycle by shooting) take the same cell's parameters.
+
+The computations run in one worker process (spawned, so the server's threads never share
+numba's state with it): a request that outlives its time limit ends the worker, the
+page is told, and the next request starts a fresh one.
+"""
+
+import math
+import multiprocessing
+import threading
+import time
+
+import numpy as np
+
+from ..errors import CamparError
+
+TRACE_POINTS = 4000  # samples of an orbit sent to the page (every k-th of the trace)
+CELL_SECONDS = 60.0  # default time limit of one computation
+
+
+def one_cell_job(path, row: int, col: int, layer: int = 0):
+    """The store's job reduced to its cell (row, col) started from the stored final state:
+    (job, stored cell arrays). StoreError when the cell has no verified stored result."""
+    from ..sweep.job import Job
+    from .source import stored_cell
+
+    job, arrays = stored_cell(path, row, col, layer)
+    y, v = (float(a) for a in arrays["state"])
+    if not (math.isfinite(y) and math.isfinite(v)):
+        raise CamparError(f"cell ({row}, {col}) failed in the map: no final state to start from")
+    data = job.to_dict()
+    x, s = float(job.first_values[col]), float(job.second_values[row])
+    data.update(
+        name=f"{job.name}-cell",
+        sweep={
+            job.first: {"from": x, "to": x, "points": 1},
+            job.second: {"from": s, "to": s, "points": 1},
+        },
+        initial={"y": y, "v": v},
+        outputs=sorted({*job.outputs, "label", "dc", "eps", "pn", "sections", "multipliers"}),
+        tiles={"rows": 1},
+        store=None,
+    )
+    data["chains"] = {**data["chains"], "direction": "down", "start": "rest"}
+    for key in ("attractors", "curves"):
+        data.pop(key, None)
+    return Job.from_dict(data, source=f"cell ({row}, {col}) of {path}"), arrays
+
+
+def cell_at(path, row: int, col: int, layer: int = 0):
+    """The PointResult (with its dense trace) of map cell (row, col) of the store ``path``."""
+    from ..sweep.plan import Tile
+    from ..sweep.tile import compile_kernel, run_tile
+    from ..views.point import MAX_TRACE_REVOLUTIONS, PointResult, point_result, trace_steady
+
+    job, _ = one_cell_job(path, row, col, layer)
+    compile_kernel(job, trace=True)
+    cell = {name: arr[0, 0] for name, arr in run_tile(job, Tile(0, 0, 1)).items()}
+    result = point_result(job, cell)
+    if result.kind != "failed":
+        n_revs = result.n or min(job.classify.window_revolutions, MAX_TRACE_REVOLUTIONS)
+        orbit = trace_steady(job, result.parameters, result.state, n_revs, result.steps)
+        if orbit is not None:
+            result = PointResult(**{**result.__dict__, "trace": orbit})
+    return result
+
+
+def cell_report(path, row: int, col: int, layer: int = 0) -> dict:
+    """What the page's cell panel shows: ``cell_at``'s numbers and its orbit, JSON-ready."""
+    result = cell_at(path, row, col, layer)
+    data = result.to_dict()
+    trace = result.trace
+    if trace is not None:
+        k = max(1, len(trace.t) // TRACE_POINTS)
+        data["trace"] = {
+            name: _finite(getattr(trace, name)[::k]) for name in ("t", "y", "v", "yc", "eps", "pn")
+        }
+        data["trace"]["period"] = trace.period
+        data["trace"]["events"] = {
+            name: _finite(trace.events_named(name)) for name in ("impact", "detachment")
+        }
+    data["cell"] = {"row": row, "col": col, "layer": layer}
+    return data
+
+
+def attractors_report(path, row: int, col: int, count: int) -> dict:
+    """The cell's attractors from ``count`` starts (``campar point --attractors``)."""
+    from ..views.attractors import find_attractors
+
+    job, _ = one_cell_job(path, row, col)
+    census = find_attractors(job.omega[0], count=count, **_point_settings(job))
+    return census.to_dict()
+
+
+def cycle_report(path, row: int, col: int, n: int) -> dict:
+    """The cell's n-cycle by shooting from its stored state, stable or not."""
+    from ..continuation.orbit import find_cycle
+
+    job, arrays = one_cell_job(path, row, col)
+    settings = _point_settings(job)
+    model = {k: settings.pop(k) for k in ("tensile", "duty_cycle", "cam_velocity")}
+    params = {k: settings[k] for k in ("f0", "mu_kn", "mu_cn", "zeta")}
+    guess = tuple(float(a) for a in arrays["state"])
+    return find_cycle(n, guess, model=model, omega=float(job.omega[0]), **params).to_dict()
+
+
+def line_report(path, row: int) -> dict:
+    """The bifurcation diagram of map row ``row``: its chain along the first axis run
+    again with every σn point kept (as ``campar line`` runs one), started as the map
+    started the row (from the job's start, or with ``chains.start: continue`` from the
+    stored final state of the row before's first cell); the label of every cell."""
+    from ..core.codes import cell_label
+    from ..sweep.job import Job
+    from ..sweep.plan import Tile
+    from ..sweep.tile import compile_kernel, run_tile
+    from ..views.line import DEFAULT_SECTIONS
+    from .source import stored_cell
+
+    job, _ = stored_cell(path, row, 0)
+    data = job.to_dict()
+    start = data["initial"]
+    if job.chains.start == "continue" and row > 0:
+        _, before = stored_cell(path, row - 1, 0)
+        start = {"y": float(before["state"][0]), "v": float(before["state"][1])}
+    value = float(job.second_values[row])
+    data.update(
+        name=f"{job.name}-row",
+        sweep={
+            job.first: data["sweep"][job.first],
+            job.second: {"from": value, "to": value, "points": 1},
+        },
+        initial=start,
+        outputs=sorted({*job.outputs, "label", "sections"}),
+        classify={**data["classify"], "sections": job.classify.sections or DEFAULT_SECTIONS},
+        tiles={"rows": 1},
+        store=None,
+    )
+    data["chains"] = {**data["chains"], "direction": "down", "start": "rest"}
+    for key in ("attractors", "curves"):
+        data.pop(key, None)
+    line = Job.from_dict(data, source=f"row {row} of {path}")
+    compile_kernel(line)
+    cells = {name: values[0] for name, values in run_tile(line, Tile(0, 0, 1)).items()}
+    chatter = line.classify.chatter_p
+    labels = [
+        cell_label(int(k), int(n), int(p), chatter) if k >= 0 else ""
+        for k, n, p in zip(cells["kind"], cells["n"], cells["p"], strict=True)
+    ]
+    x = line.first_values
+    points = [
+        [float(x[i]), float(y)]
+        for i in range(len(x))
+        for y in cells["sections"][i, : int(cells["n"][i]) or None, 0]
+        if math.isfinite(y)
+    ]
+    changes = [
+        {"at": float(0.5 * (x[i] + x[i + 1])), "from": labels[i], "to": labels[i + 1]}
+        for i in range(len(x) - 1)
+        if labels[i] != labels[i + 1]
+    ]
+    return {
+        "row": row,
+        job.second: value,
+        "x": job.first,
+        "points": points,
+        "labels": labels,
+        "first": x.tolist(),
+        "changes": changes,
+    }
+
+
+def _point_settings(job) -> dict:
+    from ..views.point import point_parameters
+
+    par = point_parameters(job)
+    par.pop("omega")
+    return par
+
+
+def _finite(a) -> list:
+    a = np.asarray(a, float)
+    return np.where(np.isfinite(a), a, None).tolist()
+
+
+def warm_up() -> dict:
+    """Compile (or load) the kernel and the tracer, so the first click is answered warm."""
+    from ..views.point import simulate_point
+
+    simulate_point(3.0, multipliers=True, trace=True)
+    return {}
+
+
+ACTIONS = {
+    "cell": cell_report,
+    "attractors": attractors_report,
+    "cycle": cycle_report,
+    "line": line_report,
+    "warm_up": warm_up,
+}
+
+
+def _serve(conn) -> None:
+    """The worker's loop: (action, args) in, ("ok", data) or ("error", one line) out."""
+    while True:
+        try:
+            action, args = conn.recv()
+        except EOFError:
+            return
+        try:
+            conn.send(("ok", ACTIONS[action](*args)))
+        except Exception as exc:  # shown in the page: the worker goes on
+            conn.send(("error", f"{type(exc).__name__}: {' '.join(str(exc).split())}"))
+
+
+class CellTimeout(CamparError):
+    pass
+
+
+class CellWorker:
+    """One worker process for the cell computations, restarted after a time-out."""
+
+    def __init__(self, seconds: float = CELL_SECONDS):
+        self.seconds = seconds
+        self._lock = threading.Lock()
+        self._process = None
+        self._conn = None
+
+    def start(self) -> None:
+        ctx = multiprocessing.get_context("spawn")
+        self._conn, child = ctx.Pipe()
+        self._process = ctx.Process(target=_serve, args=(child,), daemon=True)
+        self._process.start()
+        child.close()
+
+    def run(self, action: str, *args):
+        """The action's data; CamparError with the failure's line, or CellTimeout."""
+        with self._lock:
+            if self._process is None or not self._process.is_alive():
+                self.start()
+            started = time.monotonic()
+            self._conn.send((action, args))
+            if not self._conn.poll(self.seconds):
+                self.stop()
+                raise CellTimeout(
+                    f"the computation ran over its limit of {self.seconds:g} s and was ended"
+                )
+            kind, data = self._conn.recv()
+            data_seconds = time.monotonic() - started
+        if kind == "error":
+            raise CamparError(data)
+        if isinstance(data, dict):
+            data["seconds"] = round(data_seconds, 3)
+        return data
+
+    def stop(self) -> None:
+        if self._process is not None:
+            self._process.kill()
+            self._process.join(5)
+            self._conn.close()
+        self._process = None
