@@ -63,10 +63,12 @@ class Explorer:
             threading.Thread(target=self._watch, args=(s,), daemon=True) for s in self.sources
         ]
 
-    def start(self) -> None:
+    def start(self, warm_up: bool = True) -> None:
+        """Scan the stores; with ``warm_up``, start the cell worker and load its kernel."""
         for thread in self._threads:
             thread.start()
-        threading.Thread(target=self._warm_up, daemon=True).start()
+        if warm_up:
+            threading.Thread(target=self._warm_up, daemon=True).start()
 
     def _warm_up(self) -> None:
         try:
@@ -401,11 +403,11 @@ class ExploreServer(ThreadingHTTPServer):
         return f"http://{host}:{port}/"
 
 
-def serve(paths, host: str = "127.0.0.1", port: int = 0, cell_seconds=None):
+def serve(paths, host: str = "127.0.0.1", port: int = 0, cell_seconds=None, warm_up=True):
     """An ExploreServer of the stores ``paths``, started on its own thread."""
     explorer = Explorer(paths, cell_seconds)
     server = ExploreServer(explorer, host, port)
-    explorer.start()
+    explorer.start(warm_up)
     threading.Thread(target=server.serve_forever, daemon=True).start()
     return server
 

@@ -1,0 +1,300 @@
+"""campar explore's server without a browser: what it serves, what it refuses, how it reads
+stores (verified, damaged tiles masked as campar.open masks them), and its computations
+bounded in time. The page in a real browser: test_explore_browser.py."""
+
+import http.client
+import json
+import shutil
+import socket
+import threading
+
+import numpy as np
+import pytest
+
+import campar
+from campar.cli import main
+from campar.errors import StoreDamaged
+from campar.explore.server import serve, shutdown
+from campar.explore.source import MapSource
+
+JOB = {
+    "name": "explore",
+    "sweep": {
+        "omega": {"from": 6.0, "to": 1.0, "points": 12},
+        "mu_cn": {"from": 0.9, "to": 0.6, "points": 6},
+    },
+    "outputs": ["label", "dc", "eps", "pn", "multipliers"],
+    "tiles": {"rows": 2},
+}
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory):
+    path = tmp_path_factory.mktemp("explore") / "explore.zarr"
+    campar.run({**JOB, "store": str(path)})
+    return path
+
+
+@pytest.fixture
+def server(store):
+    server = serve([store], warm_up=False)
+    server.explorer._threads and _scanned(server)
+    yield server
+    shutdown(server)
+
+
+def _scanned(server) -> None:
+    for source in server.explorer.sources:
+        for _ in range(200):
+            if source.status()["scanned"]:
+                break
+            threading.Event().wait(0.05)
+
+
+def get(server, path: str, host: str | None = None, method: str = "GET"):
+    """(status, body text) of a request sent as written (no normalisation of the path)."""
+    h, port = server.server_address[:2]
+    conn = http.client.HTTPConnection(h, port, timeout=120)
+    conn.putrequest(method, path, skip_host=True, skip_accept_encoding=True)
+    conn.putheader("Host", host or f"{h}:{port}")
+    conn.endheaders()
+    response = conn.getresponse()
+    body = response.read().decode("utf-8", "replace")
+    conn.close()
+    return response.status, body
+
+
+def whole_map(source, w=12, h=6) -> str:
+    x0, x1 = source.x_edges[[0, -1]]
+    y0, y1 = source.y_edges[[0, -1]]
+    return f"x0={x0}&x1={x1}&y0={y0}&y1={y1}&w={w}&h={h}"
+
+
+def test_binds_the_loopback_interface(server):
+    assert server.server_address[0] == "127.0.0.1"
+    assert server.socket.getsockname()[0] == "127.0.0.1"
+    assert server.url.startswith("http://127.0.0.1:")
+    # not reachable on another address of this machine
+    others = {a[4][0] for a in socket.getaddrinfo(socket.gethostname(), None, socket.AF_INET)}
+    for address in others - {"127.0.0.1"}:
+        with pytest.raises(OSError):
+            socket.create_connection((address, server.server_address[1]), timeout=2).close()
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        "/../pyproject.toml",
+        "/../../../../etc/passwd",
+        "/%2e%2e/%2e%2e/%2e%2e/etc/passwd",
+        "/%2E%2E%2F%2E%2E%2Fetc%2Fpasswd",
+        "/..%2f..%2f..%2fetc%2fpasswd",
+        "/explore.js/../../../etc/passwd",
+        "/static/explore.js",
+        "/static/../__init__.py",
+        "//etc/passwd",
+        "/%252e%252e/etc/passwd",
+        "/..\\..\\etc\\passwd",
+        "/api/map/../../../etc/passwd",
+        "/explore.zarr/zarr.json",
+    ],
+)
+def test_serves_nothing_but_its_routes(server, path):
+    status, body = get(server, path)
+    assert status == 404, body
+    assert body.count("\n") == 1 and body.startswith("404 Not Found: "), body
+    assert "root:" not in body and "zarr_format" not in body
+
+
+def test_the_stores_are_named_by_index_only(server, store):
+    status, body = get(server, "/api/stores")
+    assert status == 200
+    (described,) = json.loads(body)
+    assert described["name"] == store.name and described["shape"] == [6, 12]
+    for bad in ("store=1", "store=-1", "store=../explore.zarr", f"store={store}"):
+        status, body = get(server, f"/api/cell?{bad}&x=3&y=0.8")
+        assert status == 400 and body.count("\n") == 1, body
+
+
+@pytest.mark.parametrize(
+    "query",
+    [
+        "/api/map",
+        "/api/map?field=label",
+        "/api/map?field=nothing&x0=0&x1=1&y0=0&y1=1&w=10&h=10",
+        "/api/map?field=label&x0=nan&x1=1&y0=0&y1=1&w=10&h=10",
+        "/api/map?field=label&x0=1&x1=0&y0=0&y1=1&w=10&h=10",
+        "/api/map?field=label&x0=0&x1=1&y0=0&y1=1&w=100000&h=10",
+        "/api/map?field=label&x0=0&x1=1&y0=0&y1=1&w=10&h=10&w=20",
+        "/api/map?field=label&x0=0&x1=1e999&y0=0&y1=1&w=10&h=10",
+        "/api/cell?x=abc&y=1",
+        "/api/compute?row=99&col=0",
+        "/api/compute?row=x",
+        "/api/cycle?row=0&col=0&n=0",
+    ],
+)
+def test_a_malformed_request_gets_one_line(server, query):
+    status, body = get(server, query)
+    assert status == 400, body
+    assert body.count("\n") == 1 and body.startswith("400 Bad Request: "), body
+    assert "Traceback" not in body
+
+
+def test_a_malformed_request_line_gets_one_line(server):
+    h, port = server.server_address[:2]
+    with socket.create_connection((h, port), timeout=30) as sock:
+        sock.sendall(b"NONSENSE\r\n\r\n")
+        answer = _read_all(sock)
+    # no request version: answered as HTTP/0.9 answers, the body alone
+    assert answer == "400 Bad Request: Bad request syntax ('NONSENSE')\n"
+    with socket.create_connection((h, port), timeout=30) as sock:
+        sock.sendall(b"GET / HTTP/1.1\r\n" + b"X: " + b"y" * 70000 + b"\r\n\r\n")
+        answer = _read_all(sock)
+    assert answer.startswith("HTTP/1.1 431 ") and answer.endswith("Line too long\n")
+    assert get(server, "/api/stores")[0] == 200  # and the server goes on
+
+
+def _read_all(sock) -> str:
+    chunks = []
+    while chunk := sock.recv(65536):
+        chunks.append(chunk)
+    return b"".join(chunks).decode()
+
+
+def test_another_host_name_is_refused(server):
+    status, body = get(server, "/api/stores", host="attacker.example:80")
+    assert status == 400 and "address" in body
+    assert get(server, "/", method="POST")[0] == 404  # the page is read, not posted to
+
+
+def test_the_map_draws_the_stored_labels_in_the_maps_palette(server, store):
+    from campar.views.plot.labels import label_colour
+
+    source = server.explorer.sources[0]
+    status, body = get(server, f"/api/map?field=label&{whole_map(source)}")
+    assert status == 200
+    answer = json.loads(body)
+    labels = campar.open(store).label.values  # (mu_cn, omega) as stored
+    image = _decode_png(answer["image"])
+    # one pixel a cell: pixel (i, j) is row i (μcn decreasing down the rows, as the page
+    # draws it: up), column 11 - j (ω decreasing along the stored rows, drawn increasing)
+    for i in range(6):
+        for j in range(12):
+            label = labels[i, 11 - j]
+            expected = np.round(np.array(label_colour(label)) * 255)
+            assert np.array_equal(image[i, j], expected), (i, j, label)
+    legend = {e["label"]: e["count"] for e in answer["legend"]}
+    values, counts = np.unique(labels, return_counts=True)
+    assert legend == dict(zip(values.tolist(), counts.tolist(), strict=True))
+
+
+def _decode_png(data_url: str) -> np.ndarray:
+    import base64
+    import io
+
+    from matplotlib.image import imread
+
+    raw = base64.b64decode(data_url.split(",", 1)[1])
+    return np.round(imread(io.BytesIO(raw), format="png") * 255)
+
+
+def test_hovering_reads_the_stored_cell(server, store):
+    ds = campar.open(store)
+    omega, mu = float(ds.omega[3]), float(ds.mu_cn[2])
+    status, body = get(server, f"/api/cell?x={omega}&y={mu}")
+    cell = json.loads(body)
+    assert (cell["row"], cell["col"]) == (2, 3)
+    assert cell["label"] == ds.label.values[2, 3]
+    assert cell["dc"] == pytest.approx(float(ds.dc.values[2, 3]), abs=0)
+    assert get(server, "/api/cell?x=100&y=0.8")[1] == '{"outside": true}'
+
+
+def test_a_damaged_tile_is_masked_as_campar_open_masks_it(server, store, tmp_path):
+    damaged = tmp_path / "damaged.zarr"
+    shutil.copytree(store, damaged)
+    (chunk,) = (damaged / "dc").glob("c.1.*")
+    chunk.write_bytes(chunk.read_bytes()[:-3] + b"xyz")
+    source = MapSource(damaged)
+    source.scan()
+    assert set(source.damage) == {1}  # tile 1: rows 2 and 3
+    with pytest.warns(campar.errors.StoreDamageWarning):
+        opened = campar.open(damaged)
+    assert (opened.label.values[2:4] == "").all()  # campar.open: not computed
+    field = source.fields["label"]
+    x0, x1 = source.x_edges[[0, -1]]
+    y0, y1 = source.y_edges[[0, -1]]
+    values, inside = source.view(field, (x0, x1, y0, y1), 12, 6)
+    assert inside.all()
+    names = source.categories[field.name]
+    drawn = np.array([[names[v] if v >= 0 else "" for v in row] for row in values])
+    assert (drawn[:, ::-1] == opened.label.values).all()
+    assert source.cell(2, 0)["stored"] == "damaged"
+
+
+def test_a_store_with_a_damaged_variable_is_refused(store, tmp_path, capsys):
+    damaged = tmp_path / "damaged.zarr"
+    shutil.copytree(store, damaged)
+    meta = damaged / "omega" / "zarr.json"
+    text = json.loads(meta.read_text())
+    text["attributes"]["units"] = "furlongs"
+    meta.write_text(json.dumps(text))
+    with pytest.raises(StoreDamaged):
+        campar.open(damaged)
+    with pytest.raises(StoreDamaged):
+        MapSource(damaged)
+    assert main(["explore", "--no-browser", str(damaged)]) == 65
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "variable omega" in err
+
+
+def test_bad_arguments_get_one_line(store, capsys):
+    assert main(["explore", "--no-browser", str(store), str(store), str(store)]) == 2
+    assert main(["explore", "--no-browser", "--port", "70000", str(store)]) == 2
+    assert main(["explore", "--no-browser", "/nonexistent.zarr"]) == 3
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 3 and all(line.startswith("campar explore: ") for line in err)
+
+
+@pytest.mark.process
+def test_a_cell_is_computed_bounded_in_time_and_failures_shown(server, store):
+    """A cell computed in the worker as `campar point` computes it; a computation over its
+    limit ends with one line and the next one runs; two clients at once."""
+    ds = campar.open(store)
+    state = ds.state.values[2, 3]
+    args = ["point", "--omega", str(float(ds.omega[3])), "--mu-cn", str(float(ds.mu_cn[2]))]
+    args += ["--y0", str(state[0]), "--v0", str(state[1]), "--json"]
+    worker = server.explorer.worker
+    worker.seconds = 0.01  # the worker's spawn alone takes longer
+    status, body = get(server, "/api/compute?row=2&col=3")
+    assert status == 422 and "limit of 0.01 s" in body and body.count("\n") == 1
+    worker.seconds = 300
+    answers = {}
+
+    def ask(name, path):
+        answers[name] = get(server, path)
+
+    threads = [
+        threading.Thread(target=ask, args=("cell", "/api/compute?row=2&col=3")),
+        threading.Thread(target=ask, args=("map", f"/api/map?field=dc&{whole_map(ds_source(server))}")),
+        threading.Thread(target=ask, args=("cell2", "/api/compute?row=4&col=7")),
+    ]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert {k: v[0] for k, v in answers.items()} == {"cell": 200, "map": 200, "cell2": 200}
+    report = json.loads(answers["cell"][1])
+    import contextlib
+    import io
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(args) == 0
+    point = json.loads(out.getvalue())
+    assert report["label"] == point["label"] == ds.label.values[2, 3]
+    assert report["dc"] == pytest.approx(point["dc"], rel=1e-9)
+    assert len(report["trace"]["t"]) > 10 and report["multipliers"]
+
+
+def ds_source(server):
+    return server.explorer.sources[0]
