@@ -20,6 +20,7 @@ LAYERS = {
     "paper": {"core", "sweep", "continuation", "views", "errors"},
     "bench": {"core", "sweep", "continuation", "views", "errors"},
     "api": {"core", "sweep", "continuation", "views", "errors"},
+    "explore": {"core", "sweep", "continuation", "views", "errors"},
     "cli": {
         "core",
         "sweep",
@@ -28,6 +29,7 @@ LAYERS = {
         "paper",
         "bench",
         "api",
+        "explore",
         "errors",
         "__init__",
     },
@@ -88,7 +90,7 @@ def test_imports_point_down_the_layers(name):
 
 
 def test_every_subpackage_says_what_it_holds_and_may_import():
-    for sub in ("core", "sweep", "continuation", "views", "paper", "bench", "cli"):
+    for sub in ("core", "sweep", "continuation", "views", "paper", "bench", "explore", "cli"):
         doc = ast.get_docstring(ast.parse((PACKAGE / sub / "__init__.py").read_text()))
         assert doc and "import" in doc, sub
 

@@ -298,3 +298,36 @@ def test_a_cell_is_computed_bounded_in_time_and_failures_shown(server, store):
 
 def ds_source(server):
     return server.explorer.sources[0]
+
+
+@pytest.mark.process
+def test_a_zoom_is_computed_by_the_runner_beside_the_map(server, store):
+    import time
+
+    import yaml
+
+    server.explorer.zoom_ranks = 1  # the serial runner: no mpirun for a 4 × 4 grid
+    query = "/api/zoom?store=0&x0=2&x1=4&y0=0.65&y1=0.85&points=4"
+    assert get(server, query)[0] == 404  # a zoom changes something: POST only
+    status, body = get(server, query, method="POST")
+    assert status == 200, body
+    zoom = json.loads(body)
+    path = store.parent / f"{store.name}.zooms" / zoom["name"]
+    assert zoom["store"] == 1 and path.is_dir()
+    for _ in range(1200):
+        stores = json.loads(get(server, "/api/stores")[1])
+        if stores[1]["status"]["verified"] == stores[1]["status"]["tiles"]:
+            break
+        time.sleep(0.1)
+    assert stores[1]["status"]["verified"] == stores[1]["status"]["tiles"]
+    assert stores[1]["x"]["edges"][0] < 2 < 4 < stores[1]["x"]["edges"][1]
+    assert get(server, query, method="POST")[1] == body.replace("true", "false")  # found again
+    job = yaml.safe_load(path.with_suffix(".yaml").read_text())
+    mine = json.loads(json.dumps(campar.open(store).attrs["job"]))
+    mine = json.loads(mine) if isinstance(mine, str) else mine
+    assert job["sweep"]["omega"] == {"from": 4.0, "to": 2.0, "points": 4}
+    assert job["sweep"]["mu_cn"] == {"from": 0.85, "to": 0.65, "points": 4}
+    same = ("model", "integrator", "transient", "classify", "outputs", "fixed", "chains")
+    assert {k: job[k] for k in same} == {k: mine[k] for k in same}
+    assert main(["verify", str(path)]) == 0
+    assert (campar.open(path).label.values != "").all()
