@@ -331,3 +331,32 @@ def test_a_zoom_is_computed_by_the_runner_beside_the_map(server, store):
     assert {k: job[k] for k in same} == {k: mine[k] for k in same}
     assert main(["verify", str(path)]) == 0
     assert (campar.open(path).label.values != "").all()
+
+
+def test_a_large_map_is_kept_at_a_stride_and_read_whole_where_zoomed_in(store, monkeypatch):
+    """With room for 18 cells a field the 6 × 12 map is kept at stride 2: a view of the
+    whole map at one pixel a cell draws every other cell; zoomed in, the tiles under the
+    view are read whole and every cell is drawn."""
+    import campar.explore.source as source_module
+
+    monkeypatch.setattr(source_module, "MOSAIC_CELLS", 18)
+    source = MapSource(store)
+    source.scan()
+    assert source.stride == 2
+    labels = campar.open(store).label.values[:, ::-1]  # ω increasing, as drawn
+    field = source.fields["label"]
+    names = source.categories["label"]
+
+    def drawn(box, w, h):
+        values, inside = source.view(field, box, w, h)
+        assert inside.all()
+        return np.array([[names[v] for v in row] for row in values])
+
+    x0, x1 = source.x_edges[[0, -1]]
+    y0, y1 = source.y_edges[[0, -1]]
+    coarse = drawn((x0, x1, y0, y1), 6, 3)  # 2 cells a pixel: the mosaic
+    # pixel centres lie on stored rows 1, 3, 5 and columns 10, 8, …, 0 (ω drawn
+    # increasing); the mosaic holds the even rows and columns: rows 0, 2, 4
+    assert (coarse == campar.open(store).label.values[0::2, 10::-2]).all()
+    fine = drawn((x0, x1, y0, y1), 24, 12)  # 2 pixels a cell: the tiles, whole
+    assert (fine[::2, ::2] == labels).all() and (fine[1::2, 1::2] == labels).all()

@@ -7,6 +7,7 @@ grey on white. Numbers are drawn with viridis over the map's own range, NaN hatc
 not computed. The image is a PNG encoded here (zlib, no imaging library).
 """
 
+import functools
 import struct
 import zlib
 
@@ -33,13 +34,16 @@ LEGEND_ROOM = 24  # categories named before the rarest are grouped as "other"
 VIRIDIS = (colormaps["viridis"](np.linspace(0, 1, 256)) * 255).round().astype(np.uint8)
 
 
+@functools.lru_cache(maxsize=1024)
 def rgb255(colour) -> tuple[int, int, int, int]:
     return tuple(int(round(c * 255)) for c in to_rgba(colour))
 
 
-def category_legend(names: list[str], counts: list[tuple[str, int]]) -> tuple[list, np.ndarray]:
+@functools.lru_cache(maxsize=64)
+def category_legend(names: tuple[str, ...], counts: tuple) -> tuple[list, np.ndarray]:
     """(legend rows, colours): rows {label, count, colour, members} in legend order over
-    the map's counts, and the RGBA (uint8) of every category id of ``names``."""
+    the map's counts ((category, cells) pairs), and the RGBA (uint8) of every category id
+    of ``names``. Cached: a view of a map that is not growing reuses its legend."""
     counted = dict(counts)
     present = sorted(counted, key=order_key)
     cells = CategoryMap(
@@ -51,8 +55,7 @@ def category_legend(names: list[str], counts: list[tuple[str, int]]) -> tuple[li
     for name, code in zip(present, shown.codes.tolist(), strict=True):
         colour_of[name] = shown.entries[code].colour
     colours = np.array(
-        [rgb255(colour_of.get(n, label_colour(n) if _known(n) else "white")) for n in names]
-        or np.zeros((0, 4)),
+        [rgb255(colour_of[n] if n in colour_of else _colour(n)) for n in names] or np.zeros((0, 4)),
         np.uint8,
     ).reshape(-1, 4)
     rows = [
@@ -68,28 +71,30 @@ def category_legend(names: list[str], counts: list[tuple[str, int]]) -> tuple[li
     return rows, colours
 
 
-def _known(name: str) -> bool:
+@functools.lru_cache(maxsize=1024)
+def _colour(name: str):
+    """A category's own colour (white for a name the palette does not know)."""
     try:
-        label_colour(name)
+        return label_colour(name)
     except ValueError:
-        return False
-    return True
+        return "white"
 
 
 def draw_categories(values: np.ndarray, inside: np.ndarray, names, colours) -> np.ndarray:
     """RGBA (height, width, 4) of a categorical view (``MapSource.view``)."""
-    h, w = values.shape
-    image = np.zeros((h, w, 4), np.uint8)
-    image[:] = BACKGROUND
-    known = values >= 0
-    if len(colours):
-        image[known] = colours[values[known]]
-    gaps = {NOT_COMPUTED: inside & (values == PENDING_CELL)}
-    for gap in (FAILED, NOT_COMPUTED):
-        if gap in names:
-            gaps[gap] = gaps.get(gap, np.zeros_like(inside)) | (values == names.index(gap))
-    for gap, where in gaps.items():
-        _hatch(image, where, gap)
+    # one lookup: ids shifted by 2 so that NO_CELL (-1) and PENDING_CELL (-2) index it too
+    lut = np.zeros((len(colours) + 2, 4), np.uint8)
+    lut[0] = rgb255(DESIGNED[NOT_COMPUTED])
+    lut[1] = BACKGROUND
+    lut[2:] = colours
+    image = lut[values.astype(np.intp) + 2]
+    gaps = [g for g in (FAILED, NOT_COMPUTED) if g in names]
+    pending = inside & (values == PENDING_CELL)
+    for gap in gaps:
+        where = values == names.index(gap)
+        _hatch(image, where | pending if gap == NOT_COMPUTED else where, gap)
+    if NOT_COMPUTED not in gaps:
+        _hatch(image, pending, NOT_COMPUTED)
     image[~inside] = BACKGROUND
     return image
 
@@ -109,16 +114,14 @@ def draw_numbers(values: np.ndarray, inside: np.ndarray, low: float, high: float
 
 def _hatch(image: np.ndarray, where: np.ndarray, gap: str) -> None:
     """White with lines in the gap's colour: '/' for not computed, 'x' for failed."""
-    if not where.any():
+    y, x = np.nonzero(where)
+    if not len(y):
         return
-    h, w = where.shape
-    y, x = np.ogrid[:h, :w]
     line = (x + y) % HATCH_PERIOD == 0
     if gap == FAILED:
-        line = line | ((x - y) % HATCH_PERIOD == 0)
-    edge = rgb255(GAP_STYLE[gap]["edgecolor"])
-    image[where] = rgb255(DESIGNED[gap])
-    image[where & line] = edge
+        line |= (x - y) % HATCH_PERIOD == 0
+    image[y, x] = rgb255(DESIGNED[gap])
+    image[y[line], x[line]] = rgb255(GAP_STYLE[gap]["edgecolor"])
 
 
 def png(image: np.ndarray) -> bytes:

@@ -58,6 +58,7 @@ class Explorer:
         self._stop = threading.Event()
         self._zoom_lock = threading.Lock()
         self._zooms = {}  # zoom store → its run's process
+        self._ranges = {}  # (store, field, layer) → (tiles verified, (low, high))
         self.zoom_ranks = 2
         self._threads = [
             threading.Thread(target=self._watch, args=(s,), daemon=True) for s in self.sources
@@ -118,16 +119,27 @@ class Explorer:
             inside &= inside2
             image[~inside] = render.BACKGROUND
         elif field.categorical:
-            names = list(source.categories[field.name])
-            answer["legend"], colours = render.category_legend(names, source.legend(field, layer))
+            names = tuple(source.categories[field.name])
+            counts = tuple(source.legend(field, layer))
+            answer["legend"], colours = render.category_legend(names, counts)
             image = render.draw_categories(values, inside, names, colours)
         else:
-            low, high = render.value_range(source.mosaic[field.name, layer])
+            low, high = self._range(source, field, layer)
             answer["range"] = [low, high]
             image = render.draw_numbers(values, inside, low, high)
         answer["image"] = "data:image/png;base64," + base64.b64encode(render.png(image)).decode()
         answer["seconds"] = round(time.perf_counter() - started, 4)
         return answer
+
+    def _range(self, source: MapSource, field, layer: int) -> tuple[float, float]:
+        """A numeric field's range over the map, computed again only as the map grows."""
+        key = (id(source), field.name, layer)
+        verified = source.status()["verified"]
+        cached = self._ranges.get(key)
+        if cached is None or cached[0] != verified:
+            cached = (verified, render.value_range(source.mosaic[field.name, layer]))
+            self._ranges[key] = cached
+        return cached[1]
 
     def cell(self, q: dict) -> dict:
         source = self._source(q)
@@ -373,9 +385,7 @@ class Handler(BaseHTTPRequestHandler):
         self.send_header("Content-Length", str(len(body)))
         self.send_header("Cache-Control", "no-store")
         self.send_header("X-Content-Type-Options", "nosniff")
-        self.send_header(
-            "Content-Security-Policy", CSP
-        )
+        self.send_header("Content-Security-Policy", CSP)
         self.end_headers()
         self.wfile.write(body)
 

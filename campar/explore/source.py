@@ -28,7 +28,7 @@ from ..sweep.store import read_store, tile_checksum, verify_store
 from .fields import Field, categories, fields_of, numeric
 
 MOSAIC_CELLS = 4_000_000  # per field and direction kept in memory: 16 MB as float32
-CACHE_BYTES = 128 * 2**20  # full-resolution fields of tiles read for close views
+CACHE_BYTES = 128 * 2**20  # stored arrays of the tiles read for close views
 PENDING, VERIFIED, DAMAGED = 0, 1, 2
 NO_CELL = -1  # a pixel outside the grid
 PENDING_CELL = -2  # a cell of a tile not committed (or masked as damaged): not computed
@@ -77,7 +77,7 @@ class MapSource:
         self.layers = len(self.job.directions)
         self.fields = {f.name: f for f in fields_of(self.names)}
         self.stride = 1
-        while (self.rows // self.stride + 1) * (self.cols // self.stride + 1) > MOSAIC_CELLS:
+        while -(-self.rows // self.stride) * -(-self.cols // self.stride) > MOSAIC_CELLS:
             self.stride *= 2
         s = self.stride
         shape = (-(-self.rows // s), -(-self.cols // s))
@@ -101,6 +101,7 @@ class MapSource:
         self._lock = threading.RLock()
         self._cache: OrderedDict = OrderedDict()
         self._cache_bytes = 0
+        self._open_reader = None
         self.scanned = False
 
     # -- taking tiles in -----------------------------------------------------------------
@@ -122,6 +123,10 @@ class MapSource:
             new = [i for i in np.flatnonzero(done & (self.state == PENDING)).tolist()]
             if not new:
                 return 0
+            with self._lock:  # a reader opened before these tiles may not see them (HDF5)
+                if self._open_reader is not None:
+                    self._open_reader.close()
+                    self._open_reader = None
             for index in new:
                 try:
                     arrays = verified_tile(reader, self.tiles[index])
@@ -195,39 +200,55 @@ class MapSource:
         return out, inside
 
     def _full_resolution(self, field: Field, layer: int, rows, cols) -> np.ndarray:
+        """The field at the cells (rows × cols) read from their tiles: the tiles' stored
+        arrays are cached, the field computed on the cells drawn only."""
         fill = PENDING_CELL if field.categorical else np.nan
         block = np.full((len(rows), len(cols)), fill, self.mosaic[field.name, layer].dtype)
         per_layer = len(self.tiles) // self.layers
         starts = np.array([t.row_start for t in self.tiles[:per_layer]])
         which = np.searchsorted(starts, rows, side="right") - 1
+        picked, parts = [], []
         for k in np.unique(which).tolist():
             tile = self.tiles[layer * per_layer + k]
             if self.state[tile.index] != VERIFIED:
                 continue
-            values = self._tile_field(field, tile)
-            sel = which == k
-            block[sel] = values[rows[sel] - tile.row_start][:, cols]
-        return block
-
-    def _tile_field(self, field: Field, tile) -> np.ndarray:
-        key = (field.name, tile.index)
-        if key in self._cache:
-            self._cache.move_to_end(key)
-            return self._cache[key]
-        with read_store(self.path) as reader:
-            arrays = {name: reader.read_tile(name, tile) for name in field.needs}
+            sel = np.flatnonzero(which == k)
+            arrays = self._tile_arrays(field, tile)
+            parts.append({n: a[rows[sel] - tile.row_start][:, cols] for n, a in arrays.items()})
+            picked.append(sel)
+        if not parts:
+            return block
+        arrays = {n: np.concatenate([p[n] for p in parts]) for n in field.needs}
         if field.categorical:
             codes, names = categories(field, arrays, self.job.classify.chatter_p)
             known = self.categories[field.name]
             values = np.array([_category_id(known, n) for n in names], np.int16)[codes]
         else:
             values = numeric(field, arrays)
-        self._cache[key] = values
-        self._cache_bytes += values.nbytes
+        block[np.concatenate(picked)] = values
+        return block
+
+    def _tile_arrays(self, field: Field, tile) -> dict:
+        """The stored arrays a field needs of a verified tile, through the cache."""
+        out = {}
+        for name in field.needs:
+            key = (name, tile.index)
+            if key in self._cache:
+                self._cache.move_to_end(key)
+            else:
+                self._cache[key] = self._reader().read_tile(name, tile)
+                self._cache_bytes += self._cache[key].nbytes
+            out[name] = self._cache[key]
         while self._cache_bytes > CACHE_BYTES and len(self._cache) > 1:
             _, old = self._cache.popitem(last=False)
             self._cache_bytes -= old.nbytes
-        return values
+        return out
+
+    def _reader(self):
+        """A reader kept open for the full-resolution reads (reopened by ``refresh``)."""
+        if self._open_reader is None:
+            self._open_reader = read_store(self.path)
+        return self._open_reader
 
     def cell(self, row: int, col: int, layer: int = 0) -> dict:
         """Everything the store holds of one cell (no σn points), or why it has nothing."""
