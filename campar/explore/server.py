@@ -72,6 +72,9 @@ class Explorer:
             threading.Thread(target=self._warm_up, daemon=True).start()
 
     def _warm_up(self) -> None:
+        # after the scans: the first view is drawn before the worker's imports compete
+        while not self._stop.is_set() and not all(s.scanned for s in self.sources):
+            self._stop.wait(0.1)
         try:
             self.worker.run("warm_up")
         except CamparError as exc:  # the first click says it again
