@@ -111,7 +111,7 @@ def screenshot(page, name: str) -> None:
     folder = os.environ.get("CAMPAR_SCREENSHOTS")
     if folder:
         Path(folder).mkdir(parents=True, exist_ok=True)
-        page.screenshot(path=str(Path(folder) / f"{name}.png"))
+        page.screenshot(path=str(Path(folder) / f"{name}.png"), full_page=True)
 
 
 def redrawn(page, view: int = 0) -> None:

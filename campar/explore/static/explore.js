@@ -12,6 +12,8 @@ const MEANING = {
 };
 const MARGIN = { left: 62, right: 12, top: 10, bottom: 46 };
 const ZOOM_STEP = 1.25;
+const MAP_SIZE = [760, 560]; // canvas pixels: one map
+const SIDE_SIZE = [500, 420]; // each of two maps side by side
 
 const state = {
   stores: [], store: 0, field: "label", layer: 0, compare: "one", box: null,
@@ -97,7 +99,7 @@ class MapView {
     this.overlays = await this.drawZooms(box, r);
     this.paint();
     this.drawn += 1;
-    if (this.index === 0) showLegend(answer);
+    showLegend();
     showStatus(answer.status);
     state.ready = true;
   }
@@ -418,7 +420,7 @@ async function drawLine(store, cell) {
   state.line.data = data;
   $("line-head").textContent = `${SYMBOL[s.y.name]} = ${fmt(cell[s.y.name], 5)}: σn points y over ` +
     `${SYMBOL[s.x.name]}, ${data.points.length} points; label changes dashed (${data.changes.length})`;
-  plot($("line-plot"), [{ points: data.points, dot: "#222", size: 1.5 }],
+  plot($("line-plot"), [{ points: data.points, dot: "#222", size: 2.5 }],
     axisTitle(s.x.name), "σn: y (units of h)", "", data.changes.map((c) => ({ x: c.at })));
 }
 
@@ -438,12 +440,21 @@ async function startZoom(parent, box) {
 
 // -- legend, status, export --------------------------------------------------------------
 
-function showLegend(answer) {
+function showLegend() {
   const legend = $("legend");
   legend.innerHTML = "";
+  for (const view of activeViews()) {
+    if (view.answer) legendOf(legend, view);
+  }
+}
+
+function legendOf(legend, view) {
+  const answer = view.answer;
   const title = document.createElement("b");
-  const f = state.stores[state.store].fields.find((x) => x.name === state.field);
-  title.textContent = f ? f.title : state.field;
+  const store = state.stores[view.storeIndex()];
+  const f = store.fields.find((x) => x.name === state.field);
+  title.textContent = (state.compare === "side" ? `${store.name}: ` : "") + (f ? f.title : state.field);
+  title.style.display = "block";
   legend.appendChild(title);
   if (answer.range) {
     const row = document.createElement("div");
@@ -577,7 +588,12 @@ async function main() {
   $("layer").onchange = () => { state.layer = +$("layer").value; setBox(state.box); };
   $("compare").onchange = () => {
     state.compare = $("compare").value;
-    $("second-map").style.display = state.compare === "side" ? "block" : "none";
+    const side = state.compare === "side";
+    $("second-map").style.display = side ? "block" : "none";
+    for (const v of state.views) {
+      v.canvas.width = side ? SIDE_SIZE[0] : MAP_SIZE[0];
+      v.canvas.height = side ? SIDE_SIZE[1] : MAP_SIZE[1];
+    }
     setBox(state.box);
   };
   $("line-mode").onclick = () => setMode("line");
