@@ -21,15 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--no-first-run",
-    "--disable-sync",
-]
+from campar.explore.chromium import CHROMIUM, CHROMIUM_ARGS
+
 REPEATS = 10
 
 
@@ -89,7 +82,7 @@ class Server:
 
 
 def open_page(p, url):
-    browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=CHROMIUM_ARGS)
+    browser = p.chromium.launch(executable_path=CHROMIUM, args=list(CHROMIUM_ARGS))
     page = browser.new_context(viewport={"width": 1400, "height": 900}, bypass_csp=True).new_page()
     page.set_default_timeout(600_000)
     started = time.perf_counter()

@@ -275,7 +275,9 @@ def test_a_cell_is_computed_bounded_in_time_and_failures_shown(server, store):
 
     threads = [
         threading.Thread(target=ask, args=("cell", "/api/compute?row=2&col=3")),
-        threading.Thread(target=ask, args=("map", f"/api/map?field=dc&{whole_map(ds_source(server))}")),
+        threading.Thread(
+            target=ask, args=("map", f"/api/map?field=dc&{whole_map(ds_source(server))}")
+        ),
         threading.Thread(target=ask, args=("cell2", "/api/compute?row=4&col=7")),
     ]
     for t in threads:

@@ -26,19 +26,10 @@ import pytest
 
 import campar
 from campar.cli import main
+from campar.explore.chromium import CHROMIUM, CHROMIUM_ARGS
 
 pytestmark = [pytest.mark.browser, pytest.mark.process]
 
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--no-first-run",
-    "--disable-sync",
-]
 JOB = {
     "sweep": {
         "omega": {"from": 6.0, "to": 1.0, "points": 12},
@@ -88,7 +79,7 @@ def page(url):
         _require("Chromium is missing (apt-get install chromium)")
     executable = CHROMIUM if Path(CHROMIUM).exists() else shutil.which("chromium")
     with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
+        browser = p.chromium.launch(executable_path=executable, args=list(CHROMIUM_ARGS))
         # the page forbids evaluated script (its Content-Security-Policy); the test's own
         # probes are evaluated script, so this context lets them run
         context = browser.new_context(

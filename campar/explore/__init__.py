@@ -11,7 +11,8 @@
   worker process that a time limit can end;
 - ``zoom``: a rectangle of a map recomputed at full resolution by the runner, a store of
   its own beside the map;
-- ``server``: the HTTP server (standard library) and its routes; ``static/``: the page.
+- ``server``: the HTTP server (standard library) and its routes; ``static/``: the page;
+- ``chromium``: the headless browser the page's tests and benchmark drive.
 
 May import: ``campar.core``, ``campar.sweep``, ``campar.continuation``, ``campar.views``,
 ``campar.errors`` and itself.
