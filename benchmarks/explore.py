@@ -99,11 +99,13 @@ def scanned(page) -> None:
     )
 
 
-def timed_redraw(page, action) -> float:
+def timed_redraw(page, action, cpu: list) -> float:
+    """Seconds from the action to the view redrawn; the server's CPU seconds go to ``cpu``."""
     before = page.evaluate("window.explore.views[0].drawn")
     started = time.perf_counter()
     action()
     page.wait_for_function(f"window.explore.views[0].drawn > {before}", polling="raf")
+    cpu.append(page.evaluate("window.explore.views[0].answer.cpu_seconds"))
     return time.perf_counter() - started
 
 
@@ -166,9 +168,9 @@ def bench_big(p, store: Path) -> dict:
     box = page.locator("#map0").bounding_box()
     cx, cy = box["x"] + 380, box["y"] + 280
     page.mouse.move(cx, cy)
-    times = {"zoom": [], "pan": []}
+    times, cpu = {"zoom": [], "pan": []}, []
     for _ in range(REPEATS):  # zoom in 1.25× a step, to 1/9 of the map: full resolution
-        times["zoom"].append(timed_redraw(page, lambda: page.mouse.wheel(0, -100)))
+        times["zoom"].append(timed_redraw(page, lambda: page.mouse.wheel(0, -100), cpu))
     for k in range(REPEATS):
         step = 40 if k % 2 else -40
 
@@ -178,11 +180,12 @@ def bench_big(p, store: Path) -> dict:
             page.mouse.move(cx + step, cy + step / 2, steps=3)
             page.mouse.up()
 
-        times["pan"].append(timed_redraw(page, drag))
+        times["pan"].append(timed_redraw(page, drag, cpu))
     for _ in range(REPEATS):
-        times["zoom"].append(timed_redraw(page, lambda: page.mouse.wheel(0, 100)))
+        times["zoom"].append(timed_redraw(page, lambda: page.mouse.wheel(0, 100), cpu))
     for name, values in times.items():
         out[f"{name}_median_s"], out[f"{name}_max_s"] = statistics.median(values), max(values)
+    out["server_cpu_median_s"], out["server_cpu_max_s"] = statistics.median(cpu), max(cpu)
     out["server_peak_mib"] = server.peak_mib()
     browser.close()
     server.stop()

@@ -15,7 +15,7 @@ import campar
 from campar.cli import main
 from campar.errors import StoreDamaged
 from campar.explore.server import serve, shutdown
-from campar.explore.source import MapSource
+from campar.explore.source import PENDING_CELL, MapSource
 
 JOB = {
     "name": "explore",
@@ -362,3 +362,43 @@ def test_a_large_map_is_kept_at_a_stride_and_read_whole_where_zoomed_in(store, m
     assert (coarse == campar.open(store).label.values[0::2, 10::-2]).all()
     fine = drawn((x0, x1, y0, y1), 24, 12)  # 2 pixels a cell: the tiles, whole
     assert (fine[::2, ::2] == labels).all() and (fine[1::2, 1::2] == labels).all()
+
+
+def test_a_store_a_run_is_writing_is_drawn_as_its_tiles_commit(store, tmp_path):
+    """Tiles not committed are pending (drawn as not computed, a cell there cannot be
+    computed: one line, the server goes on); a tile committed later is verified and
+    drawn by the next refresh."""
+    from campar.sweep.job import Job
+    from campar.sweep.plan import plan_tiles
+    from campar.sweep.store import open_store, read_store
+
+    with read_store(store) as reader:
+        job = reader.job
+        tiles = plan_tiles(job)
+        stored = [{n: reader.read_tile(n, t) for n in reader.names} for t in tiles]
+    path = tmp_path / "running.zarr"
+    job = Job.from_dict({**job.to_dict(), "store": str(path)})
+    with open_store(path, job) as writer:
+        writer.write_tile(tiles[0], stored[0])
+    server = serve([path], warm_up=False)
+    try:
+        _scanned(server)
+        source = server.explorer.sources[0]
+        assert source.status()["verified"] == 1
+        assert source.cell(2, 3)["stored"] == "pending"
+        status, body = get(server, "/api/compute?row=2&col=3")
+        assert status == 422 and "not computed yet" in body and body.count("\n") == 1
+        field = source.fields["label"]
+        box = (*source.x_edges[[0, -1]], *source.y_edges[[0, -1]])
+        values, _ = source.view(field, box, 12, 6)
+        assert (values[2:] == PENDING_CELL).all()
+        with open_store(path, job) as writer:  # the run goes on: tile 1 commits
+            writer.write_tile(tiles[1], stored[1])
+        assert source.refresh() == 1
+        values, _ = source.view(field, box, 12, 6)
+        names = source.categories["label"]
+        drawn = np.array([[names[v] for v in row] for row in values[2:4]])
+        assert (drawn[:, ::-1] == campar.open(store).label.values[2:4]).all()
+        assert (values[4:] == PENDING_CELL).all()
+    finally:
+        shutdown(server)

@@ -238,6 +238,20 @@ def test_two_stores_side_by_side_and_their_difference(page, stores):
     redrawn(page)
 
 
+def test_the_typed_edges_are_those_of_campar_plot(page, stores):
+    from campar.views.boundaries import store_boundaries
+    from campar.views.plot.curves import CURVE_STYLES
+
+    page.check("#edges")
+    page.wait_for_function("window.explore.edges && window.explore.edges.data")
+    shown = page.evaluate("window.explore.edges.data.segments")
+    typed = [s for s in store_boundaries(stores[0]).segments if s.type in CURVE_STYLES]
+    assert sorted(shown) == sorted([*map(float, s.edge), s.type] for s in typed)
+    assert typed  # the test map has edges to draw
+    screenshot(page, "edges")
+    page.uncheck("#edges")
+
+
 def test_exports(page, tmp_path):
     with page.expect_download() as svg:
         page.click("#export-svg")

@@ -188,6 +188,29 @@ def _finite(a) -> list:
     return np.where(np.isfinite(a), a, None).tolist()
 
 
+MAX_SEGMENTS = 50_000  # typed edges sent to the page
+
+
+def edges_report(path, box) -> dict:
+    """The typed bifurcation edges of the map's cells in ``box`` = (x0, x1, y0, y1)
+    (``campar plot --bifurcations``, ``store_boundaries``), with their types' colours."""
+    from ..views.boundaries import store_boundaries
+    from ..views.plot.curves import CURVE_STYLES
+
+    x0, x1, y0, y1 = box
+    found = store_boundaries(path, omega=(x0, x1), second=(y0, y1))
+    drawn = [s for s in found.segments if s.type in CURVE_STYLES]
+    counts = {}
+    for segment in found.segments:
+        counts[segment.type] = counts.get(segment.type, 0) + 1
+    return {
+        "segments": [[*map(float, s.edge), s.type] for s in drawn[:MAX_SEGMENTS]],
+        "counts": counts,
+        "styles": {k: {"text": v[0], "colour": v[1]} for k, v in CURVE_STYLES.items()},
+        "multipliers": bool(found.multipliers),
+    }
+
+
 def warm_up() -> dict:
     """Compile (or load) the kernel and the tracer, so the first click is answered warm."""
     from ..views.point import simulate_point
@@ -201,6 +224,7 @@ ACTIONS = {
     "attractors": attractors_report,
     "cycle": cycle_report,
     "line": line_report,
+    "edges": edges_report,
     "warm_up": warm_up,
 }
 

@@ -41,6 +41,7 @@ MAX_PIXELS = 4096  # a view's width or height
 REFRESH_SECONDS = 1.0  # how often a store a run writes is looked at again
 MAX_STARTS = 200  # starts of an attractor census from the page
 MAX_CYCLE = 64  # period of a cycle by shooting from the page
+MAX_EDGE_CELLS = 400 * 400  # cells of a view whose edges are typed at a request
 ZOOM_POINTS = 100  # a zoom's cells along each side
 ZOOM_START_SECONDS = 60.0  # until a zoom's run has created its store
 
@@ -110,7 +111,7 @@ class Explorer:
         if not (box[0] < box[1] and box[2] < box[3]):
             raise BadRequest("the view needs x0 < x1 and y0 < y1")
         w, h = (_integer(q, k, 1, MAX_PIXELS) for k in ("w", "h"))
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.process_time()
         values, inside = source.view(field, box, w, h, layer)
         answer = {"field": field.name, "status": source.status()}
         if "diff" in q:  # the other store's view of the same box: where they differ
@@ -132,6 +133,7 @@ class Explorer:
             image = render.draw_numbers(values, inside, low, high)
         answer["image"] = "data:image/png;base64," + base64.b64encode(render.png(image)).decode()
         answer["seconds"] = round(time.perf_counter() - started, 4)
+        answer["cpu_seconds"] = round(time.process_time() - cpu, 4)  # the server process
         return answer
 
     def _range(self, source: MapSource, field, layer: int) -> tuple[float, float]:
@@ -171,6 +173,19 @@ class Explorer:
         else:
             args.append(_integer(q, "n", 1, MAX_CYCLE))
         return self.worker.run(action, *args)
+
+    def edges(self, q: dict) -> dict:
+        """The typed edges of the cells in a view (computed in the worker, bounded)."""
+        source = self._source(q)
+        box = tuple(_number(q, k) for k in ("x0", "x1", "y0", "y1"))
+        rows, cols = source.pixel_cells(box, 2, 2)  # the view's corner cells
+        cells = (abs(int(rows[1]) - int(rows[0])) + 1) * (abs(int(cols[1]) - int(cols[0])) + 1)
+        if cells > MAX_EDGE_CELLS:
+            raise BadRequest(
+                f"zoom in to type the edges: the view holds ~{cells} cells, "
+                f"more than {MAX_EDGE_CELLS}"
+            )
+        return self.worker.run("edges", str(source.path), box)
 
     def zoom(self, q: dict) -> dict:
         """Start (or find) the zoom of a rectangle; its store is served once it exists."""
@@ -356,6 +371,7 @@ class Handler(BaseHTTPRequestHandler):
                 "/api/attractors": lambda: explorer.compute(q, "attractors"),
                 "/api/cycle": lambda: explorer.compute(q, "cycle"),
                 "/api/line": lambda: explorer.compute(q, "line"),
+                "/api/edges": lambda: explorer.edges(q),
             }
             if method == "POST":
                 routes = {"/api/zoom": lambda: explorer.zoom(q)}

@@ -141,6 +141,16 @@ class MapView {
         ctx.beginPath(); ctx.moveTo(r.x, py); ctx.lineTo(r.x + r.w, py); ctx.stroke();
         ctx.setLineDash([]);
       }
+      if (state.edges && state.edges.store === this.storeIndex() && state.compare !== "diff") {
+        const styles = state.edges.data.styles;
+        ctx.lineWidth = 2;
+        for (const [x0, y0, x1, y1, type] of state.edges.data.segments) {
+          const [ax0, ay0] = this.toPixel(x0, y0), [ax1, ay1] = this.toPixel(x1, y1);
+          ctx.strokeStyle = styles[type].colour;
+          ctx.beginPath(); ctx.moveTo(ax0, ay0); ctx.lineTo(ax1, ay1); ctx.stroke();
+        }
+        ctx.lineWidth = 1;
+      }
       if (this.selection) {
         const s = this.selection;
         ctx.strokeStyle = "#2c7be5";
@@ -234,6 +244,34 @@ function activeViews() {
 function setBox(box) {
   state.box = box;
   for (const v of activeViews()) v.draw();
+  if ($("edges").checked) {
+    clearTimeout(state.edgesTimer);
+    state.edgesTimer = setTimeout(loadEdges, 400);
+  }
+}
+
+// The typed edges of the cells in view (computed by the server, as campar plot does).
+async function loadEdges() {
+  if (!$("edges").checked) {
+    state.edges = null;
+    for (const v of activeViews()) v.paint();
+    return;
+  }
+  const store = state.store, b = state.box;
+  const have = state.edges;
+  if (have && have.store === store && have.box[0] <= b[0] && have.box[1] >= b[1] &&
+      have.box[2] <= b[2] && have.box[3] >= b[3]) return; // the view lies in the typed box
+  $("status").textContent = "typing the edges …";
+  try {
+    const data = await api("edges", { store, x0: b[0], x1: b[1], y0: b[2], y1: b[3] });
+    state.edges = { store, box: b.slice(), data };
+    const counts = Object.entries(data.counts).map(([k, n]) => `${k} ${n}`).join(", ");
+    $("status").textContent = `typed edges: ${counts || "none"}` +
+      (data.multipliers ? "" : " (no multipliers stored: PD, SN, NS, jump cannot be told)");
+  } catch (error) {
+    showError(error.message);
+  }
+  for (const v of activeViews()) v.paint();
 }
 
 function resetBox() {
@@ -596,6 +634,7 @@ async function main() {
     }
     setBox(state.box);
   };
+  $("edges").onchange = loadEdges;
   $("line-mode").onclick = () => setMode("line");
   $("zoom-mode").onclick = () => setMode("zoom");
   $("reset").onclick = resetBox;
