@@ -402,3 +402,42 @@ def test_a_store_a_run_is_writing_is_drawn_as_its_tiles_commit(store, tmp_path):
         assert (values[4:] == PENDING_CELL).all()
     finally:
         shutdown(server)
+
+
+@pytest.mark.process
+def test_hysteresis_and_a_census_as_campar_open_gives_them(tmp_path):
+    """A both-directions store with a census: the layer selector's second direction, the
+    hysteresis cells and a hovered cell's attractors are campar.open's."""
+    path = tmp_path / "both.zarr"
+    campar.run(
+        {
+            **JOB,
+            "name": "both",
+            "sweep": {
+                "omega": {"from": 3.4, "to": 2.9, "points": 8},
+                "mu_kn": {"from": 0.93, "to": 0.89, "points": 3},
+            },
+            "chains": {"direction": "both"},
+            "attractors": {"starts": 3},
+            "store": str(path),
+        }
+    )
+    ds = campar.open(path)
+    server = serve([path], warm_up=False)
+    try:
+        _scanned(server)
+        (described,) = json.loads(get(server, "/api/stores")[1])
+        assert described["layers"] == ["down", "up"] and not described["curves"]
+        status, body = get(server, "/api/hysteresis?store=0")
+        assert status == 200, body
+        cells = json.loads(body)["cells"]
+        assert sorted(map(tuple, cells)) == sorted(zip(*np.nonzero(ds.hysteresis.values)))
+        for layer in (0, 1):
+            x, y = float(ds.omega[5]), float(ds.mu_kn[1])
+            cell = json.loads(get(server, f"/api/cell?x={x}&y={y}&layer={layer}")[1])
+            assert cell["label"] == ds.label.values[layer, 1, 5]
+            shown = [a["label"] for a in cell["attractors"]]
+            stored = [a for a in ds.attractor_label.values[layer, 1, 5] if a]
+            assert shown == stored and shown
+    finally:
+        shutdown(server)

@@ -211,6 +211,29 @@ def edges_report(path, box) -> dict:
     }
 
 
+def curves_report(path) -> dict:
+    """The map's continued bifurcation curves (``campar curves``, ``MAP-curves.zarr``
+    beside it), each a polyline in the map's plane with its type and period."""
+    from ..views.map_curves import read_curves
+    from ..views.plot.curves import CURVE_STYLES
+
+    curves = read_curves(path)
+    return {
+        "curves": [{"type": c.type, "n": int(c.n), "points": _finite(c.values)} for c in curves],
+        "styles": {k: {"text": v[0], "colour": v[1]} for k, v in CURVE_STYLES.items()},
+    }
+
+
+def hysteresis_report(path) -> dict:
+    """Where the two sweep directions of a ``both`` store end on different cycles
+    (``campar.open``'s ``hysteresis``): the cells (row, column)."""
+    from ..views.dataset import open as open_store
+
+    with open_store(path) as ds:
+        rows, cols = np.nonzero(ds["hysteresis"].values)
+    return {"cells": np.stack([rows, cols], axis=1).tolist()}
+
+
 def warm_up() -> dict:
     """Compile (or load) the kernel and the tracer, so the first click is answered warm."""
     from ..views.point import simulate_point
@@ -225,6 +248,8 @@ ACTIONS = {
     "cycle": cycle_report,
     "line": line_report,
     "edges": edges_report,
+    "curves": curves_report,
+    "hysteresis": hysteresis_report,
     "warm_up": warm_up,
 }
 

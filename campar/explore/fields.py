@@ -33,6 +33,7 @@ FIELDS = (
     Field("multiplier", "largest Floquet multiplier |λ|", ("multipliers",)),
     Field("flags", "flags (bits of campar.core.codes.Flag)", ("flags",), units=""),
     Field("revolutions", "revolutions computed", ("revolutions",), units=""),
+    Field("n_attractors", "distinct attractors (census)", ("n_attractors",), units=""),
 )
 BY_NAME = {f.name: f for f in FIELDS}
 
@@ -57,6 +58,6 @@ def numeric(field: Field, arrays: dict) -> np.ndarray:
             values = np.hypot(m[..., 0], m[..., 1]).max(axis=-1)
     else:
         values = np.asarray(arrays[field.needs[0]], np.float64)
-        if values.dtype.kind in "iu" or field.name in ("flags", "revolutions"):
+        if np.asarray(arrays[field.needs[0]]).dtype.kind in "iu":
             values = np.where(np.asarray(arrays[field.needs[0]]) < 0, np.nan, values)
     return values.astype(np.float32)

@@ -19,11 +19,13 @@ import time
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
+from pathlib import Path
 from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 
 from ..errors import CamparError
+from ..views.map_curves import curves_store_path
 from . import render
 from .cells import CellWorker
 from .source import MapSource
@@ -187,6 +189,10 @@ class Explorer:
             )
         return self.worker.run("edges", str(source.path), box)
 
+    def overlay(self, q: dict, action: str) -> dict:
+        """The continued curves or the hysteresis cells of a store (in the worker)."""
+        return self.worker.run(action, str(self._source(q).path))
+
     def zoom(self, q: dict) -> dict:
         """Start (or find) the zoom of a rectangle; its store is served once it exists."""
         from .zoom import start_zoom, zoom_job, zoom_store
@@ -233,10 +239,19 @@ def _describe(index: int, s: MapSource) -> dict:
         "store": index,
         "name": s.path.name,
         "job": job.name,
-        "x": {"name": job.first, "edges": [float(s.x_edges[0]), float(s.x_edges[-1])]},
-        "y": {"name": job.second, "edges": [float(s.y_edges[0]), float(s.y_edges[-1])]},
+        "x": {
+            "name": job.first,
+            "edges": [float(s.x_edges[0]), float(s.x_edges[-1])],
+            "values": job.first_values.tolist(),
+        },
+        "y": {
+            "name": job.second,
+            "edges": [float(s.y_edges[0]), float(s.y_edges[-1])],
+            "values": job.second_values.tolist(),
+        },
         "shape": [s.rows, s.cols],
         "layers": list(job.directions),
+        "curves": Path(curves_store_path(s.path)).exists(),
         "fields": [
             {"name": f.name, "title": f.title, "categorical": f.categorical}
             for f in s.fields.values()
@@ -268,6 +283,21 @@ def _cell_values(source: MapSource, arrays: dict) -> dict:
     if "multipliers" in arrays:
         out["multipliers"] = [[_json_number(a), _json_number(b)] for a, b in arrays["multipliers"]]
     out["state"] = [_json_number(a) for a in arrays["state"]]
+    if "attractor_kind" in arrays:  # a census: the coexisting attractors, most frequent first
+        out["attractors"] = [
+            {
+                "label": cell_label(int(k), int(n), int(p), source.job.classify.chatter_p),
+                "fraction": _json_number(f),
+            }
+            for k, n, p, f in zip(
+                arrays["attractor_kind"],
+                arrays["attractor_n"],
+                arrays["attractor_p"],
+                arrays["attractor_fraction"],
+                strict=True,
+            )
+            if k >= 0
+        ]
     return out
 
 
@@ -372,6 +402,8 @@ class Handler(BaseHTTPRequestHandler):
                 "/api/cycle": lambda: explorer.compute(q, "cycle"),
                 "/api/line": lambda: explorer.compute(q, "line"),
                 "/api/edges": lambda: explorer.edges(q),
+                "/api/curves": lambda: explorer.overlay(q, "curves"),
+                "/api/hysteresis": lambda: explorer.overlay(q, "hysteresis"),
             }
             if method == "POST":
                 routes = {"/api/zoom": lambda: explorer.zoom(q)}

@@ -48,6 +48,11 @@ CELL_ARRAYS = (
     "state",
     "revolutions",
     "steps",
+    "n_attractors",
+    "attractor_n",
+    "attractor_p",
+    "attractor_kind",
+    "attractor_fraction",
 )
 
 

@@ -16,6 +16,7 @@ const MAP_SIZE = [760, 560]; // canvas pixels: one map
 const SIDE_SIZE = [500, 420]; // each of two maps side by side
 
 const state = {
+  overlays: {},
   stores: [], store: 0, field: "label", layer: 0, compare: "one", box: null,
   mode: null, cell: null, line: null, views: [], ready: false, errors: [], zooms: [],
 };
@@ -150,6 +151,30 @@ class MapView {
           ctx.beginPath(); ctx.moveTo(ax0, ay0); ctx.lineTo(ax1, ay1); ctx.stroke();
         }
         ctx.lineWidth = 1;
+      }
+      const overlay = state.overlays[this.storeIndex()] || {};
+      if (overlay.curves && $("curves").checked) {
+        ctx.lineWidth = 2;
+        for (const c of overlay.curves.curves) {
+          ctx.strokeStyle = (overlay.curves.styles[c.type] || { colour: "#000" }).colour;
+          ctx.beginPath();
+          c.points.forEach(([x, y], i) => {
+            if (x === null || y === null) return;
+            const [px, py] = this.toPixel(x, y);
+            i ? ctx.lineTo(px, py) : ctx.moveTo(px, py);
+          });
+          ctx.stroke();
+        }
+        ctx.lineWidth = 1;
+      }
+      if (overlay.hysteresis && $("hysteresis").checked) {
+        const s = state.stores[this.storeIndex()];
+        const dx = (s.x.edges[1] - s.x.edges[0]) / s.shape[1], dy = (s.y.edges[1] - s.y.edges[0]) / s.shape[0];
+        ctx.strokeStyle = "#e41a1c";
+        for (const [x, y] of overlay.hysteresis.centres) {
+          const [ax, ay] = this.toPixel(x - dx / 2, y + dy / 2), [bx, by] = this.toPixel(x + dx / 2, y - dy / 2);
+          ctx.strokeRect(ax + 0.5, ay + 0.5, Math.max(bx - ax - 1, 1), Math.max(by - ay - 1, 1));
+        }
       }
       if (this.selection) {
         const s = this.selection;
@@ -310,6 +335,8 @@ function describeCell(cell, store) {
     `duty cycle ${fmt(cell.dc)}, ε min ${fmt(cell.eps_min)}, ε max ${fmt(cell.eps_max)}, Pn max ${fmt(cell.pn_max)}<br>` +
     (cell.lyapunov !== undefined ? `Lyapunov exponent ${fmt(cell.lyapunov)}<br>` : "") +
     (mult ? `multipliers ${mult}<br>` : "") +
+    (cell.attractors ? `attractors: ${cell.attractors.map((a) =>
+      `${a.label} (${a.fraction === null ? "—" : (100 * a.fraction).toFixed(0) + " %"})`).join(", ")}<br>` : "") +
     `flags: ${(cell.flags || []).join(", ") || "none"}; ${cell.revolutions} revolutions, ${cell.steps} steps`;
 }
 
@@ -462,6 +489,30 @@ async function drawLine(store, cell) {
     axisTitle(s.x.name), "σn: y (units of h)", "", data.changes.map((c) => ({ x: c.at })));
 }
 
+// -- overlays the store has: continued curves, hysteresis -------------------------------
+
+async function loadOverlay(name) {
+  const store = state.store, s = state.stores[store];
+  const have = state.overlays[store] = state.overlays[store] || {};
+  if ($(name).checked && !have[name]) {
+    $("status").textContent = `reading the ${name} …`;
+    try {
+      const data = await api(name, { store });
+      if (name === "hysteresis") {
+        // cell centres from (row, column): the axes' cells are evenly spaced
+        const xs = s.x.values, ys = s.y.values;
+        data.centres = data.cells.map(([r, c]) => [xs[c], ys[r]]);
+      }
+      have[name] = data;
+      $("status").textContent = name === "curves" ? `${data.curves.length} continued curves`
+        : `${data.cells.length} cells with hysteresis`;
+    } catch (error) {
+      showError(error.message);
+    }
+  }
+  for (const v of activeViews()) v.paint();
+}
+
 // -- a zoom that computes --------------------------------------------------------------
 
 async function startZoom(parent, box) {
@@ -601,6 +652,8 @@ function fillFields() {
   s.layers.forEach((name, i) => layers.add(new Option(name, i)));
   $("layer-box").style.display = s.layers.length > 1 ? "" : "none";
   $("compare-box").style.display = state.stores.length > 1 ? "" : "none";
+  $("curves-box").style.display = s.curves ? "" : "none";
+  $("hysteresis-box").style.display = s.layers.length > 1 ? "" : "none";
 }
 
 let watching = null;
@@ -635,6 +688,8 @@ async function main() {
     setBox(state.box);
   };
   $("edges").onchange = loadEdges;
+  $("curves").onchange = () => loadOverlay("curves");
+  $("hysteresis").onchange = () => loadOverlay("hysteresis");
   $("line-mode").onclick = () => setMode("line");
   $("zoom-mode").onclick = () => setMode("zoom");
   $("reset").onclick = resetBox;
