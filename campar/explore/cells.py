@@ -22,6 +22,7 @@ from ..errors import CamparError
 
 TRACE_POINTS = 4000  # samples of an orbit sent to the page (every k-th of the trace)
 CELL_SECONDS = 60.0  # default time limit of one computation
+WARM_UP_SECONDS = 900.0  # a cold compile of the kernel and the tracer on a loaded machine
 
 
 def one_cell_job(path, row: int, col: int, layer: int = 0):
@@ -287,20 +288,26 @@ class CellWorker:
         self._process.start()
         child.close()
 
-    def run(self, action: str, *args):
-        """The action's data; CamparError with the failure's line, or CellTimeout."""
-        with self._lock:
+    def run(self, action: str, *args, seconds: float | None = None):
+        """The action's data; CamparError with the failure's line, or CellTimeout after
+        ``seconds`` (default: the worker's limit)."""
+        limit = self.seconds if seconds is None else seconds
+        if not self._lock.acquire(timeout=limit):
+            raise CellTimeout(f"another computation held the worker for {limit:g} s; try again")
+        try:
             if self._process is None or not self._process.is_alive():
                 self.start()
             started = time.monotonic()
             self._conn.send((action, args))
-            if not self._conn.poll(self.seconds):
+            if not self._conn.poll(limit):
                 self.stop()
                 raise CellTimeout(
-                    f"the computation ran over its limit of {self.seconds:g} s and was ended"
+                    f"the computation ran over its limit of {limit:g} s and was ended"
                 )
             kind, data = self._conn.recv()
             data_seconds = time.monotonic() - started
+        finally:
+            self._lock.release()
         if kind == "error":
             raise CamparError(data)
         if isinstance(data, dict):

@@ -1,7 +1,7 @@
 """The explorer's HTTP server: the page, and a JSON route per question it asks.
 
 Standard library only (``http.server``, one thread per request). It binds 127.0.0.1
-unless told otherwise, answers only its own routes — the page's three files by name
+unless told otherwise, answers only its own routes — the page's files by name
 and the ``/api/`` routes, the stores by their index among those it was given, never a
 path taken from a request — and refuses a request naming another host (a page of
 another site reaching it through DNS rebinding). A bad request gets a 4xx with one
@@ -27,7 +27,7 @@ import numpy as np
 from ..errors import CamparError
 from ..views.map_curves import curves_store_path
 from . import render
-from .cells import CellWorker
+from .cells import WARM_UP_SECONDS, CellWorker
 from .source import MapSource
 
 log = logging.getLogger("campar.explore")
@@ -35,10 +35,14 @@ log = logging.getLogger("campar.explore")
 STATIC = {  # served path → (file of campar/explore/static, content type)
     "/": ("index.html", "text/html; charset=utf-8"),
     "/explore.js": ("explore.js", "text/javascript; charset=utf-8"),
+    "/plots.js": ("plots.js", "text/javascript; charset=utf-8"),
+    "/exports.js": ("exports.js", "text/javascript; charset=utf-8"),
+    "/overlays.js": ("overlays.js", "text/javascript; charset=utf-8"),
     "/explore.css": ("explore.css", "text/css; charset=utf-8"),
 }
 # The page runs only its own script (no inline or evaluated code); images are its maps.
 CSP = "default-src 'self'; img-src 'self' data: blob:; style-src 'self' 'unsafe-inline'"
+LOOPBACK_NAMES = frozenset({"127.0.0.1", "localhost", "::1"})
 MAX_PIXELS = 4096  # a view's width or height
 REFRESH_SECONDS = 1.0  # how often a store a run writes is looked at again
 MAX_STARTS = 200  # starts of an attractor census from the page
@@ -79,7 +83,7 @@ class Explorer:
         while not self._stop.is_set() and not all(s.scanned for s in self.sources):
             self._stop.wait(0.1)
         try:
-            self.worker.run("warm_up")
+            self.worker.run("warm_up", seconds=WARM_UP_SECONDS)
         except CamparError as exc:  # the first click says it again
             log.warning("warming the cell worker up: %s", exc)
 
@@ -207,7 +211,12 @@ class Explorer:
                 if other.path == store:
                     return {"store": index, "name": store.name, "running": self._running(store)}
             if not self._running(store):
-                self._zooms[store] = start_zoom(source, job, self.zoom_ranks)[1]
+                try:
+                    self._zooms[store] = start_zoom(source, job, self.zoom_ranks)[1]
+                except OSError as exc:
+                    raise CamparError(
+                        f"cannot start the zoom beside {source.path}: {exc}"
+                    ) from None
             deadline = time.monotonic() + ZOOM_START_SECONDS
             while True:
                 try:
@@ -423,7 +432,8 @@ class Handler(BaseHTTPRequestHandler):
 
     def _check_host(self) -> None:
         host = (self.headers.get("Host") or "").rsplit(":", 1)[0].strip("[]")
-        if host not in self.server.allowed_hosts:
+        allowed = self.server.allowed_hosts
+        if allowed is not None and host not in allowed:
             raise BadRequest(f"requests name this server by its address, not {host[:60]!r}")
 
     def _line(self, status: HTTPStatus, text: str) -> None:
@@ -456,7 +466,9 @@ class ExploreServer(ThreadingHTTPServer):
     def __init__(self, explorer: Explorer, host: str = "127.0.0.1", port: int = 0):
         super().__init__((host, port), Handler)
         self.explorer = explorer
-        self.allowed_hosts = {"127.0.0.1", "localhost", "::1", host}
+        # on the loopback interface only this machine's names reach it; on another
+        # interface the user has chosen who may (the Host header is then not checked)
+        self.allowed_hosts = LOOPBACK_NAMES if host in LOOPBACK_NAMES else None
 
     @property
     def url(self) -> str:

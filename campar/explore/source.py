@@ -276,7 +276,8 @@ class MapSource:
             return {**where, "stored": "damaged", "why": self.damage[tile.index]}
         if state == PENDING:
             return {**where, "stored": "pending"}
-        with read_store(self.path) as reader:
+        with self._lock:
+            reader = self._reader()
             names = [n for n in CELL_ARRAYS if n in reader.names]
             values = {n: reader.read_tile(n, tile)[row - tile.row_start, col] for n in names}
         return {**where, "stored": "verified", "arrays": values}

@@ -33,17 +33,6 @@ async function api(route, params, method) {
   return response.json();
 }
 
-function niceTicks(lo, hi, count) {
-  const span = hi - lo;
-  if (!(span > 0)) return [lo];
-  const raw = span / count;
-  const mag = Math.pow(10, Math.floor(Math.log10(raw)));
-  const step = [1, 2, 2.5, 5, 10].map((m) => m * mag).find((s) => span / s <= count) || raw;
-  const ticks = [];
-  for (let t = Math.ceil(lo / step) * step; t <= hi + step * 1e-9; t += step) ticks.push(+t.toPrecision(12));
-  return ticks;
-}
-
 // -- one map view ---------------------------------------------------------------------
 
 class MapView {
@@ -275,35 +264,6 @@ function setBox(box) {
   }
 }
 
-// The typed edges of the cells in view (computed by the server, as campar plot does).
-async function loadEdges() {
-  if (!$("edges").checked) {
-    state.edges = null;
-    for (const v of activeViews()) v.paint();
-    return;
-  }
-  const store = state.store, b = state.box;
-  const have = state.edges;
-  if (have && have.store === store && have.box[0] <= b[0] && have.box[1] >= b[1] &&
-      have.box[2] <= b[2] && have.box[3] >= b[3]) return; // the view lies in the typed box
-  $("status").textContent = "typing the edges …";
-  try {
-    const data = await api("edges", { store, x0: b[0], x1: b[1], y0: b[2], y1: b[3] });
-    state.edges = { store, box: b.slice(), data };
-    const counts = Object.entries(data.counts).map(([k, n]) => `${k} ${n}`).join(", ");
-    $("status").textContent = `typed edges: ${counts || "none"}` +
-      (data.multipliers ? "" : " (no multipliers stored: PD, SN, NS, jump cannot be told)");
-  } catch (error) {
-    showError(error.message);
-  }
-  for (const v of activeViews()) v.paint();
-}
-
-function resetBox() {
-  const s = state.stores[state.store];
-  setBox([s.x.edges[0], s.x.edges[1], s.y.edges[0], s.y.edges[1]]);
-}
-
 // -- hover and click ------------------------------------------------------------------
 
 function fmt(x, digits = 4) {
@@ -399,51 +359,6 @@ function drawOrbit(report) {
   plot($("yc"), series("yc", "#a65628"), "t (units of 1/ωn)", "yc (h)");
 }
 
-function clearPlot(canvas) {
-  canvas.getContext("2d").clearRect(0, 0, canvas.width, canvas.height);
-}
-
-// A small scatter or line plot: series of {points: [[x, y]], line | dot: colour}.
-function plot(canvas, series, xlabel, ylabel, title, marks) {
-  const ctx = canvas.getContext("2d");
-  const m = { left: 50, right: 8, top: title ? 16 : 6, bottom: 30 };
-  const w = canvas.width - m.left - m.right, h = canvas.height - m.top - m.bottom;
-  ctx.clearRect(0, 0, canvas.width, canvas.height);
-  const all = series.flatMap((s) => s.points).filter(([x, y]) => x !== null && y !== null);
-  if (!all.length) return;
-  let [x0, x1, y0, y1] = [Infinity, -Infinity, Infinity, -Infinity];
-  for (const [x, y] of all) { x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y); }
-  if (x1 === x0) { x0 -= 0.5; x1 += 0.5; }
-  if (y1 === y0) { y0 -= 0.5; y1 += 0.5; }
-  const pad = 0.04 * (y1 - y0); y0 -= pad; y1 += pad;
-  const X = (x) => m.left + (x - x0) / (x1 - x0) * w, Y = (y) => m.top + (y1 - y) / (y1 - y0) * h;
-  ctx.font = "10px system-ui, sans-serif"; ctx.fillStyle = "#222"; ctx.strokeStyle = "#333";
-  ctx.strokeRect(m.left, m.top, w, h);
-  if (title) { ctx.textAlign = "left"; ctx.textBaseline = "top"; ctx.fillText(title, m.left, 2); }
-  ctx.textAlign = "center"; ctx.textBaseline = "top";
-  for (const t of niceTicks(x0, x1, 5)) ctx.fillText(String(t), X(t), m.top + h + 3);
-  ctx.fillText(xlabel, m.left + w / 2, m.top + h + 16);
-  ctx.textAlign = "right"; ctx.textBaseline = "middle";
-  for (const t of niceTicks(y0, y1, 4)) ctx.fillText(String(t), m.left - 3, Y(t));
-  ctx.save(); ctx.translate(10, m.top + h / 2); ctx.rotate(-Math.PI / 2);
-  ctx.textAlign = "center"; ctx.fillText(ylabel, 0, 0); ctx.restore();
-  for (const mark of marks || []) {
-    ctx.strokeStyle = "#999"; ctx.setLineDash([3, 3]);
-    ctx.beginPath(); ctx.moveTo(X(mark.x), m.top); ctx.lineTo(X(mark.x), m.top + h); ctx.stroke();
-    ctx.setLineDash([]);
-  }
-  for (const s of series) {
-    if (s.line) {
-      ctx.strokeStyle = s.line; ctx.beginPath();
-      s.points.forEach(([x, y], i) => (i ? ctx.lineTo(X(x), Y(y)) : ctx.moveTo(X(x), Y(y))));
-      ctx.stroke();
-    } else {
-      ctx.fillStyle = s.dot;
-      for (const [x, y] of s.points) ctx.fillRect(X(x) - s.size / 2, Y(y) - s.size / 2, s.size, s.size);
-    }
-  }
-}
-
 async function cellAction(route, extra, describe) {
   const c = state.cell;
   if (!c) return;
@@ -487,30 +402,6 @@ async function drawLine(store, cell) {
     `${SYMBOL[s.x.name]}, ${data.points.length} points; label changes dashed (${data.changes.length})`;
   plot($("line-plot"), [{ points: data.points, dot: "#222", size: 2.5 }],
     axisTitle(s.x.name), "σn: y (units of h)", "", data.changes.map((c) => ({ x: c.at })));
-}
-
-// -- overlays the store has: continued curves, hysteresis -------------------------------
-
-async function loadOverlay(name) {
-  const store = state.store, s = state.stores[store];
-  const have = state.overlays[store] = state.overlays[store] || {};
-  if ($(name).checked && !have[name]) {
-    $("status").textContent = `reading the ${name} …`;
-    try {
-      const data = await api(name, { store });
-      if (name === "hysteresis") {
-        // cell centres from (row, column): the axes' cells are evenly spaced
-        const xs = s.x.values, ys = s.y.values;
-        data.centres = data.cells.map(([r, c]) => [xs[c], ys[r]]);
-      }
-      have[name] = data;
-      $("status").textContent = name === "curves" ? `${data.curves.length} continued curves`
-        : `${data.cells.length} cells with hysteresis`;
-    } catch (error) {
-      showError(error.message);
-    }
-  }
-  for (const v of activeViews()) v.paint();
 }
 
 // -- a zoom that computes --------------------------------------------------------------
@@ -577,50 +468,6 @@ function showError(message) {
   state.errors.push(message);
   $("status").textContent = message;
   $("status").className = "error";
-}
-
-function download(name, blob) {
-  const a = document.createElement("a");
-  a.href = URL.createObjectURL(blob);
-  a.download = name;
-  document.body.appendChild(a);
-  a.click();
-  a.remove();
-}
-
-function exportPng() {
-  state.views[0].canvas.toBlob((blob) => download(`${state.stores[state.store].job}-${state.field}.png`, blob));
-}
-
-function exportSvg() {
-  const v = state.views[0], r = v.rect, c = v.canvas;
-  const [ax, ay] = v.toPixel(v.imageBox[0], v.imageBox[3]);
-  const [bx, by] = v.toPixel(v.imageBox[1], v.imageBox[2]);
-  const s = state.stores[v.storeIndex()], b = state.box;
-  const esc = (t) => String(t).replace(/&/g, "&amp;").replace(/</g, "&lt;");
-  const parts = [`<svg xmlns="http://www.w3.org/2000/svg" width="${c.width}" height="${c.height}" font-family="sans-serif" font-size="11">`,
-    `<clipPath id="plot"><rect x="${r.x}" y="${r.y}" width="${r.w}" height="${r.h}"/></clipPath>`,
-    `<image clip-path="url(#plot)" x="${ax}" y="${ay}" width="${bx - ax}" height="${by - ay}" preserveAspectRatio="none" style="image-rendering:pixelated" href="${v.answer.image}"/>`,
-    `<rect x="${r.x}" y="${r.y}" width="${r.w}" height="${r.h}" fill="none" stroke="#333"/>`];
-  for (const t of niceTicks(b[0], b[1], 8)) {
-    const [px] = v.toPixel(t, b[2]);
-    parts.push(`<line x1="${px}" x2="${px}" y1="${r.y + r.h}" y2="${r.y + r.h + 4}" stroke="#333"/>`,
-      `<text x="${px}" y="${r.y + r.h + 16}" text-anchor="middle">${t}</text>`);
-  }
-  for (const t of niceTicks(b[2], b[3], 8)) {
-    const [, py] = v.toPixel(b[0], t);
-    parts.push(`<line x1="${r.x - 4}" x2="${r.x}" y1="${py}" y2="${py}" stroke="#333"/>`,
-      `<text x="${r.x - 6}" y="${py + 4}" text-anchor="end">${t}</text>`);
-  }
-  parts.push(`<text x="${r.x + r.w / 2}" y="${r.y + r.h + 34}" text-anchor="middle">${esc(axisTitle(s.x.name))}</text>`,
-    `<text transform="translate(14 ${r.y + r.h / 2}) rotate(-90)" text-anchor="middle">${esc(axisTitle(s.y.name))}</text>`, "</svg>");
-  download(`${s.job}-${state.field}.svg`, new Blob([parts.join("\n")], { type: "image/svg+xml" }));
-}
-
-function exportJson() {
-  const c = state.cell;
-  if (!c || !c.report) return;
-  download(`cell-${c.row}-${c.col}.json`, new Blob([JSON.stringify(c, null, 1)], { type: "application/json" }));
 }
 
 // -- set-up -----------------------------------------------------------------------------
