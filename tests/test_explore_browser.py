@@ -201,6 +201,17 @@ def test_a_row_gives_its_bifurcation_line(page, stores):
     assert line["row"] == 4
     assert line["labels"] == ds.label.values[4].tolist()  # the row's chain, run again
     assert len(line["points"]) >= 12
+    # the branches through a periodic cell of the row: they pass through its stored cycle
+    i = next(j for j in range(12) if ds.label.values[4, j] == "1-1")
+    page.evaluate("window.explore.cell = null")
+    page.mouse.click(*_mouse_at(page, ds.omega.values[i], ds.mu_cn.values[4]))
+    page.wait_for_function("window.explore.cell && window.explore.cell.report")
+    page.click("#branch")
+    page.wait_for_function("window.explore.line.branch")
+    branch = page.evaluate("window.explore.line.branch")
+    y = float(ds.state.values[4, i, 0])
+    at_cell = [p for b in branch["branches"] for p in b["points"] if p[0] == ds.omega.values[i]]
+    assert any(abs(p[1] - y) < 1e-6 and p[2] for p in at_cell), (y, at_cell)
     screenshot(page, "line")
     page.evaluate("window.explore.line = null")  # its row's mark off the map's colours
 

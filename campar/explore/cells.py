@@ -176,6 +176,55 @@ def line_report(path, row: int) -> dict:
     }
 
 
+def branch_report(path, row: int, col: int) -> dict:
+    """The branches through the cell's cycle along the map's first axis, both ways to the
+    map's ends (``campar continue``), with one level of period doubling followed: each
+    branch's σn points y with their stability, and its special points (PD, SN, NS, G)."""
+    from ..views.continuation import continue_from_cell
+
+    job, arrays = one_cell_job(path, row, col)
+    if int(arrays["kind"]) != 0 or int(arrays["n"]) < 1:
+        raise CamparError(f"cell ({row}, {col}) is not periodic: no cycle to continue")
+    settings = _point_settings(job)
+    model = {k: settings.pop(k) for k in ("tensile", "duty_cycle", "cam_velocity")}
+    from ..sweep.store import read_store
+
+    with read_store(path) as reader:  # the map's own range along its first axis
+        axis = reader.job.sweep[job.first]
+    here = float(job.first_values[0])
+    ends = [float(axis.start), float(axis.stop)]
+    branches, special = [], []
+    y0, v0 = (float(a) for a in arrays["state"])
+    for end in sorted(set(ends)):
+        if end == here:
+            continue
+        result = continue_from_cell(
+            job.first,
+            (here, end),
+            settings,
+            y0=y0,
+            v0=v0,
+            cycle=int(arrays["n"]),
+            switch=1,
+            model=model,
+        )
+        for branch in result.root.walk():
+            points = [
+                [float(x), float(y), bool(stable)]
+                for x, sec, stable in zip(
+                    branch.values, branch.sections, branch.stable, strict=True
+                )
+                for y in sec[:, 0]
+                if math.isfinite(y)
+            ]
+            branches.append({"n": branch.n, "points": points})
+        special += [
+            {"type": sp.type, "value": float(sp.value), "y": float(sp.state[0]), "n": b.n}
+            for b, sp in result.special_points()
+        ]
+    return {"branches": branches, "special": special, "parameter": job.first}
+
+
 def _point_settings(job) -> dict:
     from ..views.point import point_parameters
 
@@ -249,6 +298,7 @@ ACTIONS = {
     "cycle": cycle_report,
     "line": line_report,
     "edges": edges_report,
+    "branch": branch_report,
     "curves": curves_report,
     "hysteresis": hysteresis_report,
     "warm_up": warm_up,

@@ -174,6 +174,8 @@ class Explorer:
             args.append(_integer(q, "layer", 0, source.layers - 1, default=0))
         elif action == "line":
             args.pop()
+        elif action == "branch":
+            pass
         elif action == "attractors":
             args.append(_integer(q, "k", 2, MAX_STARTS, default=16))
         else:
@@ -410,6 +412,7 @@ class Handler(BaseHTTPRequestHandler):
                 "/api/attractors": lambda: explorer.compute(q, "attractors"),
                 "/api/cycle": lambda: explorer.compute(q, "cycle"),
                 "/api/line": lambda: explorer.compute(q, "line"),
+                "/api/branch": lambda: explorer.compute(q, "branch"),
                 "/api/edges": lambda: explorer.edges(q),
                 "/api/curves": lambda: explorer.overlay(q, "curves"),
                 "/api/hysteresis": lambda: explorer.overlay(q, "hysteresis"),

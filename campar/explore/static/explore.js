@@ -398,10 +398,46 @@ async function drawLine(store, cell) {
     return;
   }
   state.line.data = data;
+  state.line.branch = null;
   $("line-head").textContent = `${SYMBOL[s.y.name]} = ${fmt(cell[s.y.name], 5)}: σn points y over ` +
     `${SYMBOL[s.x.name]}, ${data.points.length} points; label changes dashed (${data.changes.length})`;
-  plot($("line-plot"), [{ points: data.points, dot: "#222", size: 2.5 }],
-    axisTitle(s.x.name), "σn: y (units of h)", "", data.changes.map((c) => ({ x: c.at })));
+  drawLinePlot();
+}
+
+function drawLinePlot() {
+  const line = state.line, s = state.stores[line.store], data = line.data;
+  const series = [{ points: data.points, dot: "#222", size: 2.5 }];
+  const marks = data.changes.map((c) => ({ x: c.at }));
+  if (line.branch) {
+    const stable = [], unstable = [];
+    for (const b of line.branch.branches) {
+      for (const [x, y, ok] of b.points) (ok ? stable : unstable).push([x, y]);
+    }
+    series.push({ points: stable, dot: "#2c7be5", size: 2 }, { points: unstable, dot: "#f28e2b", size: 2 });
+    series.push({ points: line.branch.special.map((p) => [p.value, p.y]), dot: "#e41a1c", size: 6 });
+  }
+  plot($("line-plot"), series, axisTitle(s.x.name), "σn: y (units of h)", "", marks);
+}
+
+// The branches through the clicked cell's cycle along the row (campar continue).
+async function continueCell() {
+  const c = state.cell, line = state.line;
+  if (!c || !c.report || !line || !line.data || c.store !== line.store || c.row !== line.row) {
+    $("branch-head").textContent = "draw a row's line, then click a periodic cell of that row";
+    return;
+  }
+  $("branch-head").textContent = "continuing the cycle …";
+  try {
+    line.branch = await api("branch", { store: c.store, row: c.row, col: c.col });
+  } catch (error) {
+    $("branch-head").textContent = error.message;
+    return;
+  }
+  const sp = line.branch.special.map((p) => `${p.type} at ${fmt(p.value, 4)}`).join(", ");
+  const count = line.branch.branches.length;
+  $("branch-head").textContent = `${count} branch${count === 1 ? "" : "es"}: stable blue, ` +
+    `unstable orange; special points (red) ${sp || "none"}`;
+  drawLinePlot();
 }
 
 // -- a zoom that computes --------------------------------------------------------------
@@ -535,6 +571,7 @@ async function main() {
     setBox(state.box);
   };
   $("edges").onchange = loadEdges;
+  $("branch").onclick = continueCell;
   $("curves").onchange = () => loadOverlay("curves");
   $("hysteresis").onchange = () => loadOverlay("hysteresis");
   $("line-mode").onclick = () => setMode("line");
