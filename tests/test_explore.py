@@ -431,7 +431,7 @@ def test_hysteresis_and_a_census_as_campar_open_gives_them(tmp_path):
         status, body = get(server, "/api/hysteresis?store=0")
         assert status == 200, body
         cells = json.loads(body)["cells"]
-        assert sorted(map(tuple, cells)) == sorted(zip(*np.nonzero(ds.hysteresis.values)))
+        assert sorted(cells) == sorted(np.argwhere(ds.hysteresis.values).tolist())
         for layer in (0, 1):
             x, y = float(ds.omega[5]), float(ds.mu_kn[1])
             cell = json.loads(get(server, f"/api/cell?x={x}&y={y}&layer={layer}")[1])

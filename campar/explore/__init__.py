@@ -7,8 +7,9 @@
   at a stride that bounds the server's memory, the tiles a run commits taken in as they
   come, and a view's cells chosen one per screen pixel;
 - ``render``: a view's cells as an image (the maps' palette, hatched gaps) and its legend;
-- ``cells``: one cell computed again as ``campar point`` computes it (``cell_at``), in a
-  worker process that a time limit can end;
+- ``cells``: one cell computed again as ``campar point`` computes it (``cell_at``), and the
+  page's other computations (a row's line, a census, a cycle, branches, typed edges);
+- ``worker``: the process they run in, which a time limit can end;
 - ``zoom``: a rectangle of a map recomputed at full resolution by the runner, a store of
   its own beside the map;
 - ``server``: the HTTP server (standard library) and its routes; ``static/``: the page;

@@ -6,23 +6,17 @@ at that cell, started from the cell's stored final state (a point of its attract
 multipliers and the steady orbit traced densely. The other actions of the cell panel
 (its attractors from K starts, its n-cycle by shooting) take the same cell's parameters.
 
-The computations run in one worker process (spawned, so the server's threads never share
-numba's state with it): a request that outlives its time limit ends the worker, the
-page is told, and the next request starts a fresh one.
+Each is a plain function of plain arguments returning JSON-ready data (``ACTIONS``), run
+by the server's worker process (``campar.explore.worker``).
 """
 
 import math
-import multiprocessing
-import threading
-import time
 
 import numpy as np
 
 from ..errors import CamparError
 
 TRACE_POINTS = 4000  # samples of an orbit sent to the page (every k-th of the trace)
-CELL_SECONDS = 60.0  # default time limit of one computation
-WARM_UP_SECONDS = 900.0  # a cold compile of the kernel and the tracer on a loaded machine
 
 
 def one_cell_job(path, row: int, col: int, layer: int = 0):
@@ -303,70 +297,3 @@ ACTIONS = {
     "hysteresis": hysteresis_report,
     "warm_up": warm_up,
 }
-
-
-def _serve(conn) -> None:
-    """The worker's loop: (action, args) in, ("ok", data) or ("error", one line) out."""
-    while True:
-        try:
-            action, args = conn.recv()
-        except EOFError:
-            return
-        try:
-            conn.send(("ok", ACTIONS[action](*args)))
-        except Exception as exc:  # shown in the page: the worker goes on
-            conn.send(("error", f"{type(exc).__name__}: {' '.join(str(exc).split())}"))
-
-
-class CellTimeout(CamparError):
-    pass
-
-
-class CellWorker:
-    """One worker process for the cell computations, restarted after a time-out."""
-
-    def __init__(self, seconds: float = CELL_SECONDS):
-        self.seconds = seconds
-        self._lock = threading.Lock()
-        self._process = None
-        self._conn = None
-
-    def start(self) -> None:
-        ctx = multiprocessing.get_context("spawn")
-        self._conn, child = ctx.Pipe()
-        self._process = ctx.Process(target=_serve, args=(child,), daemon=True)
-        self._process.start()
-        child.close()
-
-    def run(self, action: str, *args, seconds: float | None = None):
-        """The action's data; CamparError with the failure's line, or CellTimeout after
-        ``seconds`` (default: the worker's limit)."""
-        limit = self.seconds if seconds is None else seconds
-        if not self._lock.acquire(timeout=limit):
-            raise CellTimeout(f"another computation held the worker for {limit:g} s; try again")
-        try:
-            if self._process is None or not self._process.is_alive():
-                self.start()
-            started = time.monotonic()
-            self._conn.send((action, args))
-            if not self._conn.poll(limit):
-                self.stop()
-                raise CellTimeout(
-                    f"the computation ran over its limit of {limit:g} s and was ended"
-                )
-            kind, data = self._conn.recv()
-            data_seconds = time.monotonic() - started
-        finally:
-            self._lock.release()
-        if kind == "error":
-            raise CamparError(data)
-        if isinstance(data, dict):
-            data["seconds"] = round(data_seconds, 3)
-        return data
-
-    def stop(self) -> None:
-        if self._process is not None:
-            self._process.kill()
-            self._process.join(5)
-            self._conn.close()
-        self._process = None

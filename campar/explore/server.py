@@ -27,8 +27,8 @@ import numpy as np
 from ..errors import CamparError
 from ..views.map_curves import curves_store_path
 from . import render
-from .cells import WARM_UP_SECONDS, CellWorker
 from .source import MapSource
+from .worker import WARM_UP_SECONDS, CellWorker
 
 log = logging.getLogger("campar.explore")
 
