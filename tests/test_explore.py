@@ -439,5 +439,19 @@ def test_hysteresis_and_a_census_as_campar_open_gives_them(tmp_path):
             shown = [a["label"] for a in cell["attractors"]]
             stored = [a for a in ds.attractor_label.values[layer, 1, 5] if a]
             assert shown == stored and shown
+        # the sets of coexisting attractors, one pixel a cell, as campar plot names them
+        from campar.sweep.attractor_sets import attractor_sets
+
+        source = server.explorer.sources[0]
+        box = (*source.x_edges[[0, -1]], *source.y_edges[[0, -1]])
+        for layer in (0, 1):
+            values, _ = source.view(source.fields["attractor_set"], box, 8, 3, layer)
+            names = source.categories["attractor_set"]
+            drawn = np.array([[names[v] for v in row] for row in values])[:, ::-1]
+            codes, expected = attractor_sets(
+                *(ds[f"attractor_{k}"].values[layer] for k in ("kind", "n", "p")),
+                ds.n_attractors.values[layer],
+            )
+            assert (drawn == np.array([e or "none settled" for e in expected])[codes]).all()
     finally:
         shutdown(server)

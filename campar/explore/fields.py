@@ -10,7 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..views.plot.labels import map_kinds, map_labels
+from ..sweep.attractor_sets import attractor_sets
+from ..views.plot.labels import NOT_COMPUTED, map_kinds, map_labels
+
+NONE_SETTLED = "none settled"  # a census cell whose starts reached no attractor
 
 
 @dataclass(frozen=True)
@@ -34,6 +37,13 @@ FIELDS = (
     Field("flags", "flags (bits of campar.core.codes.Flag)", ("flags",), units=""),
     Field("revolutions", "revolutions computed", ("revolutions",), units=""),
     Field("n_attractors", "distinct attractors (census)", ("n_attractors",), units=""),
+    Field(
+        "attractor_set",
+        "set of coexisting attractors (census)",
+        ("n_attractors", "attractor_kind", "attractor_n", "attractor_p"),
+        categorical=True,
+        units="",
+    ),
 )
 BY_NAME = {f.name: f for f in FIELDS}
 
@@ -46,6 +56,18 @@ def fields_of(names) -> list[Field]:
 
 def categories(field: Field, arrays: dict, chatter_p: int):
     """(codes, names): each cell's category index into ``names``, for a categorical field."""
+    if field.name == "attractor_set":  # "1-1 + 2-2", as campar plot --what attractor_sets
+        count = np.asarray(arrays["n_attractors"])
+        codes, names = attractor_sets(
+            arrays["attractor_kind"],
+            arrays["attractor_n"],
+            arrays["attractor_p"],
+            count,
+            chatter_p,
+        )
+        names = [name or NONE_SETTLED for name in names]
+        pending = len(names)
+        return np.where(count < 0, pending, codes), [*names, NOT_COMPUTED]
     cells = map_labels(arrays, chatter_p) if field.name == "label" else map_kinds(arrays)
     return cells.codes, [e.label for e in cells.entries]
 

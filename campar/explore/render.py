@@ -20,6 +20,7 @@ from ..views.plot.labels import (
     FAILED,
     GAP_STYLE,
     NOT_COMPUTED,
+    POOL,
     CategoryMap,
     LegendEntry,
     distinct_categories,
@@ -40,10 +41,13 @@ def rgb255(colour) -> tuple[int, int, int, int]:
 
 
 @functools.lru_cache(maxsize=64)
-def category_legend(names: tuple[str, ...], counts: tuple) -> tuple[list, np.ndarray]:
+def category_legend(names: tuple[str, ...], counts: tuple, sets: bool = False):
     """(legend rows, colours): rows {label, count, colour, members} in legend order over
     the map's counts ((category, cells) pairs), and the RGBA (uint8) of every category id
-    of ``names``. Cached: a view of a map that is not growing reuses its legend."""
+    of ``names``. Cached: a view of a map that is not growing reuses its legend.
+    ``sets``: the categories are sets of coexisting attractors (``set_legend``)."""
+    if sets:
+        return set_legend(names, counts)
     counted = dict(counts)
     present = sorted(counted, key=order_key)
     cells = CategoryMap(
@@ -69,6 +73,34 @@ def category_legend(names: tuple[str, ...], counts: tuple) -> tuple[list, np.nda
         for e in shown.entries
     ]
     return rows, colours
+
+
+def set_legend(names: tuple[str, ...], counts: tuple):
+    """The legend of attractor sets as ``campar plot --what attractor_sets`` draws them:
+    sets of several attractors a POOL colour each by cells, single attractors grey."""
+    counted = dict(counts)
+    several = sorted((n for n in counted if "+" in n), key=lambda n: -counted[n])
+    colour_of = {n: POOL[k % len(POOL)] for k, n in enumerate(several)}
+    rows = [
+        {
+            "label": n,
+            "count": counted[n],
+            "colour": "#{:02x}{:02x}{:02x}".format(*rgb255(_set_colour(n, colour_of))[:3]),
+            "members": [],
+            "hatch": n == NOT_COMPUTED,
+        }
+        for n in [*several, *sorted(n for n in counted if n not in colour_of)]
+    ]
+    colours = np.array(
+        [rgb255(_set_colour(n, colour_of)) for n in names] or np.zeros((0, 4)), np.uint8
+    ).reshape(-1, 4)
+    return rows, colours
+
+
+def _set_colour(name: str, colour_of: dict):
+    if name in colour_of:
+        return colour_of[name]
+    return "white" if name in (NOT_COMPUTED, "none settled") else "0.82"
 
 
 @functools.lru_cache(maxsize=1024)

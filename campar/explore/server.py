@@ -131,7 +131,8 @@ class Explorer:
         elif field.categorical:
             names = tuple(source.categories[field.name])
             counts = tuple(source.legend(field, layer))
-            answer["legend"], colours = render.category_legend(names, counts)
+            sets = field.name == "attractor_set"
+            answer["legend"], colours = render.category_legend(names, counts, sets)
             image = render.draw_categories(values, inside, names, colours)
         else:
             low, high = self._range(source, field, layer)
