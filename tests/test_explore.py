@@ -455,3 +455,26 @@ def test_hysteresis_and_a_census_as_campar_open_gives_them(tmp_path):
             assert (drawn == np.array([e or "none settled" for e in expected])[codes]).all()
     finally:
         shutdown(server)
+
+
+@pytest.mark.process
+def test_the_continued_curves_are_those_campar_curves_stored(store, tmp_path):
+    from campar.views.map_curves import read_curves
+
+    path = tmp_path / "map.zarr"
+    shutil.copytree(store, path)
+    assert main(["curves", str(path)]) == 0
+    expected = read_curves(path)
+    assert expected  # the map has a PD edge to seed from
+    server = serve([path], warm_up=False)
+    try:
+        (described,) = json.loads(get(server, "/api/stores")[1])
+        assert described["curves"]
+        status, body = get(server, "/api/curves?store=0")
+        assert status == 200, body
+        shown = json.loads(body)["curves"]
+        assert [(c["type"], c["n"]) for c in shown] == [(c.type, c.n) for c in expected]
+        for c, e in zip(shown, expected, strict=True):
+            assert np.array_equal(np.array(c["points"], float), e.values)
+    finally:
+        shutdown(server)
