@@ -192,6 +192,25 @@ def test_a_click_computes_the_cell_as_campar_point(page, stores):
     screenshot(page, "cell")
 
 
+def test_a_failing_computation_is_shown_and_the_page_goes_on(page, stores):
+    page.evaluate("computeCell(0, {row: 99, col: 0, omega: 1, mu_cn: 0.7})")
+    page.wait_for_function("document.getElementById('cell-label').className === 'error'")
+    assert page.inner_text("#cell-label").startswith("400 Bad Request: row must be in [0, 5]")
+    ds = campar.open(stores[0])
+    page.mouse.click(*_mouse_at(page, ds.omega.values[3], ds.mu_cn.values[2]))
+    page.wait_for_function("window.explore.cell.report")
+    assert page.inner_text("#cell-label") == ds.label.values[2, 3]
+
+
+def test_without_chromium_under_ci_the_tests_fail(monkeypatch):
+    monkeypatch.setenv("CI", "true")
+    with pytest.raises(pytest.fail.Exception):
+        _require("Chromium is missing")
+    monkeypatch.setenv("CI", "false")
+    with pytest.raises(pytest.skip.Exception):
+        _require("Chromium is missing")
+
+
 def test_a_row_gives_its_bifurcation_line(page, stores):
     ds = campar.open(stores[0])
     page.click("#line-mode")
