@@ -58,7 +58,8 @@ def stores(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def url(stores):
-    command = [sys.executable, "-m", "campar.cli", "explore", "--no-browser", *map(str, stores)]
+    command = [sys.executable, "-m", "campar.cli", "explore", "--no-browser", "--zoom-ranks", "1"]
+    command += [str(s) for s in stores]
     proc = subprocess.Popen(command, stdout=subprocess.PIPE, text=True)
     try:
         line = proc.stdout.readline()
@@ -280,6 +281,30 @@ def test_the_typed_edges_are_those_of_campar_plot(page, stores):
     assert typed  # the test map has edges to draw
     screenshot(page, "edges")
     page.uncheck("#edges")
+
+
+def test_a_zoom_is_computed_and_drawn_over_the_map(page, stores):
+    """A rectangle dragged in zoom mode is run again on a 4 × 4 grid of its own, beside
+    the map, and drawn over it in its own labels' colours as its tiles commit."""
+    page.fill("#zoom-points", "4")
+    page.click("#zoom-mode")
+    start, end = _mouse_at(page, 2.0, 0.85), _mouse_at(page, 4.0, 0.65)
+    page.mouse.move(*start)
+    page.mouse.down()
+    page.mouse.move(*end, steps=4)
+    page.mouse.up()
+    page.wait_for_function("window.explore.zooms.length === 1")
+    index = page.evaluate("window.explore.zooms[0].store")
+    page.wait_for_function(
+        f"""fetch('/api/stores').then(r => r.json()).then(s =>
+        s[{index}].status.verified === s[{index}].status.tiles)"""
+    )
+    redrawn(page)
+    (zoom,) = (stores[0].parent / f"{stores[0].name}.zooms").glob("*.zarr")
+    z = campar.open(zoom)
+    centres = [(z.omega.values[j], z.mu_cn.values[i]) for i in range(4) for j in range(4)]
+    assert np.array_equal(pixels(page, centres), label_rgba(z.label.values.ravel()))
+    screenshot(page, "zoom")
 
 
 def test_exports(page, tmp_path):

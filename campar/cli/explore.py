@@ -25,6 +25,12 @@ def add_explore(sub):
         default=60.0,
         help="time limit of one computation of the page (a cell, a line, a census) (60)",
     )
+    p.add_argument(
+        "--zoom-ranks",
+        type=int,
+        default=2,
+        help="MPI ranks of a zoom's run (mpirun -n; 1: the serial runner) (2)",
+    )
     p.set_defaults(handler=run_explore)
 
 
@@ -41,8 +47,11 @@ def run_explore(args) -> int:
         raise JobError(f"--port must be in [0, 65535], got {args.port}")
     if not args.cell_seconds > 0:
         raise JobError(f"--cell-seconds must be > 0, got {args.cell_seconds}")
+    if not 1 <= args.zoom_ranks <= 1024:
+        raise JobError(f"--zoom-ranks must be in [1, 1024], got {args.zoom_ranks}")
     try:
         server = serve(args.stores, args.host, args.port, args.cell_seconds)
+        server.explorer.zoom_ranks = args.zoom_ranks
     except OSError as exc:
         raise JobError(f"cannot listen on {args.host}:{args.port}: {exc.strerror}") from None
     stop = threading.Event()

@@ -44,7 +44,7 @@ STATIC = {  # served path → (file of campar/explore/static, content type)
 CSP = "default-src 'self'; img-src 'self' data: blob:; style-src 'self' 'unsafe-inline'"
 LOOPBACK_NAMES = frozenset({"127.0.0.1", "localhost", "::1"})
 MAX_PIXELS = 4096  # a view's width or height
-REFRESH_SECONDS = 1.0  # how often a store a run writes is looked at again
+REFRESH_SECONDS = 0.5  # how often a store a run writes is looked at again
 MAX_STARTS = 200  # starts of an attractor census from the page
 MAX_CYCLE = 64  # period of a cycle by shooting from the page
 MAX_EDGE_CELLS = 400 * 400  # cells of a view whose edges are typed at a request
@@ -121,7 +121,9 @@ class Explorer:
         values, inside = source.view(field, box, w, h, layer)
         answer = {"field": field.name, "status": source.status()}
         if "diff" in q:  # the other store's view of the same box: where they differ
-            other = self.sources[1 - self.sources.index(source)] if len(self.sources) > 1 else None
+            # the other of the two stores given (zooms added later are not compared)
+            other = self.sources[1 if source is self.sources[0] else 0]
+            other = None if other is source else other
             if other is None or field.name not in other.fields:
                 raise BadRequest("a difference needs two stores with the field")
             theirs, inside2 = other.view(other.fields[field.name], box, w, h, layer)

@@ -55,7 +55,7 @@ class MapView {
       h: c.height - MARGIN.top - MARGIN.bottom };
   }
   storeIndex() {
-    return state.compare === "side" && this.index === 1 ? 1 - state.store : state.store;
+    return state.compare === "side" && this.index === 1 ? otherStore() : state.store;
   }
   toPixel(x, y) {
     const r = this.rect, b = state.box;
@@ -98,7 +98,7 @@ class MapView {
     for (const zoom of state.zooms) {
       if (zoom.parent !== this.storeIndex() || zoom.store === undefined) continue;
       try {
-        const a = await api("map", { store: zoom.store, field: state.field in zoom.fields ? state.field : "label",
+        const a = await api("map", { store: zoom.store, field: state.field,
           x0: box[0], x1: box[1], y0: box[2], y1: box[3], w: Math.round(r.w), h: Math.round(r.h) });
         const im = new Image();
         im.src = a.image;
@@ -197,7 +197,7 @@ class MapView {
     ctx.fillText(axisTitle(s.y.name), 0, 0);
     ctx.restore();
     this.caption.textContent = `${s.name} (${s.job}, ${s.shape[0]} × ${s.shape[1]} cells)` +
-      (state.compare === "diff" ? ` − ${state.stores[1 - state.store].name}` : "");
+      (state.compare === "diff" ? ` − ${state.stores[otherStore()].name}` : "");
   }
   listen() {
     const c = this.canvas;
@@ -249,6 +249,11 @@ class MapView {
     c.addEventListener("mouseleave", () => { drag = null; });
     c.addEventListener("dblclick", () => resetBox());
   }
+}
+
+// The other of the two stores given, to compare with (zoom stores come after them).
+function otherStore() {
+  return state.store === 0 ? 1 : 0;
 }
 
 function activeViews() {
@@ -444,9 +449,10 @@ async function continueCell() {
 
 async function startZoom(parent, box) {
   try {
-    const zoom = await api("zoom", { store: parent, x0: box[0], x1: box[1], y0: box[2], y1: box[3] }, "POST");
+    const zoom = await api("zoom", { store: parent, x0: box[0], x1: box[1], y0: box[2], y1: box[3],
+      points: $("zoom-points").value }, "POST");
     await loadStores();
-    state.zooms.push({ parent, store: zoom.store, fields: {} });
+    state.zooms.push({ parent, store: zoom.store });
     $("status").textContent = `zoom: ${zoom.name} running`;
     watchStores();
   } catch (error) {
@@ -550,7 +556,7 @@ function watchStores() {
     state.stores = stores;
     if (changed) for (const v of activeViews()) v.draw();
     if (!busy) { clearInterval(watching); watching = null; }
-  }, 1000);
+  }, 500); // as often as the server looks at a store a run writes
 }
 
 async function main() {
