@@ -91,11 +91,16 @@ def open_page(p, url):
     return browser, page, time.perf_counter() - started
 
 
+def wait_until(page, expression: str, poll: float = 0.05) -> None:
+    """Wait until ``expression`` (a promise's value: evaluate awaits it) is true."""
+    while not page.evaluate(expression):
+        time.sleep(poll)
+
+
 def scanned(page) -> None:
     """Wait until the server has verified every committed tile of its stores."""
-    page.wait_for_function(
-        "fetch('/api/stores').then(r => r.json()).then(s => s.every(x => x.status.scanned))",
-        polling=200,
+    wait_until(
+        page, "fetch('/api/stores').then(r => r.json()).then(s => s.every(x => x.status.scanned))"
     )
 
 
@@ -146,12 +151,14 @@ def bench_map(p, store: Path) -> dict:
             {store: 0, x0: 1, x1: 2, y0: 0.70, y1: 0.80}), {method: 'POST'});
         return r.json(); }"""
     )
-    page.wait_for_function(
+    wait_until(
+        page,
         f"""fetch('/api/stores').then(r => r.json()).then(s => s[{zoom["store"]}] &&
         s[{zoom["store"]}].status.verified === s[{zoom["store"]}].status.tiles)""",
-        polling=100,
     )
     out["zoom_100x100_s"] = time.perf_counter() - started
+    out["zoom_store"] = page.evaluate("fetch('/api/stores').then(r => r.json())")[zoom["store"]]
+    out["zoom_store"] = {k: out["zoom_store"][k] for k in ("name", "shape", "status")}
     out["server_peak_mib"] = server.peak_mib()
     browser.close()
     server.stop()

@@ -19,6 +19,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -106,9 +107,11 @@ def screenshot(page, name: str) -> None:
         page.screenshot(path=str(Path(folder) / f"{name}.png"), full_page=True)
 
 
-def redrawn(page, view: int = 0) -> None:
-    """Wait until view ``view`` has drawn an image asked for after this call."""
+@contextlib.contextmanager
+def redrawn(page, view: int = 0):
+    """Wait, after the block, until view ``view`` has drawn an image asked for in it."""
     before = page.evaluate(f"window.explore.views[{view}].drawn")
+    yield
     page.wait_for_function(f"window.explore.views[{view}].drawn > {before}")
 
 
@@ -240,33 +243,33 @@ def test_another_variable_is_drawn_over_its_range(page, stores):
     from matplotlib import colormaps
 
     ds = campar.open(stores[0])
-    page.select_option("#field", "dc")
-    redrawn(page)
+    with redrawn(page):
+        page.select_option("#field", "dc")
     dc = ds.dc.values.ravel()
     k = np.round((dc - dc.min()) / (dc.max() - dc.min()) * 255).astype(int)
     expected = np.round(colormaps["viridis"](np.linspace(0, 1, 256))[k] * 255)
     drawn = pixels(page, cell_centres(ds))
     assert np.abs(drawn - expected).max() <= 1
-    page.select_option("#field", "label")
-    redrawn(page)
+    with redrawn(page):
+        page.select_option("#field", "label")
 
 
 def test_two_stores_side_by_side_and_their_difference(page, stores):
     a, b = (campar.open(s) for s in stores)
     assert (a.label.values != b.label.values).any()  # the comparison shows something
-    page.select_option("#compare", "side")
-    redrawn(page, 1)
+    with redrawn(page, 1):
+        page.select_option("#compare", "side")
     assert np.array_equal(pixels(page, cell_centres(b), 1), label_rgba(b.label.values.ravel()))
     screenshot(page, "side-by-side")
-    page.select_option("#compare", "diff")
-    redrawn(page)
+    with redrawn(page):
+        page.select_option("#compare", "diff")
     differ = (a.label.values != b.label.values).ravel()
     drawn = pixels(page, cell_centres(a))
     assert np.array_equal(drawn[differ], np.tile([202, 0, 32, 255], (differ.sum(), 1)))
     assert np.array_equal(drawn[~differ], np.tile([224, 224, 224, 255], ((~differ).sum(), 1)))
     screenshot(page, "difference")
-    page.select_option("#compare", "one")
-    redrawn(page)
+    with redrawn(page):
+        page.select_option("#compare", "one")
 
 
 def test_the_typed_edges_are_those_of_campar_plot(page, stores):
@@ -295,11 +298,15 @@ def test_a_zoom_is_computed_and_drawn_over_the_map(page, stores):
     page.mouse.up()
     page.wait_for_function("window.explore.zooms.length === 1")
     index = page.evaluate("window.explore.zooms[0].store")
-    page.wait_for_function(
-        f"""fetch('/api/stores').then(r => r.json()).then(s =>
+    complete = f"""fetch('/api/stores').then(r => r.json()).then(s =>
         s[{index}].status.verified === s[{index}].status.tiles)"""
-    )
-    redrawn(page)
+    for _ in range(2400):  # evaluate awaits the promise (wait_for_function would not)
+        if page.evaluate(complete):
+            break
+        time.sleep(0.1)
+    assert page.evaluate(complete)
+    with redrawn(page):
+        page.evaluate("setBox(window.explore.box)")  # drawn again now that every tile is in
     (zoom,) = (stores[0].parent / f"{stores[0].name}.zooms").glob("*.zarr")
     z = campar.open(zoom)
     centres = [(z.omega.values[j], z.mu_cn.values[i]) for i in range(4) for j in range(4)]

@@ -14,6 +14,7 @@ import contextlib
 import json
 import logging
 import math
+import subprocess
 import threading
 import time
 from http import HTTPStatus
@@ -50,6 +51,7 @@ MAX_CYCLE = 64  # period of a cycle by shooting from the page
 MAX_EDGE_CELLS = 400 * 400  # cells of a view whose edges are typed at a request
 ZOOM_POINTS = 100  # a zoom's cells along each side
 ZOOM_START_SECONDS = 60.0  # until a zoom's run has created its store
+ZOOM_STOP_SECONDS = 30.0  # for a zoom's run to stop at a tile's end when the server stops
 
 
 class BadRequest(Exception):
@@ -90,10 +92,15 @@ class Explorer:
     def stop(self) -> None:
         self._stop.set()
         self.worker.stop()
-        for process in self._zooms.values():
+        for store, process in self._zooms.items():
             if process.poll() is None:
                 process.terminate()  # the run stops at a tile's end: resumable
-                process.wait(30)
+                try:
+                    process.wait(ZOOM_STOP_SECONDS)
+                except subprocess.TimeoutExpired:
+                    log.warning("the zoom's run into %s did not stop: killed", store)
+                    process.kill()  # its committed tiles stay; a resume redoes the rest
+                    process.wait()
 
     def _watch(self, source: MapSource) -> None:
         try:

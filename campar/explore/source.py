@@ -132,9 +132,10 @@ class MapSource:
                 if self._open_reader is not None:
                     self._open_reader.close()
                     self._open_reader = None
+            sums = reader.tile_checksums()[0]
             for index in new:
                 try:
-                    arrays = verified_tile(reader, self.tiles[index])
+                    arrays = verified_tile(reader, self.tiles[index], sums)
                 except StoreDamaged as exc:
                     self._mark_damaged(index, str(exc))
                     continue
@@ -304,13 +305,15 @@ class MapSource:
         return items
 
 
-def verified_tile(reader, tile) -> dict:
-    """Every array of a committed tile, checked against its checksum (StoreDamaged if not)."""
+def verified_tile(reader, tile, sums=None) -> dict:
+    """Every array of a committed tile, checked against its checksum (StoreDamaged if not);
+    ``sums``: the store's tile checksums, read once for many tiles (None: read here)."""
     try:
         arrays = {name: reader.read_tile(name, tile) for name in reader.names}
     except Exception as exc:  # zarr, numcodecs and h5py raise many kinds
         raise StoreDamaged(f"unreadable ({type(exc).__name__}: {exc})") from None
-    sums = reader.tile_checksums()[0]
+    if sums is None:
+        sums = reader.tile_checksums()[0]
     if sums is not None and tile_checksum(arrays, reader.names) != int(sums[tile.index]):
         raise StoreDamaged("checksum mismatch: its arrays changed after the commit")
     return arrays

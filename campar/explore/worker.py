@@ -19,16 +19,21 @@ WARM_UP_SECONDS = 900.0  # a cold compile of the kernel and the tracer on a load
 
 
 def _serve(conn) -> None:
-    """The worker's loop: (action, args) in, ("ok", data) or ("error", one line) out."""
+    """The worker's loop: (action, args) in, ("ok", data) or ("error", one line) out; it
+    ends when the server closes its end (or is gone)."""
     while True:
         try:
             action, args = conn.recv()
-        except EOFError:
+        except (EOFError, OSError):
             return
         try:
-            conn.send(("ok", ACTIONS[action](*args)))
+            answer = ("ok", ACTIONS[action](*args))
         except Exception as exc:  # shown in the page: the worker goes on
-            conn.send(("error", f"{type(exc).__name__}: {' '.join(str(exc).split())}"))
+            answer = ("error", f"{type(exc).__name__}: {' '.join(str(exc).split())}")
+        try:
+            conn.send(answer)
+        except OSError:  # the server stopped meanwhile
+            return
 
 
 class CellTimeout(CamparError):
