@@ -32,8 +32,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ContinuationError
+from ..model.laws import LAW_PARAMETERS
 from .orbit import PeriodicOrbit, newton, orbit_at, section_points
-from .section_map import PARAMETER_ORDER, SectionMap, Shot, in_range, parameter_index
+from .section_map import SectionMap, Shot, in_range
 from .special import (
     LOCATE_TOL,
     PD,
@@ -181,7 +182,7 @@ class Continuation:
         self.smap = smap
         self.par = np.array(par, dtype=np.float64)
         self.name = name
-        self.index = parameter_index(name)
+        self.index = smap.index(name)
         self.n = n
         self.lo, self.hi = sorted(window)
         self.settings = settings or BranchSettings()
@@ -482,7 +483,7 @@ class Continuation:
             labels=(f"{self.n}-{a.p}", f"{self.n}-{b.p}"),
             stable=(stable_a, stable_b),
             accuracy=accuracy,
-            parameters=dict(zip(PARAMETER_ORDER, map(float, par), strict=True)),
+            parameters=dict(zip(self.smap.order, map(float, par), strict=True)),
             eigenvector=vector,
             arclength=float(pt.s),
         )
@@ -555,8 +556,9 @@ def continue_branch(
     >>> [(sp.type, round(sp.value, 6)) for sp in branch.special], branch.end
     ([('PD', 3.542608)], 'left the window at omega=3')
     """
-    smap = section_map or SectionMap(orbit.model)
-    par = np.array([orbit.parameters[name] for name in PARAMETER_ORDER])
+    law = parameter if parameter in LAW_PARAMETERS else None
+    smap = section_map or SectionMap(orbit.model, law_parameter=law)
+    par = smap.vector(orbit.parameters)
     engine = Continuation(smap, par, parameter, orbit.n, window, settings)
     value = orbit.parameters[parameter]
     if direction is None:
@@ -583,7 +585,7 @@ def assemble(
     period = [n * 2.0 * math.pi / engine.parameters_at(pt.u[2])[0] for pt in points]
     mult = np.array([multipliers_of(pt.jacobian) for pt in points], dtype=complex).reshape(-1, 2)
     others = {
-        k: float(v) for k, v in zip(PARAMETER_ORDER, engine.par, strict=True) if k != engine.name
+        k: float(v) for k, v in zip(engine.smap.order, engine.par, strict=True) if k != engine.name
     }
     return Branch(
         parameter=engine.name,

@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import ContinuationError
 from .branch import Branch, BranchSettings, Continuation, assemble, continue_branch
 from .orbit import PeriodicOrbit, minimal_period, section_points
-from .section_map import PARAMETER_ORDER, SectionMap
+from .section_map import SectionMap
 from .special import PD, SpecialPoint
 
 log = logging.getLogger("campar.continue")
@@ -41,7 +41,7 @@ def switch_at_pd(
     """
     if sp.type != PD or sp.eigenvector is None:
         raise ContinuationError(f"branch switching needs a PD point, got {sp.type}")
-    par = np.array([sp.parameters[name] for name in PARAMETER_ORDER])
+    par = smap.vector(sp.parameters)
     engine = Continuation(smap, par, sp.parameter, 2 * sp.n, window, settings)
     v = np.array(sp.eigenvector)
     normal = np.array([v[0], v[1], 0.0])
