@@ -92,7 +92,17 @@ def test_imports_point_down_the_layers(name):
 
 
 def test_every_subpackage_says_what_it_holds_and_may_import():
-    for sub in ("core", "model", "sweep", "continuation", "views", "paper", "bench", "explore", "cli"):
+    for sub in (
+        "core",
+        "model",
+        "sweep",
+        "continuation",
+        "views",
+        "paper",
+        "bench",
+        "explore",
+        "cli",
+    ):
         doc = ast.get_docstring(ast.parse((PACKAGE / sub / "__init__.py").read_text()))
         assert doc and "import" in doc, sub
 

@@ -175,14 +175,13 @@ def test_hovering_a_cell_reads_its_stored_values(page, stores):
     assert f"ε max {float(ds.eps_max.values[2, 3]):.4f}" in text
 
 
-def test_a_click_computes_the_cell_as_campar_point(page, stores):
+def test_a_click_computes_the_cell_as_campar_point_from(page, stores):
     ds = campar.open(stores[0])
     omega, mu = ds.omega.values[3], ds.mu_cn.values[2]
     page.mouse.click(*_mouse_at(page, omega, mu))
     page.wait_for_function("window.explore.cell && window.explore.cell.report")
-    y0, v0 = ds.state.values[2, 3]
     out = io.StringIO()
-    args = ["point", "--omega", str(omega), "--mu-cn", str(mu), "--y0", str(y0), "--v0", str(v0)]
+    args = ["point", "--from", str(stores[0]), "--omega", str(omega), "--mu-cn", str(mu)]
     with contextlib.redirect_stdout(out):
         assert main([*args, "--json"]) == 0
     point = json.loads(out.getvalue())

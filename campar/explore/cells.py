@@ -1,10 +1,11 @@
-"""One map cell computed again, and the worker process that computes it within a time limit.
+"""One map cell computed again, and the page's other computations.
 
-``cell_at(path, row, col)`` is the explorer's one way to a cell's motion: the store's job
-at that cell, started from the cell's stored final state (a point of its attractor), as
-``campar point`` simulates a cell — the same model, settings and label — with the
-multipliers and the steady orbit traced densely. The other actions of the cell panel
-(its attractors from K starts, its n-cycle by shooting) take the same cell's parameters.
+``cell_at(path, row, col)`` is the explorer's one way to a cell's motion: ``campar.cell``
+of the map cell (its model and stored values, its tile verified first) simulated as
+``campar point --from`` simulates it — its chain replayed, so every stored value comes
+back bit for bit — with the steady orbit traced densely. The other actions of the cell
+panel (its attractors from K starts, its n-cycle by shooting, the branches through its
+cycle) start from the same StoredCell.
 
 Each is a plain function of plain arguments returning JSON-ready data (``ACTIONS``), run
 by the server's worker process (``campar.explore.worker``).
@@ -19,51 +20,22 @@ from ..errors import CamparError
 TRACE_POINTS = 4000  # samples of an orbit sent to the page (every k-th of the trace)
 
 
-def one_cell_job(path, row: int, col: int, layer: int = 0):
-    """The store's job reduced to its cell (row, col) started from the stored final state:
-    (job, stored cell arrays). StoreError when the cell has no verified stored result."""
-    from ..sweep.job import Job
+def stored_model_cell(path, row: int, col: int, layer: int = 0):
+    """``campar.cell`` of map cell (row, col) — its model and stored values — once its
+    tile has verified against its checksum (``stored_cell``)."""
+    from ..views.cell import cell
     from .source import stored_cell
 
-    job, arrays = stored_cell(path, row, col, layer)
-    y, v = (float(a) for a in arrays["state"])
-    if not (math.isfinite(y) and math.isfinite(v)):
-        raise CamparError(f"cell ({row}, {col}) failed in the map: no final state to start from")
-    data = job.to_dict()
-    x, s = float(job.first_values[col]), float(job.second_values[row])
-    data.update(
-        name=f"{job.name}-cell",
-        sweep={
-            job.first: {"from": x, "to": x, "points": 1},
-            job.second: {"from": s, "to": s, "points": 1},
-        },
-        initial={"y": y, "v": v},
-        outputs=sorted({*job.outputs, "label", "dc", "eps", "pn", "sections", "multipliers"}),
-        tiles={"rows": 1},
-        store=None,
-    )
-    data["chains"] = {**data["chains"], "direction": "down", "start": "rest"}
-    for key in ("attractors", "curves"):
-        data.pop(key, None)
-    return Job.from_dict(data, source=f"cell ({row}, {col}) of {path}"), arrays
+    job, _ = stored_cell(path, row, col, layer)
+    direction = job.directions[layer] if job.chains.direction == "both" else None
+    at = {job.first: float(job.first_values[col]), job.second: float(job.second_values[row])}
+    return cell(path, direction=direction, **at)
 
 
 def cell_at(path, row: int, col: int, layer: int = 0):
-    """The PointResult (with its dense trace) of map cell (row, col) of the store ``path``."""
-    from ..sweep.plan import Tile
-    from ..sweep.tile import compile_kernel, run_tile
-    from ..views.point import MAX_TRACE_REVOLUTIONS, PointResult, point_result, trace_steady
-
-    job, _ = one_cell_job(path, row, col, layer)
-    compile_kernel(job, trace=True)
-    cell = {name: arr[0, 0] for name, arr in run_tile(job, Tile(0, 0, 1)).items()}
-    result = point_result(job, cell)
-    if result.kind != "failed":
-        n_revs = result.n or min(job.classify.window_revolutions, MAX_TRACE_REVOLUTIONS)
-        orbit = trace_steady(job, result.parameters, result.state, n_revs, result.steps)
-        if orbit is not None:
-            result = PointResult(**{**result.__dict__, "trace": orbit})
-    return result
+    """The PointResult (with its dense trace) of map cell (row, col) of the store ``path``,
+    as ``campar point --from`` computes it (``StoredCell.simulate``)."""
+    return stored_model_cell(path, row, col, layer).simulate(trace=True)
 
 
 def cell_report(path, row: int, col: int, layer: int = 0) -> dict:
@@ -85,24 +57,13 @@ def cell_report(path, row: int, col: int, layer: int = 0) -> dict:
 
 
 def attractors_report(path, row: int, col: int, count: int) -> dict:
-    """The cell's attractors from ``count`` starts (``campar point --attractors``)."""
-    from ..views.attractors import find_attractors
-
-    job, _ = one_cell_job(path, row, col)
-    census = find_attractors(job.omega[0], count=count, **_point_settings(job))
-    return census.to_dict()
+    """The cell's attractors from ``count`` starts (``campar point --from --attractors``)."""
+    return stored_model_cell(path, row, col).attractors(count).to_dict()
 
 
 def cycle_report(path, row: int, col: int, n: int) -> dict:
     """The cell's n-cycle by shooting from its stored state, stable or not."""
-    from ..continuation.orbit import find_cycle
-
-    job, arrays = one_cell_job(path, row, col)
-    settings = _point_settings(job)
-    model = {k: settings.pop(k) for k in ("tensile", "duty_cycle", "cam_velocity")}
-    params = {k: settings[k] for k in ("f0", "mu_kn", "mu_cn", "zeta")}
-    guess = tuple(float(a) for a in arrays["state"])
-    return find_cycle(n, guess, model=model, omega=float(job.omega[0]), **params).to_dict()
+    return stored_model_cell(path, row, col).cycle(n).to_dict()
 
 
 def line_report(path, row: int) -> dict:
@@ -174,33 +135,33 @@ def branch_report(path, row: int, col: int) -> dict:
     """The branches through the cell's cycle along the map's first axis, both ways to the
     map's ends (``campar continue``), with one level of period doubling followed: each
     branch's σn points y with their stability, and its special points (PD, SN, NS, G)."""
+    from ..sweep.store import read_store
     from ..views.continuation import continue_from_cell
 
-    job, arrays = one_cell_job(path, row, col)
+    stored = stored_model_cell(path, row, col)
+    arrays = stored.stored
     if int(arrays["kind"]) != 0 or int(arrays["n"]) < 1:
         raise CamparError(f"cell ({row}, {col}) is not periodic: no cycle to continue")
-    settings = _point_settings(job)
-    model = {k: settings.pop(k) for k in ("tensile", "duty_cycle", "cam_velocity")}
-    from ..sweep.store import read_store
-
     with read_store(path) as reader:  # the map's own range along its first axis
-        axis = reader.job.sweep[job.first]
-    here = float(job.first_values[0])
-    ends = [float(axis.start), float(axis.stop)]
+        first = reader.job.first
+        axis = reader.job.sweep[first]
+    here = float(stored.coordinates[first])
+    # the cell's parameters, said again: those not given take the paper's values
+    fixed = {k: v for k, v in stored.model.parameters.items() if k != first}
     branches, special = [], []
-    y0, v0 = (float(a) for a in arrays["state"])
-    for end in sorted(set(ends)):
+    y0, v0 = stored.state
+    for end in sorted({float(axis.start), float(axis.stop)}):
         if end == here:
             continue
         result = continue_from_cell(
-            job.first,
+            first,
             (here, end),
-            settings,
+            fixed,
             y0=y0,
             v0=v0,
             cycle=int(arrays["n"]),
             switch=1,
-            model=model,
+            model=stored.model,
         )
         for branch in result.root.walk():
             points = [
@@ -216,15 +177,7 @@ def branch_report(path, row: int, col: int) -> dict:
             {"type": sp.type, "value": float(sp.value), "y": float(sp.state[0]), "n": b.n}
             for b, sp in result.special_points()
         ]
-    return {"branches": branches, "special": special, "parameter": job.first}
-
-
-def _point_settings(job) -> dict:
-    from ..views.point import point_parameters
-
-    par = point_parameters(job)
-    par.pop("omega")
-    return par
+    return {"branches": branches, "special": special, "parameter": first}
 
 
 def _finite(a) -> list:
