@@ -30,6 +30,7 @@ the CLI can name the views without paying for matplotlib.
 
 import argparse
 import importlib
+import math
 
 from ...errors import CamparError
 
@@ -90,9 +91,14 @@ def parse_range(text: str) -> tuple[float, float]:
     try:
         if len(parts) != 2:
             raise ValueError
-        return float(parts[0]), float(parts[1])
+        low, high = float(parts[0]), float(parts[1])
+        if not (math.isfinite(low) and math.isfinite(high)):
+            raise ValueError
+        return low, high
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected A:B with two numbers, got {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"expected A:B with two finite numbers, got {text!r}"
+        ) from None
 
 
 def __getattr__(name):
