@@ -21,6 +21,7 @@ LAYERS = {
     "paper": {"core", "model", "sweep", "continuation", "views", "errors"},
     "bench": {"core", "model", "sweep", "continuation", "views", "errors"},
     "api": {"core", "model", "sweep", "continuation", "views", "errors"},
+    "explore": {"core", "model", "sweep", "continuation", "views", "errors"},
     "cli": {
         "core",
         "model",
@@ -30,6 +31,7 @@ LAYERS = {
         "paper",
         "bench",
         "api",
+        "explore",
         "errors",
         "__init__",
     },
@@ -92,7 +94,17 @@ def test_imports_point_down_the_layers():
 
 
 def test_every_subpackage_says_what_it_holds_and_may_import():
-    for sub in ("core", "model", "sweep", "continuation", "views", "paper", "bench", "cli"):
+    for sub in (
+        "core",
+        "model",
+        "sweep",
+        "continuation",
+        "views",
+        "paper",
+        "bench",
+        "explore",
+        "cli",
+    ):
         doc = ast.get_docstring(ast.parse((PACKAGE / sub / "__init__.py").read_text()))
         assert doc and "import" in doc, sub
 
