@@ -56,13 +56,13 @@ class ContinuationResult:
 def continue_from_cell(
     parameter: str,
     span: tuple[float, float],
-    fixed: dict,
+    fixed: dict | None = None,
     *,
-    y0: float = 0.0,
-    v0: float = 0.0,
+    y0: float | None = None,
+    v0: float | None = None,
     cycle: int | None = None,
     switch: int = 0,
-    model: dict | None = None,
+    model: Model | dict | None = None,
     settings: BranchSettings | None = None,
     curve_types=(),
     second: str | None = None,
@@ -78,10 +78,11 @@ def continue_from_cell(
         the model (phi1 … phi4, n, restitution; campar.model.laws.LAW_PARAMETERS).
     span : (float, float)
         Where the branch starts and the far end of its window.
-    fixed : dict
-        The other parameters (the paper's base values for those not given).
-    y0, v0 : float
-        The simulation's start at θ = 0 (rest by default).
+    fixed : dict, optional
+        The other parameters: the ``model``'s values for those not given (the paper's
+        base values without a Model).
+    y0, v0 : float, optional
+        The simulation's start at θ = 0 (default the model's ``initial``: rest).
     cycle : int, optional
         The period solved for; by default the simulated cell's period.
     switch : int
@@ -132,14 +133,15 @@ def continue_from_cell(
     if curve_types and (second is None or second_window is None or second == parameter):
         raise JobError("curves need a second parameter and its range (--second NAME:A:B)")
     began = time.perf_counter()
-    values = {**fixed, parameter: span[0]}
-    base = model if isinstance(model, Model) else Model.build({"omega": values["omega"]})
-    if isinstance(model, dict):  # the force law's options (the model section's keys)
-        base = base.replace(**model)
+    given = {**(fixed or {}), parameter: span[0]}
+    base = start_model(model, given)
     law = parameter if parameter in LAW_PARAMETERS else None
+    # every parameter of the model continued: its own where neither fixed nor span says
+    values = {**base.parameters, **({law: span[0]} if law else {})}
     smap = section_map or SectionMap(base, law_parameter=law)
     shots0 = smap.shots
-    cell = simulate_point(base, y0=y0, v0=v0, **values)
+    y0, v0 = (base.initial.y if y0 is None else y0), (base.initial.v if v0 is None else v0)
+    cell = simulate_point(base, state=(y0, v0))
     period = cycle or cell.n
     if not period:
         raise ContinuationError(
@@ -148,7 +150,7 @@ def continue_from_cell(
         )
     if not all(map(math.isfinite, cell.state)):
         raise ContinuationError(f"the cell at {parameter}={span[0]} failed: {cell.status}")
-    start = solve_cycle(period, cell.state, {**fixed, parameter: span[0]}, section_map=smap)
+    start = solve_cycle(period, cell.state, values, section_map=smap)
     direction = 1.0 if span[1] > span[0] else -1.0
     root = continue_with_switching(
         start, parameter, span, switch, direction=direction, section_map=smap, settings=settings
@@ -166,6 +168,17 @@ def continue_from_cell(
     result.seconds = time.perf_counter() - began
     result.shots = smap.shots - shots0
     return result
+
+
+def start_model(model, given: dict) -> Model:
+    """The model at the branch's start: ``model`` (a Model, the force law's options or
+    None: the paper's) with the ``given`` parameters set."""
+    if isinstance(model, Model):
+        return model.replace(**given)
+    if model is not None and not isinstance(model, dict):
+        raise JobError(f"a model is a Model or the force law's options, got {type(model).__name__}")
+    # the model section's keys, then the parameters (a law parameter after the law it sets)
+    return Model.build(None, **{**(model or {}), **given})
 
 
 def describe_continuation(result: ContinuationResult) -> str:
