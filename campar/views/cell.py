@@ -46,6 +46,9 @@ class StoredCell:
         Every per-cell array's value at the cell, as the store holds it.
     kernel : str or None
         The kernel version that wrote the store (None: a store that does not say).
+    job : Job
+        The store's job (``campar.sweep.job.Job``): its grid, chains and outputs, from
+        which the cell is computed again.
 
     Examples
     --------
@@ -187,6 +190,11 @@ def cell(store, direction: str | None = None, **coordinates) -> StoredCell:
         down or up: which chain of a ``chains.direction: both`` store (default down).
     **coordinates : float
         The cell's place by the store's axis names.
+
+    Returns
+    -------
+    StoredCell
+        The cell's place, model and stored values; no file is held open.
 
     Raises
     ------
