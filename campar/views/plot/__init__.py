@@ -5,6 +5,8 @@ a point simulation) and never recomputes them; nothing here imports the kernel.
 Figures are headless (Agg) and returned, so a caller can adjust or save them.
 
 - ``labels``: n-p categories and their fixed colours (``label_colour``, ``map_labels``).
+- ``cells``: grids of cells as flat colours, gaps hatched, legends with counts (the
+  drawing every categorical view shares).
 - ``maps``: two-parameter maps (``MapGrid``, ``plot_map``, ``select_cells``).
 - ``stores``: maps of result stores (``plot_store``, ``read_map``).
 - ``compare``: two maps side by side, and the cells whose labels differ (``plot_compare``).
