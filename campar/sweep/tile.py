@@ -30,7 +30,7 @@ from ..core.model import N_STATE
 from ..core.revolution import make_trace
 from ..core.tracer import compile_tracer, trace_orbit
 from .arrays import array_names, array_spec
-from .curves_job import runner as curves_runner
+from .curves_job import NOT_THE_KERNELS
 from .job import Job
 from .laws import LAW_PARAMETERS
 from .plan import Tile, chain_order, chain_parameters, first_column_parameters
@@ -126,15 +126,15 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     """Compute every chain of a tile; arrays shaped (tile rows, ω points, …) in the job's
     ω order, whichever way the chains ran. A ``both`` job's tile is computed as its
     direction's one-direction job computes it (same starts, settings and outputs); a
-    basin's tile by ``basin.run_basin_tile``; a curves job's by the function
-    campar.continuation.tasks registers (``curves_job.register``)."""
+    basin's tile by ``basin.run_basin_tile``; a curves job's tiles are not the kernel's
+    (``curves_job.CurvesWork``)."""
     ensure_fresh_cache()
     if job.kind == "basin":
         from .basin import run_basin_tile  # it builds on this module's settings and buffers
 
         return run_basin_tile(job, tile, array_names(job))
-    if job.kind == "curves":  # campar.continuation.tasks, registered
-        return curves_runner("tile")(job, tile)
+    if job.kind == "curves":
+        raise ValueError(NOT_THE_KERNELS)
     if tile.direction is not None:
         job = job.one_direction(tile.direction)
     elif job.chains.direction == "both":
@@ -178,9 +178,6 @@ def load_kernel(job: Job, share=None) -> None:
     a lane's thread while the store opens, so the first tile starts at full speed
     (~0.3 s a process, benchmarks/RESULTS.md). A chain of no cells: nothing is computed.
     ``share``: as compile_kernel's."""
-    if job.kind == "curves":
-        curves_runner("compile")(job)
-        return
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
     compile_kernel(job, share)
@@ -196,8 +193,7 @@ def compile_kernel(job: Job, share=None, trace: bool = False) -> None:
     at once if this process holds the chain already (a point called again and again)."""
     ensure_fresh_cache()
     if job.kind == "curves":
-        curves_runner("compile")(job)
-        return
+        raise ValueError(NOT_THE_KERNELS)
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
     solver = solver_options(job)
