@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..continuation.branch import Branch, BranchSettings
+from ..continuation.branch import BranchSettings
+from ..continuation.branch_result import Branch
 from ..continuation.curves import CURVE_TYPES, BifurcationCurve, continue_curve
 from ..continuation.orbit import PeriodicOrbit, find_cycle
 from ..continuation.section_map import PARAMETER_ORDER, SectionMap
