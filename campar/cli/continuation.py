@@ -1,6 +1,7 @@
 """``campar continue``: a branch of periodic orbits, its bifurcations, switching, curves."""
 
 import argparse
+import sys
 
 from ..errors import JobError
 from .options import PARAMETER_HELP, add_model_options, flag_of, launched_rank, model_options
@@ -64,7 +65,9 @@ def add_continue(sub):
         "--cycle",
         type=int,
         metavar="N",
-        help="the period to solve for (default: the simulated cell's)",
+        help="the start cycle's period: Newton's method solves for an N-cycle from the "
+        "simulated cell's state, stable or not (default: the period of the cycle the "
+        "simulation reaches; the start cycle's label is the output's first line)",
     )
     p.add_argument(
         "--switch",
@@ -160,6 +163,8 @@ def run_continue(args) -> int:
         second_window=window,
     )
     print(json.dumps(result.to_dict()) if args.json else describe_continuation(result))
+    for line in result.missing:  # asked for, not found: said on stderr, and in the JSON
+        print(f"campar continue: {line}", file=sys.stderr)
     if args.output:
         draw(args, result, parameter, span, fixed)
     return 0
@@ -179,12 +184,14 @@ def draw(args, result, parameter, span, fixed) -> None:
             line_job(span, args.line, **model_options(args), **others), transitions=False
         )
     plot_branches(result.root, line=line).savefig(args.output, dpi=200)
-    if result.curves:
+    if args.curves:
         path = Path(args.output)
+        curves = path.with_name(f"{path.stem}-curves{path.suffix}")
+        if not result.curves:
+            print(f"campar continue: {curves} not written: no curve found", file=sys.stderr)
+            return
         window = (span, args.second[1])
-        plot_bifurcation_curves(result.curves, window=window).savefig(
-            path.with_name(f"{path.stem}-curves{path.suffix}"), dpi=200
-        )
+        plot_bifurcation_curves(result.curves, window=window).savefig(curves, dpi=200)
 
 
 def add_curves(sub):
