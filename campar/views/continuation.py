@@ -300,12 +300,14 @@ class LineStructure:
     (the seeds), each continued across the window both ways with switching, and the
     branches found twice dropped.
 
-    branches: the root branches (each with its switched children); seeds: (ω, label) of
-    the cells the branches were started from; line: the simulated line.
+    branches: the root branches (each with its switched children), those of a seed one
+    after the other (down then up, or one where the branch is a closed loop); seeds: (ω,
+    label, "path" or "census") of the cells the branches were started from; line: the
+    simulated line.
     """
 
     branches: list[Branch]
-    seeds: list[tuple[float, str]]
+    seeds: list[tuple[float, str, str]]
     line: object
     seconds: float = 0.0
     shots: int = 0
@@ -318,7 +320,7 @@ class LineStructure:
 
     def to_dict(self) -> dict:
         return {
-            "seeds": [{"omega": w, "label": label} for w, label in self.seeds],
+            "seeds": [{"omega": w, "label": lab, "source": src} for w, lab, src in self.seeds],
             "branches": [root.to_dict() for root in self.branches],
             "special": [{"branch_period": b.n, **sp.to_dict()} for b, sp in self.special_points()],
             "seconds": self.seconds,
@@ -366,11 +368,12 @@ def line_structure(
             if line.kind[start] == 0:
                 runs.append((start, i))
             start = i
-    candidates = []  # (ω, n, label, state, section points)
+    candidates = []  # (ω, n, label, state, section points, source)
     for a, b in runs:
         k = (a + b) // 2
         n = int(line.n[k])
-        candidates.append((float(line.omega[k]), n, labels[k], line.state[k], line.sections[k, :n]))
+        omega = float(line.omega[k])
+        candidates.append((omega, n, labels[k], line.state[k], line.sections[k, :n], "path"))
     if census:
         from .attractors import find_attractors
 
@@ -386,11 +389,12 @@ def line_structure(
                             r.label,
                             np.array(r.state),
                             np.asarray(r.sections)[: r.n],
+                            "census",
                         )
                     )
     settings = settings or BranchSettings()
     roots, seeds, switched = [], [], []
-    for omega, n, label, state, points in candidates:
+    for omega, n, label, state, points, source in candidates:
         if on_a_branch(roots, omega, points):
             continue
         try:
@@ -399,7 +403,7 @@ def line_structure(
             continue
         if on_a_branch(roots, omega, orbit.sections):
             continue
-        seeds.append((omega, label))
+        seeds.append((omega, label, source))
         for direction in (-1.0, 1.0):
             root = continue_with_switching(
                 orbit,
