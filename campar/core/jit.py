@@ -77,7 +77,7 @@ def collector_paused():
     """Python's cyclic garbage collector off while numba compiles. A cold kernel compile
     builds millions of objects (types, IR, LLVM wrappers) that live until it ends, and the
     collector's full passes walk them again and again: with it paused a cold
-    ``campar point`` is ~14 % faster and peaks ~48 MB higher (numba 0.68). The cycles it
+    ``campar point`` is faster, at a higher memory peak (numba 0.68). The cycles it
     leaves are collected once it is back on."""
     enabled = gc.isenabled()
     gc.disable()

@@ -110,7 +110,7 @@ def cascade_claim(ev: Evidence) -> Verdict:
     return Verdict(text, depth >= 2)
 
 
-TONGUES = ("2-2", "2-1")  # the subharmonic domains the issue and the paper's Figs 4c–e name
+TONGUES = ("2-2", "2-1")  # the subharmonic domains the paper's Figs 4c–e name
 TONGUE_PLANES = ("mu_kn", "mu_cn")
 BOUNDED_SHARE = 0.8  # of a tongue's boundary on PD and G curves for N2 to hold
 

@@ -6,7 +6,7 @@ rank — commits each finished tile to the store, and stops on a signal. Who
 writes a tile's arrays depends on the backend (``Store.direct_writes``): into a
 Zarr store every worker writes its own tiles' chunks (on a thread of its own,
 while its lane computes the next tile) and the master only commits them
-(checksum, then ``done``: ~0.6 ms a tile instead of ~5 to write it, docs/scaling.md); into
+(checksum, then ``done``: a fraction of writing it, docs/scaling.md); into
 HDF5 (serial h5py) the master writes every tile. ``CAMPAR_WRITER=master``
 makes the master write Zarr tiles too (the single-writer path, for comparison).
 The kernel's ``run_chain`` releases the GIL, so the master's compute thread
@@ -15,7 +15,7 @@ signal check: with two ranks on two cores both cores compute.
 
 Every lane holds its next tile as well (``TILES_HELD``, while the queue has one for
 every lane): it starts it the moment the last one is done, whatever the master is
-doing, instead of waiting 3–6 ms a tile for the master's answer and the GIL. The master
+doing, instead of waiting for the master's answer and the GIL. The master
 probes every ≤ 1 ms, except while every lane is provided for — holds its next tile, and
 no worker is writing one (``provided_for``) —: then it waits on its own lane for up to a
 quarter of the shortest tile, which on the 2-rank plane wakes it a quarter as often
@@ -410,8 +410,8 @@ def run_job(
             return signals.count > 0
 
         if comm is not None and comm.Get_rank() > 0:
-            # The worker's lane loads the kernel while rank 0 opens the store (~0.3 s each:
-            # in rank 0's own process the two would take turns on the GIL).
+            # The worker's lane loads the kernel while rank 0 opens the store (in rank 0's
+            # own process the two would take turns on the GIL).
             lane = ThreadLane(
                 job, f"rank {comm.Get_rank()} {where}", True, halted, share, tile_work
             )
@@ -423,9 +423,8 @@ def run_job(
         # a serial process then has one thread (zarr starts one of its own when the store
         # opens), so a cold compile may fork a helper (campar.core.split_compile); under MPI
         # the workers load theirs meanwhile (a cold compile split between the ranks of a
-        # node, ``share``), and rank 0's first tile runs at full speed (its
-        # lane loading inside it was 0.22 s of a 7.4 s plane). A store with nothing pending
-        # then has loaded the kernel for nothing (~0.3 s; a compile if the cache is cold).
+        # node, ``share``), and rank 0's first tile runs at full speed. A store with nothing
+        # pending then has loaded the kernel for nothing (a compile if the cache is cold).
         (tile_work.load if tile_work else compile_kernel)(job, share)
         lane = ThreadLane(job, f"rank 0 {where}", halted=halted, tile_work=tile_work)
         opened = {}

@@ -176,7 +176,7 @@ def load_kernel(job: Job, share=None) -> None:
     """Bring the job's compiled kernel into this process (numba's on-disk cache, or a
     compile) and compute its chains' starts, as a first tile would: a runner calls it on
     a lane's thread while the store opens, so the first tile starts at full speed
-    (~0.3 s a process, benchmarks/RESULTS.md). A chain of no cells: nothing is computed.
+    (benchmarks/RESULTS.md). A chain of no cells: nothing is computed.
     ``share``: as compile_kernel's."""
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
@@ -298,8 +298,8 @@ def chain_starts(job: Job) -> np.ndarray:
 def warm_up() -> float:
     """Compile the kernel into numba's on-disk cache, as the first map or point of a fresh
     install would (one cell of the paper's set-up), and the orbit tracer a plotted point
-    uses; returns the seconds it took. Every later process loads the cache in about a
-    second (benchmarks/RESULTS.md)."""
+    uses; returns the seconds it took. Every later process loads the cache instead
+    (benchmarks/RESULTS.md)."""
     import time
 
     start = time.perf_counter()
