@@ -239,3 +239,17 @@ def test_no_module_registers_itself_into_another_when_imported():
                 assert not (isinstance(callee, ast.Name) and callee.id in from_campar), (
                     f"{name}:{node.lineno} calls {ast.unparse(node.value.func)} when imported"
                 )
+
+
+def test_no_module_takes_names_from_its_own_package_face():
+    """A package's __init__ hands names on (some lazily, by importing its modules when
+    asked): a module of the package that took names from it would close a loop, hidden
+    in that lazy import. The package's own modules import each other directly."""
+    for name, path in MODULES.items():
+        if path.name in ("__init__.py", "__main__.py") or name.count(".") < 2:
+            continue
+        package = name.rsplit(".", 1)[0]
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level == 1 and node.module is None:
+                names = [a.name for a in node.names if f"{package}.{a.name}" not in MODULES]
+                assert not names, f"{name} takes {names} from {package}"

@@ -16,9 +16,9 @@ from ...sweep.job import DIRECTIONS, Job
 from ...sweep.plan import plan_tiles
 from ..cycles import hysteresis_cells, settled_cycles
 from ..dataset import cycle_tolerance
-from . import PlotError
 from .cells import draw_codes
 from .labels import computed_cells
+from .requests import PlotError
 
 # What the hysteresis of a cell is computed from (per direction).
 HYSTERESIS_ARRAYS = ("kind", "status", "n", "sections")

@@ -20,7 +20,6 @@ from matplotlib.ticker import FuncFormatter, MaxNLocator
 from ...core.codes import Kind
 from ...sweep.job import PARAMETERS, Job, cell_edges
 from ...sweep.plan import plan_tiles
-from . import MAP_VIEWS, PlotError
 from .cells import draw_categories, draw_gaps, draw_legend, swatch
 from .hysteresis import draw_hysteresis
 from .labels import (
@@ -32,6 +31,7 @@ from .labels import (
     map_labels,
 )
 from .multistability import draw_attractor_sets, draw_multistability
+from .requests import MAP_VIEWS, PlotError
 from .style import axis_label, figure_style, new_figure, parameter_text
 
 NICE_TICKS = MaxNLocator(4, steps=[1, 2, 2.5, 5, 10])
