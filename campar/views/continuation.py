@@ -107,6 +107,10 @@ def continue_from_cell(
     Returns
     -------
     ContinuationResult
+        Its ``start`` cycle, ``reached`` (the simulated cell's label) and ``chosen`` (how
+        the start was chosen), the branch tree, the curves (each once: a special point on
+        a curve already continued starts none) and ``missing``: a line for each thing
+        asked for and not found, saying why.
 
     Examples
     --------
@@ -120,7 +124,9 @@ def continue_from_cell(
     ContinuationError
         The start cell is not periodic and no ``cycle`` is given, or Newton fails there.
     JobError
-        A parameter or option out of range.
+        Before any work (``check_request``): a parameter the model does not have, a range
+        that is empty, not finite or outside the model's range, a second window that is
+        not low:high inside its range, curves without a second parameter.
     """
     check_request(parameter, span, fixed, curve_types, second, second_window)
     began = time.perf_counter()
