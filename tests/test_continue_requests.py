@@ -147,3 +147,23 @@ def test_a_special_point_on_a_curve_already_continued_starts_none():
     assert not continuation.on_a_curve(replace(far_end, type="SN"), [curve], window)
     curve.n = 2
     assert not continuation.on_a_curve(far_end, [curve], window)
+
+
+@pytest.mark.slow
+def test_a_curve_through_both_pd_points_of_a_branch_is_reported_once(capsys):
+    """Over ω 6 → 2 the 1-cycles have two PD points on one PD curve of the (ω, μkn)
+    window: one curve, passing through both (each a PD point by SciPy's shooting)."""
+    from campar.bench import scipy_shooting
+
+    argv = ["continue", "--omega", "6:2", "--mu-kn", "0.91", "--cycle", "1", "--curves", "PD"]
+    assert main([*argv, "--second", "mu_kn:0.84:0.95", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    pds = [sp for sp in data["special"] if sp["type"] == "PD"]
+    assert len(pds) == 2 and len(data["curves"]) == 1 and data["missing"] == []
+    values = np.array([[pt["omega"], pt["mu_kn"]] for pt in data["curves"][0]["points"]])
+    for sp in pds:
+        value, _ = scipy_shooting.bifurcation_point(
+            "PD", {"omega": sp["value"], "mu_kn": 0.91}, "omega", sp["state"], 1
+        )
+        scaled = (values - [value, 0.91]) / [4.0, 0.11]  # the window's sides
+        assert np.linalg.norm(scaled, axis=1).min() <= 0.02  # within a curve step
