@@ -167,3 +167,9 @@ def test_a_curve_through_both_pd_points_of_a_branch_is_reported_once(capsys):
         )
         scaled = (values - [value, 0.91]) / [4.0, 0.11]  # the window's sides
         assert np.linalg.norm(scaled, axis=1).min() <= 0.02  # within a curve step
+
+
+def test_the_branch_length_is_bounded_before_any_work(capsys, monkeypatch):
+    monkeypatch.setattr(continuation, "simulate_point", no_work)
+    assert main(["continue", "--omega", "4:3", "--max-points", "1000000000"]) == 2
+    assert "--max-points must be from 2 to 100000" in capsys.readouterr().err

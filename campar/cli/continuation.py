@@ -124,6 +124,7 @@ def run_continue(args) -> int:
     import json
 
     from ..continuation.branch import BranchSettings
+    from ..sweep.settings import MAX_POINTS
     from ..views.continuation import continue_from_cell, describe_continuation
 
     parameter, span, fixed = split_parameters(args)
@@ -133,8 +134,8 @@ def run_continue(args) -> int:
         raise JobError(f"--cycle must be ≥ 1, got {args.cycle}")
     if not 0.0 < args.max_step <= 1.0:
         raise JobError(f"--max-step must be in (0, 1], got {args.max_step}")
-    if args.max_points < 2:
-        raise JobError(f"--max-points must be ≥ 2, got {args.max_points}")
+    if not 2 <= args.max_points <= MAX_POINTS:
+        raise JobError(f"--max-points must be from 2 to {MAX_POINTS}, got {args.max_points}")
     if args.line is not None and (parameter != "omega" or not args.output):
         raise JobError(
             "--line draws campar line's diagram along omega: it needs a range of --omega and -o"
