@@ -19,44 +19,44 @@ def no_work(*args, **kwargs):
 
 
 @pytest.mark.parametrize(
-    "argv, message",
+    "argv, said",
     [
-        (["--second", "mu_kn:0.5:1.5"], "mu_kn must be in (0, 1), got 1.5"),
-        (["--second", "mu_kn:nan:0.95"], "mu_kn must be a finite number"),
-        (["--second", "mu_kn:0.9:0.9"], "the window is empty"),
-        (["--second", "foo:1:2"], "'foo' is not a parameter of the model"),
-        (["--second", "mu_kn:0.95:0.84"], "from low to high: mu_kn:0.84:0.95"),
-        (["--second", "omega:3:4"], "must differ from the branch's, omega"),
-        (["--second", "mu_cn:0.7:inf"], "mu_cn must be a finite number"),
-        (["--second", "f0:-1:0.5"], "f0 must be ≥ 0"),
+        (["--second", "mu_kn:0.5:1.5"], ("--second mu_kn:0.5:1.5:", "mu_kn", "1.5")),
+        (["--second", "mu_kn:nan:0.95"], ("--second mu_kn:nan:0.95:", "finite", "nan")),
+        (["--second", "mu_kn:0.9:0.9"], ("the window is empty",)),
+        (["--second", "foo:1:2"], ("'foo' is not a parameter of the model",)),
+        (["--second", "mu_kn:0.95:0.84"], ("from low to high: mu_kn:0.84:0.95",)),
+        (["--second", "omega:3:4"], ("must differ from the branch's, omega",)),
+        (["--second", "mu_cn:0.7:inf"], ("--second mu_cn:0.7:inf:", "finite", "inf")),
+        (["--second", "f0:-1:0.5"], ("--second f0:-1:0.5:", "f0", "-1")),
     ],
 )
 def test_a_bad_second_window_is_refused_in_one_line_before_any_work(
-    argv, message, capsys, monkeypatch
+    argv, said, capsys, monkeypatch
 ):
     monkeypatch.setattr(continuation, "simulate_point", no_work)
     code = main(["continue", "--omega", "4:3", "--mu-kn", "0.91", "--curves", "PD", *argv])
     err = capsys.readouterr().err
-    assert code == 2 and message in err, err
+    assert code == 2 and all(part in err for part in said), err
     assert len(err.strip().splitlines()) == 1
 
 
 @pytest.mark.parametrize(
-    "argv, message",
+    "argv, said",
     [
-        (["--omega", "nan:3"], "omega must be a finite number"),
-        (["--omega", "4:-1"], "omega must be > 0"),
-        (["--omega", "4", "--mu-kn", "0.5:1.5"], "mu_kn must be in (0, 1), got 1.5"),
-        (["--omega", "4:4"], "the range of omega is empty"),
-        (["--omega", "4:3", "--mu-cn", "1.2"], "mu_cn must be in (0, 1)"),
-        (["--omega", "4:3", "--second", "mu_kn:0.8:0.9"], "give their types (--curves"),
+        (["--omega", "nan:3"], ("omega", "finite", "nan")),
+        (["--omega", "4:-1"], ("omega", "-1")),
+        (["--omega", "4", "--mu-kn", "0.5:1.5"], ("mu_kn", "1.5")),
+        (["--omega", "4:4"], ("the range of omega is empty",)),
+        (["--omega", "4:3", "--mu-cn", "1.2"], ("mu_cn", "1.2")),
+        (["--omega", "4:3", "--second", "mu_kn:0.8:0.9"], ("give their types (--curves",)),
     ],
 )
-def test_a_bad_range_is_refused_in_one_line_before_any_work(argv, message, capsys, monkeypatch):
+def test_a_bad_range_is_refused_in_one_line_before_any_work(argv, said, capsys, monkeypatch):
     monkeypatch.setattr(continuation, "simulate_point", no_work)
     code = main(["continue", *argv])
     err = capsys.readouterr().err
-    assert code == 2 and message in err, err
+    assert code == 2 and all(part in err for part in said), err
     assert len(err.strip().splitlines()) == 1
 
 
