@@ -87,7 +87,8 @@ def add_continue(sub):
         "--second",
         type=named_range,
         metavar="NAME:A:B",
-        help="the curves' second parameter and range, e.g. mu_kn:0.7:0.95",
+        help="the curves' second parameter and its window LOW:HIGH inside the model's "
+        "range, e.g. mu_kn:0.7:0.95 (with --curves)",
     )
     p.add_argument(
         "--line",
