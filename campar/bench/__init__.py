@@ -223,6 +223,15 @@ def _scaling_arguments(p):
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
+@benchmark("startup", "fixed cost of a campar run, and 1 against 2 ranks, whole and run part")
+def _startup_arguments(p):
+    p.add_argument("--job", default="jobs/mu_cn.yaml", help="plane (jobs/mu_cn.yaml)")
+    p.add_argument("--size", type=int, default=100, help="N of the N × N sub-plane (100)")
+    p.add_argument("--rounds", type=int, default=5, help="rounds, the launches taking turns (5)")
+    p.add_argument("--baseline", metavar="DIR", help="another campar checkout, launched in turn")
+    p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
+
+
 @benchmark("directions", "a map of both sweep directions against one direction (down, up)")
 def _directions_arguments(p):
     p.add_argument("--job", default="jobs/mu_cn.yaml", help="plane (jobs/mu_cn.yaml)")

@@ -197,7 +197,7 @@ def draw(args, result, parameter, span, fixed) -> None:
 
 
 def add_curves(sub):
-    from ..continuation.mapscale import SEED_TYPES
+    from ..sweep.curves_job import SEED_TYPES  # not the continuation: numba loads only to run
     from .maps import RUN_EPILOG, seconds
 
     p = sub.add_parser(

@@ -68,6 +68,13 @@ def add_plot(sub):
         "from the orbits traced from the stored states (loads the kernel)",
     )
     p.add_argument(
+        "--shoot",
+        action="store_true",
+        help="with --bifurcations: type the edges "
+        "still unknown between periodic cells by shooting (both cycles by Newton on Pⁿ, "
+        "continued across the edge)",
+    )
+    p.add_argument(
         "--json",
         action="store_true",
         help="with --bifurcations: print one "
@@ -81,8 +88,8 @@ def run_plot(args) -> int:
 
     if len(args.stores) > 2:
         raise JobError(f"plot draws one store or compares two, got {len(args.stores)}")
-    if (args.json or args.trace) and not args.bifurcations:
-        raise JobError("--json and --trace go with --bifurcations")
+    if (args.json or args.trace or args.shoot) and not args.bifurcations:
+        raise JobError("--json, --trace and --shoot go with --bifurcations")
     if len(args.stores) == 2:
         return run_compare(args)
     if args.diff:
@@ -96,7 +103,12 @@ def run_plot(args) -> int:
         if args.output:
             figure_file(args.output)  # before typing the boundaries
         found = store_boundaries(
-            store, omega=args.omega, second=args.second, trace=args.trace, direction=args.direction
+            store,
+            omega=args.omega,
+            second=args.second,
+            trace=args.trace,
+            direction=args.direction,
+            shoot=args.shoot,
         )
     continued = None
     if args.curves:

@@ -23,13 +23,13 @@ Seeds on one curve (neighbouring edges of one type and period) are merged before
 import numpy as np
 
 from ..errors import ContinuationError
+from ..sweep.curves_job import SEED_TYPES  # noqa: F401 (its home for the continuation)
 from ..sweep.curves_job import SeedSettings as Seed
 from .branch import BranchSettings, continue_branch
 from .curves import BifurcationCurve, CurveSettings, continue_curve
 from .orbit import find_cycle
 from .section_map import SectionMap
 
-SEED_TYPES = ("PD", "SN", "G")  # the map types a curve is seeded from (the model has no NS)
 GROUP_CELLS = 6  # seed cells of one type and period this close (in cells) are one task
 CANDIDATES = 8  # seeds of a group tried in turn (those a found curve passes near are skipped)
 SAME_CURVE_CELLS = 1.5  # a curve whose points all lie this close to another is that curve

@@ -74,6 +74,7 @@ def ensure_fresh_cache() -> None:
     Called explicitly before the kernel first runs in a process (``run_tile``,
     the CLI); once per process, later calls return at once.
     """
+    numba_internals.check_blas_without_scipy()  # before numba's first load: see there
     want = core_digest()
     for directory in cache_dirs():
         stamp = directory / STAMP

@@ -81,3 +81,41 @@ def documented_cache_dirs(source_dir: Path) -> list[Path]:
     if root and Path(root).is_dir():
         dirs += sorted({p.parent for p in Path(root).rglob("kernel.chain_compiled-*.nbi")})
     return dirs
+
+
+def check_blas_without_scipy() -> None:
+    """Let numba's first load of compiled code skip importing scipy.linalg.
+
+    numba's CPU target imports ``numba.np.arraymath`` the first time a process types or
+    loads a function, and that module imports scipy.linalg (through ``numba.np.linalg``'s
+    ``ensure_blas``) only to set ``_HAVE_BLAS``, which picks np.convolve's and
+    np.correlate's inner product; the import is about half of loading the cached kernel
+    (benchmarks/RESULTS.md). Here ``_HAVE_BLAS`` is set from whether SciPy is installed,
+    without importing it. numba's linear algebra still imports scipy.linalg, and checks
+    its BLAS, when a function that uses it is compiled. A numba without these names, or a
+    process that has imported either module already, is left as it is."""
+    import importlib.util
+    import sys
+
+    if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules:
+        return
+    try:
+        from numba.np import linalg
+    except ImportError:
+        return
+    check = getattr(linalg, "ensure_blas", None)
+    if check is None:
+        return
+
+    def unasked() -> None:
+        raise ImportError("asked without importing SciPy")
+
+    linalg.ensure_blas = unasked
+    try:
+        from numba.np import arraymath
+    finally:
+        linalg.ensure_blas = check
+    if getattr(arraymath, "ensure_blas", None) is unasked:
+        arraymath.ensure_blas = check
+    if hasattr(arraymath, "_HAVE_BLAS"):
+        arraymath._HAVE_BLAS = importlib.util.find_spec("scipy") is not None

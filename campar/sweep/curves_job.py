@@ -25,6 +25,7 @@ from .settings import MAX_COUNT, MAX_POINTS, Settings
 CURVE_AXES = ("point", "task")  # a curves job's sweep keys: columns, rows
 CURVES_PER_TASK = 3  # curves a task may find (a group of seeds may stand for several)
 CURVE_TYPES = ("PD", "SN", "NS", "G")  # the codes of curve_type, in order
+SEED_TYPES = ("PD", "SN", "G")  # the map types a curve is seeded from (the model has no NS)
 
 # dtype and trailing shape of each per-point array of a curves job
 CURVE_ARRAYS = {

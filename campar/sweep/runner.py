@@ -419,18 +419,24 @@ def run_job(
             work(comm, job, signals, lane, direct)
             receive_outcome(comm)  # of the run
             return RunSummary("worker", {})
-        # Compiled (or loaded) before the store opens and before the lane's thread starts:
-        # a serial process then has one thread (zarr starts one of its own when the store
-        # opens), so a cold compile may fork a helper (campar.core.split_compile); under MPI
-        # the workers load theirs meanwhile (a cold compile split between the ranks of a
-        # node, ``share``), and rank 0's first tile runs at full speed. A store with nothing
-        # pending then has loaded the kernel for nothing (a compile if the cache is cold).
-        (tile_work.load if tile_work else compile_kernel)(job, share)
-        lane = ThreadLane(job, f"rank 0 {where}", halted=halted, tile_work=tile_work)
+        # Serial: compiled (or loaded) before the store opens and before the lane's thread
+        # starts: the process then has one thread (zarr starts one of its own when the
+        # store opens), so a cold compile may fork a helper (campar.core.split_compile),
+        # and the first tile runs at full speed. A store with nothing pending then has
+        # loaded the kernel for nothing (a compile if the cache is cold).
+        # Under MPI every worker waits for the store: rank 0 opens it first, and its lane
+        # loads the kernel as a worker's does (a cold compile split between the ranks of a
+        # node, ``share``) while the master hands out tiles, so the workers start one
+        # kernel load sooner (benchmarks/RESULTS.md, "Start-up").
+        if comm is None:
+            (tile_work.load if tile_work else compile_kernel)(job, share)
+            lane = ThreadLane(job, f"rank 0 {where}", halted=halted, tile_work=tile_work)
         opened = {}
         with share_outcome(comm, opened):
             store = open_store(path, job, overwrite=overwrite)
             opened["text"] = direct_path(store)
+        if comm is not None:
+            lane = ThreadLane(job, f"rank 0 {where}", True, halted, share, tile_work)
         with store, share_outcome(comm):
             return run_master(job, store, signals, comm, grace, lane, bool(opened["text"]))
 

@@ -354,7 +354,13 @@ def half_gaps(sections, n) -> np.ndarray:
 
 
 def store_boundaries(
-    path, *, omega=None, second=None, trace: bool = False, direction: str | None = None
+    path,
+    *,
+    omega=None,
+    second=None,
+    trace: bool = False,
+    direction: str | None = None,
+    shoot: bool = False,
 ) -> MapBoundaries:
     """``find_boundaries`` of a result store (the cells whose centres lie in the zoom
     ranges ``omega=(a, b)``, ``second=(c, d)``, either order; None: the whole axis).
@@ -363,7 +369,9 @@ def store_boundaries(
     grazing from orbits traced from the stored states with the store's job (loads the
     kernel; a few ms per periodic cell on an edge where the detachments change).
     direction: of a ``chains.direction: both`` store, the sweep whose map is typed
-    ("down", the default, or "up"); else None or the store's own direction.
+    ("down", the default, or "up"); else None or the store's own direction. ``shoot``:
+    the edges still unknown between periodic cells typed by shooting
+    (``campar.views.shot_edges``; a few ms an edge).
 
     Parameters
     ----------
@@ -376,6 +384,9 @@ def store_boundaries(
         Judge grazing from orbits traced from the stored states with the store's job.
     direction : str, optional
         Of a ``chains.direction: both`` store, the sweep whose map is typed.
+    shoot : bool
+        Type the unknown edges between periodic cells by shooting: both cycles solved
+        by Newton on Pⁿ and continued across the edge.
 
     Returns
     -------
@@ -443,7 +454,7 @@ def store_boundaries(
     rows, cols = zoom(job.second_values, second, job.second), zoom(job.omega, omega, "omega")
     arrays = {name: values[rows][:, cols] for name, values in arrays.items()}
     tracer = store_tracer(job, arrays, job.omega[cols], job.second_values[rows]) if trace else None
-    return find_boundaries(
+    found = find_boundaries(
         arrays,
         job.omega[cols],
         job.second_values[rows],
@@ -452,6 +463,11 @@ def store_boundaries(
         chatter_p=job.classify.chatter_p,
         trace=tracer,
     )
+    if not shoot:
+        return found
+    from .shot_edges import shoot_unknown
+
+    return shoot_unknown(found, job, arrays["state"], job.omega[cols], job.second_values[rows])
 
 
 def zoom(centres, bounds, name: str) -> slice:

@@ -47,7 +47,7 @@ def store_seeds(path, types=SEED_TYPES, *, group: bool = True) -> list[list[Seed
     from ..sweep.store import read_store
     from .dataset import open as open_store
 
-    found = store_boundaries(path)
+    found = store_boundaries(path, shoot=True)  # the edges the map cannot type, by shooting
     second_name = found.second_name
     with read_store(path) as store:
         job = store.job
