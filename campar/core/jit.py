@@ -4,8 +4,8 @@ Three decorators. ``hot`` for the per-step path: numba's reference counting off.
 Each array passed down a call (and the stepper passes ~10 of them, in named
 tuples) otherwise costs an atomic increment and decrement that numba's pruning
 pass does not remove across calls: with reference counting on, a revolution
-takes several times as long, most of it in NRT_incref/NRT_decref (numba 0.68;
-benchmarks/RESULTS.md). ``hot`` functions must not allocate or return
+takes several times as long, most of it in NRT_incref/NRT_decref (numba 0.68).
+``hot`` functions must not allocate or return
 arrays; numba refuses to compile them if they do. Buffers are allocated in
 Python (``make_work``, ``make_chain_work``) and handed down.
 
