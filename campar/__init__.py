@@ -4,6 +4,8 @@ The package, layer by layer (each may import only the layers above it):
 
 - ``campar.core``: the numerical core, compiled with numba (model, integrator,
   analysis, one revolution, the cell kernel);
+- ``campar.model``: the model as one value (``Model``: everything a cell's numbers
+  depend on, its schema and bounds) and one cell or chain computed from it;
 - ``campar.sweep``: the sweep machinery (job, plan, tile, runner, progress, store);
 - ``campar.views``: one cell, one bifurcation line, and figures;
 - ``campar.paper``: the study of the source paper (claims, figure set, report);
@@ -12,8 +14,8 @@ The package, layer by layer (each may import only the layers above it):
   per command family.
 
 The public names (``dir(campar)``, docs/cli.md): ``run``, ``forecast``, ``line``,
-``open``, ``simulate_point``, ``PointResult``, ``find_attractors``, ``BifurcationLine``,
-``Job``, ``load_job``.
+``open``, ``simulate_point``, ``PointResult``, ``cell``, ``StoredCell``, ``Model``,
+``find_attractors``, ``BifurcationLine``, ``Job``, ``load_job``.
 
 Importing campar does nothing but define names: the numba cache is checked when
 the kernel is first run (``campar.core.jitcache.ensure_fresh_cache``).
@@ -28,6 +30,9 @@ _EXPORTS = {
     "line": "campar.api",
     "open": "campar.views.dataset",
     "simulate_point": "campar.views.point",
+    "cell": "campar.views.cell",
+    "StoredCell": "campar.views.cell",
+    "Model": "campar.model",
     "PointResult": "campar.views.point",
     "find_attractors": "campar.views.attractors",
     "BifurcationLine": "campar.views.line",

@@ -9,13 +9,10 @@ from pathlib import Path
 
 from .errors import JobError
 from .sweep.job import (
-    DEFAULT_MODEL,
-    DEFAULT_TRANSIENT,
-    PAPER_VALUES,
     Job,
     load_job,
 )
-from .views.line import DEFAULT_POINTS, DEFAULT_SECTIONS, BifurcationLine
+from .views.line import DEFAULT_POINTS, BifurcationLine
 
 
 def job_of(job, settings: dict | None = None) -> Job:
@@ -180,23 +177,14 @@ def work_of(job):
 def line(
     omega: tuple[float, float],
     points: int = DEFAULT_POINTS,
-    *,
-    f0: float = PAPER_VALUES["f0"],
-    mu_kn: float = PAPER_VALUES["mu_kn"],
-    mu_cn: float = PAPER_VALUES["mu_cn"],
-    zeta: float = PAPER_VALUES["zeta"],
-    tensile: str = DEFAULT_MODEL.tensile,
-    duty_cycle: str = DEFAULT_MODEL.duty_cycle,
-    cam_velocity: str = DEFAULT_MODEL.cam_velocity,
-    transient: str = DEFAULT_TRANSIENT.mode,
-    revolutions: int = DEFAULT_TRANSIENT.max_revolutions,
-    sections: int = DEFAULT_SECTIONS,
+    model=None,
+    **fields,
 ) -> BifurcationLine:
     """A bifurcation line along ω, as ``campar line`` computes it.
 
-    One continuation chain: the line starts at the larger ω of ``omega`` from rest,
-    (y, y') = (0, 0) at θ = 0, and each next cell (ω decreasing) starts from the
-    previous cell's final state — exactly one row of a map with these parameters.
+    One continuation chain: the line starts at the larger ω of ``omega`` from the model's
+    start (rest: (y, y') = (0, 0) at θ = 0), and each next cell (ω decreasing) starts
+    from the previous cell's final state — exactly one row of a map with this model.
 
     Parameters
     ----------
@@ -204,21 +192,15 @@ def line(
         The ω range, either order; computed from the larger value down.
     points : int
         ω values, evenly spaced, at least 2.
-    f0, mu_kn, mu_cn, zeta : float
-        The model's parameters (default: the paper's base values).
-    tensile : {"clamp", "allow"}
-        The force law: no tensile contact force, or the paper's formula as printed.
-    duty_cycle : {"separation", "force"}
-        What the duty cycle counts: time with ε < 0, or time with Pn = 0.
-    cam_velocity : {"chain", "literal"}
-        The cam velocity in the contact force: ω dyc/dθ, or the paper's eq. 6, dyc/dθ.
-    transient : {"converged", "fixed"}
-        Stop each cell's transient once it settles, or after ``revolutions`` as the
-        paper does.
-    revolutions : int
-        The transient's budget (converged) or length (fixed).
-    sections : int
-        σn points kept per non-periodic cell.
+    model : Model or mapping, optional
+        The line's model (``campar.Model``; its ω is replaced by the range's).
+    **fields
+        Any key of the model by its name, as ``campar.simulate_point`` takes them: the
+        parameters ``f0``, ``mu_kn``, ``mu_cn``, ``zeta`` (default the paper's base
+        values); ``tensile`` ("clamp" or "allow"), ``duty_cycle``, ``cam_velocity``; the
+        cam's ``rise``, ``fall``, ``phi1`` … ``phi4``; the contact's ``law``, ``n``,
+        ``restitution``; ``transient``, ``revolutions``; ``rtol``; ``sections`` (σn points
+        kept per non-periodic cell, default DEFAULT_SECTIONS); … (jobs/README.md).
 
     Returns
     -------
@@ -231,7 +213,7 @@ def line(
     Raises
     ------
     JobError
-        A parameter or option unknown or out of range.
+        A key unknown or a value out of range.
 
     Examples
     --------
@@ -240,22 +222,8 @@ def line(
     >>> result.omega.round(2).tolist(), result.labels
     ([1.0, 0.95, 0.9], ['1-1', '1-1', '1-1'])
     """
-    from .views.line import compute_line, line_job
+    from .views.line import compute_line, line_spec
 
     if points < 2:
         raise JobError(f"a line has at least 2 points, got {points}")
-    job = line_job(
-        omega,
-        points,
-        f0=f0,
-        mu_kn=mu_kn,
-        mu_cn=mu_cn,
-        zeta=zeta,
-        tensile=tensile,
-        duty_cycle=duty_cycle,
-        cam_velocity=cam_velocity,
-        transient=transient,
-        revolutions=revolutions,
-        sections=sections,
-    )
-    return compute_line(job)
+    return compute_line(line_spec(omega, points, model, **fields))

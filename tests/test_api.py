@@ -102,5 +102,5 @@ def test_line_returns_what_the_cli_writes(tmp_path, capsys):
 def test_line_refuses_bad_input_in_one_clear_error():
     with pytest.raises(JobError, match="at least 2 points"):
         campar.line((3.0, 2.9), points=1)
-    with pytest.raises(JobError, match=r"mu_kn.from: must be in \(0, 1\), got 1.5"):
+    with pytest.raises(JobError, match=r"^mu_kn must be in \(0, 1\), got 1.5$"):
         campar.line((3.0, 2.9), points=3, mu_kn=1.5)

@@ -212,4 +212,7 @@ def test_point_attractors_refuses_too_few_starts():
         text=True,
         timeout=300,
     )
-    assert out.returncode == 2 and "--attractors must be ≥ 2" in out.stderr
+    assert (
+        out.returncode == 2
+        and "--attractors must be an integer from 2 to 4096, got 1" in out.stderr
+    )

@@ -1,6 +1,6 @@
-"""One interface everywhere: every option of a job's ``model:`` section is a flag of each
-command that computes cells (point, line, continue), from one definition
-(campar/cli/options.py), and a line's flags reach the kernel (checked against the
+"""One interface everywhere: every key of the model is a flag of each command that computes
+cells (point, line, continue), generated from one schema (campar.model.FIELDS,
+campar/cli/options.py), and a line's flags reach the kernel (checked against the
 independent SciPy model)."""
 
 import argparse
@@ -11,8 +11,8 @@ import pytest
 
 from campar.bench.scipy_model import Model, duty_cycle, integrate
 from campar.cli import build_parser, main
-from campar.cli.options import option_fields
-from campar.sweep.job import DEFAULT_MODEL, ModelSettings, field_choices
+from campar.cli.options import FIELD_DEST
+from campar.model import FIELDS
 
 CELL_COMMANDS = ("point", "line", "continue")
 
@@ -30,12 +30,13 @@ def option(parser: argparse.ArgumentParser, flag: str) -> argparse.Action:
 
 
 @pytest.mark.parametrize("command", CELL_COMMANDS)
-@pytest.mark.parametrize("name", option_fields())
-def test_every_model_option_is_a_flag_with_the_jobs_choices_and_default(command, name):
-    action = option(subparser(command), f"--{name.replace('_', '-')}")
-    assert tuple(action.choices) == field_choices(ModelSettings, name)
-    assert action.default == getattr(DEFAULT_MODEL, name)
-    assert action.dest == name
+@pytest.mark.parametrize("key", sorted(FIELDS))
+def test_every_model_key_is_a_flag_with_the_jobs_choices(command, key):
+    field = FIELDS[key]
+    action = option(subparser(command), field.flag)
+    if field.choices:
+        assert action.metavar == "|".join(field.choices)
+    assert key in action.help and str(field.default) in action.help
 
 
 @pytest.mark.parametrize("command", CELL_COMMANDS)
@@ -43,13 +44,10 @@ def test_the_commands_share_one_definition_of_the_model_flags(command):
     """Same flags, same help text: a flag means the same in every command."""
     mine = {a.dest: (a.option_strings, a.help) for a in subparser(command)._actions}
     point = {a.dest: (a.option_strings, a.help) for a in subparser("point")._actions}
-    for name in option_fields():
-        assert mine[name] == point[name], name
-    if command == "line":  # a chain's transient too (continue solves for cycles instead)
-        assert (mine["transient"], mine["revolutions"]) == (
-            point["transient"],
-            point["revolutions"],
-        )
+    for field in FIELDS.values():
+        dest = FIELD_DEST + field.key
+        assert mine[dest] == point[dest], field.key
+    assert mine["set"] == point["set"] and mine["job"] == point["job"]
 
 
 def test_a_lines_model_flags_reach_the_kernel(tmp_path):

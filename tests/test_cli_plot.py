@@ -112,7 +112,6 @@ def test_plot_what_n_and_p_from_a_store(pair, tmp_path):
         (["line", "--omega", "3:2", "--cam-velocty", "literal"], "did you mean --cam-velocity"),
         (["run", "job.yaml", "--dryrun"], "did you mean --dry-run"),
         (["pont", "--omega", "3"], "did you mean point"),
-        (["point", "--omega", "1", "--tensile", "alow"], "did you mean allow"),
     ],
 )
 def test_a_misspelled_flag_names_the_one_meant_with_its_commands_usage(argv, hint, capsys):

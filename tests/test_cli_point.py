@@ -69,9 +69,12 @@ def test_point_summary_is_human_readable():
         (["--omega", "1", "--mu-kn", "1.0"], "mu_kn must be in (0, 1)"),
         (["--omega", "1", "--mu-cn", "-0.1"], "mu_cn must be in (0, 1)"),
         (["--omega", "1", "--zeta", "-1"], "zeta must be ≥ 0"),
-        (["--omega", "1", "--f0", "nan"], "f0 must be a finite number"),
+        (["--omega", "1", "--f0", "nan"], "f0: Input should be a finite number"),
         (["--omega", "1", "--rtol", "2"], "rtol"),
-        (["--omega", "1", "--revolutions", "0"], "--revolutions"),
+        (
+            ["--omega", "1", "--revolutions", "0"],
+            "transient.max_revolutions: Input should be greater than or equal to 1",
+        ),
     ],
 )
 def test_bad_input_exits_2_naming_the_parameter(args, needle):

@@ -14,7 +14,7 @@ from campar.core.jit import through_numba
 from campar.core.revolution import make_trace
 from campar.core.tracer import trace_orbit
 from campar.errors import JobError
-from campar.sweep.cam_table import parse_table, periodic_spline
+from campar.model.cam_table import parse_table, periodic_spline
 from campar.sweep.job import Job
 from campar.sweep.tile import cell_settings, solver_options
 from campar.views.dataset import cell_labels

@@ -342,10 +342,15 @@ def test_campar_run_refuses_a_huge_job_before_touching_the_disk(tmp_path, capsys
     assert sorted(p.name for p in tmp_path.iterdir()) == ["huge.yaml"]
 
 
-def test_point_names_its_flag_not_the_job_key(capsys):
+def test_point_names_the_models_key_as_every_entry_does(capsys):
+    """One message for a bad value whatever the entry (flag, --set, job, Python): the
+    model's key, which the flag's help names."""
     assert main(["point", "--omega", "3", "--rtol", "0"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("campar point: --rtol: ") and "integrator" not in err
+    assert err.startswith("campar point: integrator.rtol: ") and err.count("\n") == 1
+    with pytest.raises(SystemExit):
+        main(["point", "--help"])
+    assert "(integrator.rtol; default 1e-07)" in capsys.readouterr().out
 
 
 def test_status_of_a_store_written_by_another_host_run_is_safe(tmp_path):

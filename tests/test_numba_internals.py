@@ -17,8 +17,9 @@ from packaging.specifiers import SpecifierSet
 from campar.core import jitcache, numba_internals, split_compile
 from campar.core.kernel import chain_compiled
 from campar.core.revolution import run_revolution
+from campar.sweep.job import cell_job
 from campar.sweep.tile import cell_settings, solver_options
-from campar.views.point import point_job, simulate_point
+from campar.views.point import POINT_OUTPUTS, simulate_point
 
 ROOT = Path(__file__).resolve().parents[1]
 ANOTHER_NUMBA = "_cache_of_another_numba"  # an attribute no numba dispatcher has
@@ -53,7 +54,7 @@ def test_without_the_internals_nothing_is_split_and_nothing_waits(monkeypatch):
     assert jitcache.PACKAGE / "__pycache__" in jitcache.cache_dirs()
     assert numba_internals.cache_indexes(chain_compiled, ()) is None
     assert not split_compile.cold_for(run_revolution, [()])
-    job = point_job(omega=3.0)
+    job = cell_job(outputs=POINT_OUTPUTS, omega=3.0)
     assert split_compile.start_helper(solver_options(job), cell_settings(job)) is None
     monkeypatch.setattr(split_compile, "HELPER_SECONDS", 60.0)
     from numba import types

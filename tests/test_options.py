@@ -26,10 +26,10 @@ from campar.core.model import (
 from campar.core.revolution import make_trace
 from campar.core.tracer import trace_orbit
 from campar.errors import JobError
-from campar.sweep.job import Job, job_digest
+from campar.sweep.job import Job, cell_job, job_digest
 from campar.sweep.store._cf import global_attrs
 from campar.sweep.tile import cell_settings, solver_options
-from campar.views.point import EVENT_NAMES, point_job, simulate_point
+from campar.views.point import EVENT_NAMES, simulate_point
 
 RTOL = 1e-10
 
@@ -46,7 +46,7 @@ REGIMES = [
 
 def campar_orbit(omega, f0, mu_kn, mu_cn, tensile, x0, revolutions, cam_velocity):
     """Final state and events of campar's integration (DP54 at RTOL) from x0 at θ = 0."""
-    job = point_job(
+    job = cell_job(
         omega=omega,
         f0=f0,
         mu_kn=mu_kn,

@@ -10,12 +10,13 @@ from campar.core.model import kernel_law
 from campar.core.revolution import make_trace
 from campar.core.revolution_call import fingerprint, revolution_args, revolution_link
 from campar.core.tracer import trace_arguments, trace_compiled, tracer_link
+from campar.sweep.job import cell_job
 from campar.sweep.tile import allocate_outputs, cell_settings, solver_options
-from campar.views.point import point_job
+from campar.views.point import POINT_OUTPUTS
 
 
 def chain_arguments(method="dop853"):
-    job = point_job(omega=3.0, method=method)
+    job = cell_job(outputs=POINT_OUTPUTS, omega=3.0, method=method)
     solver, settings = solver_options(job), cell_settings(job)
     out = allocate_outputs(1, settings.output_bits, job.n_sections)
     one = np.ones(1)

@@ -6,8 +6,9 @@ import pytest
 from campar.bench.scipy_model import Model, integrate
 from campar.core.revolution import make_trace
 from campar.core.tracer import trace_orbit
+from campar.sweep.job import cell_job
 from campar.sweep.tile import cell_settings, solver_options
-from campar.views.point import EVENT_NAMES, point_job
+from campar.views.point import EVENT_NAMES
 
 # (omega, f0, mu_kn, mu_cn, clamp, start state, revolutions): contact only, impacting,
 # a 2-cycle with the clamp active, the paper's literal law, and fast with strong damping.
@@ -24,7 +25,7 @@ def campar_orbit(
     omega, f0, mu_kn, mu_cn, clamp, x0, revolutions, rtol, method="dp54", rk4_steps=600
 ):
     """Final state and events of campar's integration of whole revolutions from x0."""
-    job = point_job(
+    job = cell_job(
         omega=omega,
         f0=f0,
         mu_kn=mu_kn,

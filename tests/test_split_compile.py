@@ -14,9 +14,10 @@ from numba import typeof
 
 from campar.core import split_compile
 from campar.core.kernel import chain_compiled, chain_loaded
+from campar.sweep.job import cell_job
 from campar.sweep.plan import Tile
 from campar.sweep.tile import cell_settings, compile_kernel, run_tile, solver_options
-from campar.views.point import point_job
+from campar.views.point import POINT_OUTPUTS
 
 COLD_POINT = textwrap.dedent("""
     import json, sys
@@ -87,7 +88,7 @@ def test_split_compile_loads_the_helpers_revolution_and_matches_a_serial_compile
 
 
 def test_no_helper_where_forking_is_unsafe():
-    job = point_job(omega=3.0)
+    job = cell_job(outputs=POINT_OUTPUTS, omega=3.0)
     solver, settings = solver_options(job), cell_settings(job)
     stop = threading.Event()
     other = threading.Thread(target=stop.wait)
@@ -116,9 +117,9 @@ def test_a_stuck_helper_is_killed_and_reaped(monkeypatch):
 def test_a_loaded_chain_serves_every_job_of_its_method():
     # compile_kernel returns at once when chain_loaded: only the solver options' type may
     # differ between jobs' chains, so other outputs, transients and laws add no signature
-    compile_kernel(point_job(omega=3.0))
+    compile_kernel(cell_job(outputs=POINT_OUTPUTS, omega=3.0))
     signatures = len(chain_compiled.signatures)
-    other = point_job(
+    other = cell_job(
         omega=2.0,
         outputs=("label", "dc", "sections", "multipliers", "lyapunov"),
         transient="fixed",
@@ -130,9 +131,9 @@ def test_a_loaded_chain_serves_every_job_of_its_method():
     assert len(chain_compiled.signatures) == signatures
     # another method is another chain (whether this process holds it depends on the tests
     # before): its options' type differs, so the DOP853 chain never stands in for it
-    assert typeof(solver_options(point_job(omega=3.0, method="rk4"))) != typeof(
-        solver_options(other)
-    )
+    assert typeof(
+        solver_options(cell_job(outputs=POINT_OUTPUTS, omega=3.0, method="rk4"))
+    ) != typeof(solver_options(other))
 
 
 IN_CACHE = textwrap.dedent("""
@@ -142,8 +143,9 @@ IN_CACHE = textwrap.dedent("""
     from campar.core.revolution import run_revolution
     from campar.core.revolution_call import revolution_args
     from campar.sweep.tile import cell_settings, solver_options
-    from campar.views.point import point_job
-    job = point_job(omega=3.0)
+    from campar.sweep.job import cell_job
+    from campar.views.point import POINT_OUTPUTS
+    job = cell_job(outputs=POINT_OUTPUTS, omega=3.0)
     solver, settings = solver_options(job), cell_settings(job)
     signature = revolution_args(solver, settings, make_chain_work(settings).w6, law=job.law())
     print(numba_internals.cache_indexes(run_revolution, signature))

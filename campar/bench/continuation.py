@@ -49,11 +49,11 @@ def speed(points: int) -> dict:
             orbit, "omega", (SPAN[1], SPAN[0]), section_map=smap, settings=settings
         )
     )
-    from ..views.line import compute_line, line_job
+    from ..views.line import compute_line, line_spec
 
-    job = line_job(SPAN[::-1], len(branch.values), mu_kn=MU_KN)
-    compute_line(job, transitions=False)  # warm
-    cells, _ = timed(lambda: compute_line(job, transitions=False))
+    spec = line_spec(SPAN[::-1], len(branch.values), mu_kn=MU_KN)
+    compute_line(spec, transitions=False)  # warm
+    cells, _ = timed(lambda: compute_line(spec, transitions=False))
     per_point = took.cpu / len(branch.values)
     per_cell = cells.cpu / len(branch.values)
     return {

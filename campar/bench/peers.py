@@ -37,10 +37,9 @@ from typing import NamedTuple
 import numpy as np
 
 from ..core.codes import Kind, cell_label
-from ..sweep.job import DEFAULT_CLASSIFY, DEFAULT_INTEGRATOR, DEFAULT_TRANSIENT, Job
+from ..sweep.job import DEFAULT_CLASSIFY, DEFAULT_INTEGRATOR, DEFAULT_TRANSIENT, Job, cell_job
 from ..sweep.plan import Tile
 from ..sweep.tile import run_tile
-from ..views.point import point_job
 from .common import Cell, Timing, best_time, format_table, machine_line, timed
 from .scipy_peer import scipy_cell
 
@@ -112,7 +111,7 @@ def campar_outcomes(job: Job, min_seconds: float) -> tuple[list[Outcome], Timing
 def campar_outcome(
     cell: Cell, method: str, transient: str, revolutions: int, window: int, min_seconds: float
 ) -> Outcome:
-    job = point_job(
+    job = cell_job(
         omega=cell.omega,
         **cell.parameters,
         transient=transient,

@@ -29,9 +29,9 @@ import numpy as np
 
 from ..core.revolution import make_trace
 from ..core.tracer import trace_orbit
-from ..sweep.job import DEFAULT_INTEGRATOR
+from ..sweep.job import DEFAULT_INTEGRATOR, cell_job
 from ..sweep.tile import cell_settings, solver_options
-from ..views.point import EVENT_NAMES, point_job, simulate_point
+from ..views.point import EVENT_NAMES, simulate_point
 from .common import (
     Cell,
     Timing,
@@ -110,7 +110,7 @@ def event_error(events, ref_events) -> float:
 
 def campar_call(cell: Cell, x0, revolutions: int, method: str, rtol: float, rk4_steps: int):
     """A function f(rec) running trace_orbit once; rec = make_trace(0, 0, 1) records nothing."""
-    job = point_job(
+    job = cell_job(
         omega=cell.omega,
         **cell.parameters,
         y0=x0[0],

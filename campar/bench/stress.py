@@ -30,9 +30,9 @@ from typing import NamedTuple
 import numpy as np
 
 from ..core.codes import FAILED, OK, PERIODIC, Flag, Status, cell_label
+from ..sweep.job import cell_job
 from ..sweep.plan import Tile
 from ..sweep.tile import run_tile
-from ..views.point import point_job
 from .common import Cell, format_table, machine_line
 from .scipy_model import integrate
 
@@ -91,7 +91,7 @@ class Result(NamedTuple):
 
 def compute_cell(cell: Cell, start, rtol: float, budget: int) -> dict:
     """One cell through run_tile with a step budget: the outputs of the cell."""
-    job = point_job(
+    job = cell_job(
         omega=cell.omega,
         **cell.parameters,
         y0=start[0],

@@ -4,7 +4,16 @@ import argparse
 import sys
 
 from ..errors import JobError
-from .options import PARAMETER_HELP, add_model_options, flag_of, launched_rank, model_options
+from ..model.laws import LAW_PARAMETERS
+from .options import (
+    FIELD_DEST,
+    PARAMETER_HELP,
+    add_model_fields,
+    flag_of,
+    given_fields,
+    launched_rank,
+    model_of,
+)
 
 CONTINUATION_PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 HELP = {"omega": "cam speed / natural frequency", **PARAMETER_HELP}
@@ -45,7 +54,8 @@ def add_continue(sub):
         "solve for its periodic orbit by Newton's method on the section map, and follow "
         "the orbit's branch by pseudo-arclength continuation through folds; PD, SN, BP, "
         "NS and G points are located to 1e-10 in the parameter. Exactly one parameter "
-        "takes a range A:B (the branch starts at A).",
+        "takes a range A:B (the branch starts at A): omega, f0, mu_kn, mu_cn, zeta, or a "
+        "law parameter of the model (--phi1 … --phi4, --n, --restitution).",
     )
     p.add_argument(
         "--omega", type=value_or_range, required=True, metavar="W or A:B", help=HELP["omega"]
@@ -54,13 +64,10 @@ def add_continue(sub):
         p.add_argument(
             flag_of(name),
             type=value_or_range,
-            default=value,
             metavar="X or A:B",
             help=f"{HELP[name]} ({value:g})",
         )
-    add_model_options(p)
-    p.add_argument("--y0", type=float, default=0.0, help="the start cell's initial y (rest)")
-    p.add_argument("--v0", type=float, default=0.0, help="the start cell's initial y' (rest)")
+    add_model_fields(p)
     p.add_argument(
         "--cycle",
         type=int,
@@ -111,6 +118,12 @@ def add_continue(sub):
 def split_parameters(args) -> tuple[str, tuple[float, float], dict]:
     """(the parameter with a range, its range, the other parameters' values)."""
     values = {name: getattr(args, name) for name in CONTINUATION_PARAMETERS}
+    values = {name: value for name, value in values.items() if value is not None}
+    for key, text in given_fields(args).items():  # a law parameter's range: --phi1 0.9:1.3
+        name = key.rsplit(".", 1)[-1]
+        if name in LAW_PARAMETERS and ":" in text:
+            values[name] = value_or_range(text)
+            delattr(args, FIELD_DEST + key)
     ranged = [name for name, value in values.items() if isinstance(value, tuple)]
     if len(ranged) != 1:
         raise JobError(
@@ -129,6 +142,8 @@ def run_continue(args) -> int:
     from ..views.continuation import continue_from_cell, describe_continuation
 
     parameter, span, fixed = split_parameters(args)
+    model = model_of(args, **{**fixed, parameter: span[0]})
+    fixed = {k: v for k, v in model.parameters.items() if k != parameter}
     if args.switch < 0:
         raise JobError(f"--switch must be ≥ 0, got {args.switch}")
     if args.cycle is not None and args.cycle < 1:
@@ -154,11 +169,11 @@ def run_continue(args) -> int:
         parameter,
         span,
         fixed,
-        y0=args.y0,
-        v0=args.v0,
+        y0=model.initial.y,
+        v0=model.initial.v,
         cycle=args.cycle,
         switch=args.switch,
-        model=model_options(args),
+        model=model,
         settings=settings,
         curve_types=types,
         second=second,
@@ -168,23 +183,20 @@ def run_continue(args) -> int:
     for line in result.missing:  # asked for, not found: said on stderr, and in the JSON
         print(f"campar continue: {line}", file=sys.stderr)
     if args.output:
-        draw(args, result, parameter, span, fixed)
+        draw(args, result, parameter, span, model)
     return 0
 
 
-def draw(args, result, parameter, span, fixed) -> None:
+def draw(args, result, parameter, span, model) -> None:
     from pathlib import Path
 
     from ..views.plot.branches import plot_bifurcation_curves, plot_branches
 
     line = None
     if args.line:
-        from ..views.line import compute_line, line_job
+        from ..views.line import compute_line, line_spec
 
-        others = {k: v for k, v in fixed.items() if k != "omega"}
-        line = compute_line(
-            line_job(span, args.line, **model_options(args), **others), transitions=False
-        )
+        line = compute_line(line_spec(span, args.line, model), transitions=False)
     plot_branches(result.root, line=line).savefig(args.output, dpi=200)
     if args.curves:
         path = Path(args.output)

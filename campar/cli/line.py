@@ -1,11 +1,11 @@
 """``campar line``: bifurcation diagrams along ω."""
 
 from ..errors import JobError
-from .options import add_model_arguments, model_options, parameter_values, transient_options
+from .options import add_model_fields, add_parameter_arguments, model_of, parameter_values
 
 
 def add_line(sub):
-    from ..views.line import DEFAULT_POINTS, DEFAULT_SECTIONS  # cheap: numba loads only to compute
+    from ..views.line import DEFAULT_POINTS  # cheap: numba loads only to compute
     from ..views.plot import parse_range  # cheap: matplotlib loads only to draw
 
     p = sub.add_parser(
@@ -27,13 +27,8 @@ def add_line(sub):
     p.add_argument(
         "--points", type=int, default=DEFAULT_POINTS, help=f"ω values ({DEFAULT_POINTS})"
     )
-    add_model_arguments(p, several=True)
-    p.add_argument(
-        "--sections",
-        type=int,
-        default=DEFAULT_SECTIONS,
-        help=f"σn points kept per non-periodic cell ({DEFAULT_SECTIONS})",
-    )
+    add_parameter_arguments(p, several=True)
+    add_model_fields(p)
     p.add_argument(
         "-o",
         "--output",
@@ -55,7 +50,7 @@ def run_line(args) -> int:
     import time
     from pathlib import Path
 
-    from ..views.line import compute_lines, describe_line, line_job, varied_parameters
+    from ..views.line import compute_lines, describe_line, line_spec, varied_parameters
     from ..views.transitions import describe_transitions
 
     if args.points < 2:
@@ -65,13 +60,13 @@ def run_line(args) -> int:
     figure_file(args.output)  # before computing
     if args.npz:
         writable_file(args.npz, "arrays")
-    options = {**model_options(args), **transient_options(args), "sections": args.sections}
-    jobs = [
-        line_job(args.omega, args.points, **options, **params)
-        for params in varied_parameters(parameter_values(args))
+    given = {name: value for name, value in parameter_values(args).items() if value is not None}
+    model = model_of(args, omega=max(args.omega))
+    specs = [
+        line_spec(args.omega, args.points, model, **params) for params in varied_parameters(given)
     ]
     start = time.perf_counter()
-    lines = compute_lines(jobs)
+    lines = compute_lines(specs)
     seconds = time.perf_counter() - start
     if not args.json:
         for line in lines:

@@ -1,17 +1,25 @@
-"""Flags several commands share, each defined once: the model's parameters, its options
-and the transient.
+"""Flags every command that computes a cell shares, generated from the model's schema.
 
-Every command that computes cells (``point``, ``line``, and any command added beside them)
-calls ``add_model_arguments`` on its parser and reads the values back with
-``model_options`` and ``transient_options``, so a flag means the same everywhere and a
-field added to the job's ``model:`` section becomes a flag of all of them at once::
+Every key of a Model (campar.model.FIELDS: the force law's options, the cam, the contact,
+the start, the integrator, the transient, the classification) is a flag named as the
+key's last part (``--rise`` for ``model.cam.rise``, ``--rtol`` for ``integrator.rtol``;
+``--y0``, ``--v0``, ``--transient``, ``--revolutions`` for the start and the transient's
+mode and length), so a key added to the schema is a flag of every such command at once.
+Beside them: ``--set KEY=VALUE`` (a key as a job writes it, e.g. ``model.cam.rise=cycloidal``),
+``--job FILE`` (the job's model: its sections and fixed parameters), and the parameters'
+own flags, which each command defines for itself (a value, a range, a list)::
 
     p = sub.add_parser("mycommand")
-    add_model_arguments(p)               # --f0 … --zeta, --tensile, --duty-cycle, …
+    add_parameter_arguments(p)            # --f0 … --zeta
+    add_model_fields(p)                   # --tensile … --sections, --set, --job
     ...
-    job = point_job(omega=args.omega, **parameter_values(args), **model_options(args),
-                    **transient_options(args))
+    model = model_of(args, omega=args.omega, **parameter_values(args))
+
+A value is read as a job file reads it (YAML), so a flag, ``--set``, a job file and
+a Python keyword give the same model and the same message for the same bad value.
 """
+
+import argparse
 
 # What the model parameters are, for help texts (their defaults: the paper's base values).
 PARAMETER_HELP = {
@@ -20,26 +28,7 @@ PARAMETER_HELP = {
     "mu_cn": "contact damping ratio",
     "zeta": "spring damping ratio",
 }
-
-# What each value of a model option means (docs/model.md): one entry per field of the job's
-# ``model:`` section (campar.sweep.job.ModelSettings); a field without one fails every parser.
-MODEL_OPTION_HELP = {
-    "tensile": "clamp: no tensile force; allow: the paper's formula",
-    "duty_cycle": "separation: DC counts ε < 0; force: Pn = 0",
-    "cam_velocity": "chain: ẏc = ω dyc/dθ; literal: the paper's eq. 6, dyc/dθ",
-}
-
-
-def option_fields() -> list[str]:
-    """The fields of a job's ``model:`` section that are a choice among words (tensile,
-    duty_cycle, cam_velocity): each a flag. The cam and contact laws are sections of their
-    own, set in job files (docs/design.md)."""
-    import typing
-
-    from ..sweep.job import ModelSettings
-
-    fields = ModelSettings.model_fields.items()
-    return [name for name, f in fields if typing.get_origin(f.annotation) is typing.Literal]
+FIELD_DEST = "model_field:"  # argparse dest prefix of a generated flag
 
 
 def flag_of(name: str) -> str:
@@ -47,87 +36,110 @@ def flag_of(name: str) -> str:
     return f"--{name.replace('_', '-')}"
 
 
-def add_model_arguments(p, *, several: bool = False) -> None:
-    """Add the model's flags to the parser ``p``: ``--f0 … --zeta`` (default: the paper's
-    base values; ``several``: each takes a list), one flag per model option
-    (``add_model_options``) and ``--transient``, ``--revolutions``."""
-    add_parameter_arguments(p, several=several)
-    add_model_options(p)
-    add_transient_arguments(p)
-
-
-def add_parameter_arguments(p, *, several: bool = False) -> None:
-    from ..sweep.job import PAPER_VALUES
+def add_parameter_arguments(p, *, several: bool = False, kind=float, metavar=None) -> None:
+    """``--f0 … --zeta``, each unset unless given (the model's default then: the paper's
+    base values); ``several``: each takes a list."""
+    from ..model.sections import PAPER_VALUES
 
     for name, value in PAPER_VALUES.items():
-        if several:
-            text = f"{PARAMETER_HELP[name]} ({value:g}; several values: a line each)"
-            p.add_argument(flag_of(name), type=float, nargs="+", default=[value], help=text)
-        else:
-            text = f"{PARAMETER_HELP[name]} ({value:g})"
-            p.add_argument(flag_of(name), type=float, default=value, help=text)
+        text = f"{PARAMETER_HELP[name]} ({value:g}"
+        text += "; several values: a line each)" if several else ")"
+        nargs = "+" if several else None
+        p.add_argument(flag_of(name), type=kind, nargs=nargs, metavar=metavar, help=text)
 
 
-def add_model_options(p) -> None:
-    """One flag per field of a job's ``model:`` section (``--tensile``, ``--duty-cycle``,
-    ``--cam-velocity``), its choices and default the job model's."""
-    from ..sweep.job import DEFAULT_MODEL, ModelSettings, field_choices
+def add_model_fields(p, *, skip=()) -> None:
+    """One flag per key of the model (``campar.model.FIELDS``) but those in ``skip``, and
+    ``--set KEY=VALUE``, ``--job FILE``; each unset unless given."""
+    from ..model import FIELDS
 
-    for name in option_fields():
-        default = getattr(DEFAULT_MODEL, name)
-        p.add_argument(
-            flag_of(name),
-            choices=field_choices(ModelSettings, name),
-            default=default,
-            help=f"{MODEL_OPTION_HELP[name]} ({default})",
+    group = p.add_argument_group(
+        "model", "every key of the model (jobs/README.md); unset: the job's default"
+    )
+    group.add_argument(
+        "--job",
+        metavar="FILE",
+        help="take the model of this job file (its sections and fixed parameters)",
+    )
+    group.add_argument(
+        "--set",
+        metavar="KEY=VALUE",
+        action="append",
+        default=[],
+        help="a key of the model as a job writes it, e.g. model.cam.rise=cycloidal (repeatable)",
+    )
+    for field in FIELDS.values():
+        if field.key in skip:
+            continue
+        group.add_argument(
+            field.flag,
+            dest=FIELD_DEST + field.key,
+            metavar="|".join(field.choices) if field.choices else "VALUE",
+            default=argparse.SUPPRESS,
+            help=field.help(),
         )
 
 
-def add_transient_arguments(p) -> None:
-    from ..sweep.job import DEFAULT_TRANSIENT, TransientSettings, field_choices
+def given_fields(args) -> dict[str, str]:
+    """{key: text} of the model's flags given on the command line."""
+    return {
+        dest.removeprefix(FIELD_DEST): value
+        for dest, value in vars(args).items()
+        if dest.startswith(FIELD_DEST)
+    }
 
-    mode, budget = DEFAULT_TRANSIENT.mode, DEFAULT_TRANSIENT.max_revolutions
-    p.add_argument(
-        "--transient",
-        choices=field_choices(TransientSettings, "mode"),
-        default=mode,
-        help=f"converged: until it settles; fixed: as the paper ({mode})",
-    )
-    p.add_argument(
-        "--revolutions", type=int, default=budget, help=f"transient budget / length ({budget})"
-    )
+
+def read_value(key: str, text):
+    """A flag's or --set's text as a job file reads it (YAML: numbers, true/false, text);
+    a number the YAML spelling misses (``nan``, ``inf``) as that number, so the model
+    refuses it as a number."""
+    import math
+
+    from ..sweep.overrides import parse_assignment
+
+    _, value = parse_assignment(f"{key}={text}")
+    if isinstance(value, str):
+        try:
+            number = float(value)
+        except ValueError:
+            return value
+        return number if not math.isfinite(number) else value
+    return value
+
+
+def model_of(args, **parameters):
+    """The Model of the command line: ``--job``'s model, then ``--set``, then the model's
+    flags, then ``parameters`` (None values left out); JobError for a bad key or value."""
+    from ..model import Model
+
+    base = job_model(args.job) if getattr(args, "job", None) else None
+    fields = {}
+    for text in getattr(args, "set", []):
+        key, _, raw = text.partition("=")
+        if not _:
+            from ..errors import JobError
+
+            raise JobError(f"--set expects KEY=VALUE (e.g. model.cam.rise=cycloidal), got {text!r}")
+        fields[key.strip()] = read_value(key.strip(), raw)
+    fields.update({key: read_value(key, text) for key, text in given_fields(args).items()})
+    fields.update({name: value for name, value in parameters.items() if value is not None})
+    return Model.build(base, **fields)
+
+
+def job_model(path) -> dict:
+    """A job file's model as a mapping: its model sections and fixed parameters."""
+    from ..sweep.job import MODEL_SECTIONS, load_job
+
+    job = load_job(path)
+    data = {name: getattr(job, name).model_dump(mode="json") for name in MODEL_SECTIONS}
+    return {**job.fixed, **data}
 
 
 def parameter_values(args) -> dict:
-    """``{"f0": …, "mu_kn": …, "mu_cn": …, "zeta": …}`` as parsed (lists with ``several``)."""
-    from ..sweep.job import PAPER_VALUES
+    """``{"f0": …, "mu_kn": …, "mu_cn": …, "zeta": …}`` as parsed (None: not given)."""
+    from ..model.sections import PAPER_VALUES
 
     return {name: getattr(args, name) for name in PAPER_VALUES}
-
-
-def model_options(args) -> dict:
-    """``{"tensile": …, "duty_cycle": …, "cam_velocity": …}`` as parsed: the job's
-    ``model:`` section, and keywords of ``point_job``, ``line_job`` and ``campar.line``."""
-
-    return {name: getattr(args, name) for name in option_fields()}
-
-
-def transient_options(args) -> dict:
-    """``{"transient": mode, "revolutions": budget}`` as parsed (keywords of ``point_job``
-    and ``line_job``); JobError for a budget below one revolution."""
-    from ..errors import JobError
-
-    if args.revolutions < 1:
-        raise JobError(f"--revolutions must be ≥ 1, got {args.revolutions}")
-    return {"transient": args.transient, "revolutions": args.revolutions}
-
-
-def model_flags() -> dict[str, str]:
-    """Job keys of the model options and the transient → their flags (``model.tensile`` →
-    ``--tensile``), for errors that name the flag the user typed."""
-
-    flags = {f"model.{name}": flag_of(name) for name in option_fields()}
-    return {**flags, "transient.mode": "--transient", "transient.max_revolutions": "--revolutions"}
 
 
 MPI_RANK_ENV = ("PMI_RANK", "OMPI_COMM_WORLD_RANK", "PMIX_RANK")

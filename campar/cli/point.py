@@ -1,31 +1,25 @@
-"""``campar point``: one cell, its classification, its attractors."""
+"""``campar point``: one cell, its classification, its cycle, its attractors; or a stored
+cell of a map reproduced (``--from``)."""
+
+import sys
 
 from ..errors import JobError
-from .options import (
-    add_model_arguments,
-    model_flags,
-    model_options,
-    parameter_values,
-    transient_options,
-)
+from .options import add_model_fields, add_parameter_arguments, model_of, parameter_values
 
 
 def add_point(sub):
-    from ..sweep.job import DEFAULT_INITIAL, DEFAULT_INTEGRATOR, IntegratorSettings, field_choices
-
-    p = sub.add_parser("point", help="simulate one cell and classify its steady motion")
-    p.add_argument("--omega", type=float, required=True, help="cam speed / natural frequency")
-    add_model_arguments(p)
-    p.add_argument("--y0", type=float, default=DEFAULT_INITIAL.y, help="initial y at θ = 0")
-    p.add_argument("--v0", type=float, default=DEFAULT_INITIAL.v, help="initial y' at θ = 0")
-    rtol, method = DEFAULT_INTEGRATOR.rtol, DEFAULT_INTEGRATOR.method
-    p.add_argument("--rtol", type=float, default=rtol, help=f"integrator rtol ({rtol:g})")
-    p.add_argument(
-        "--method",
-        choices=field_choices(IntegratorSettings, "method"),
-        default=method,
-        help=f"integrator ({method})",
+    p = sub.add_parser(
+        "point",
+        help="simulate one cell and classify its steady motion",
+        description="One cell of the model: every key of a job's model is a flag (or "
+        "--set KEY=VALUE, or --job FILE for a job's model). With --from STORE the cell "
+        "of a map's store nearest the coordinates given (its axes by name, e.g. --omega "
+        "--mu-cn) is computed again from its store's model and checked against every "
+        "value the store holds for it.",
     )
+    p.add_argument("--omega", type=float, help="cam speed / natural frequency")
+    add_parameter_arguments(p)
+    add_model_fields(p)
     p.add_argument("--multipliers", action="store_true", help="Floquet multipliers")
     p.add_argument("--lyapunov", action="store_true", help="largest Lyapunov exponent")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -45,113 +39,112 @@ def add_point(sub):
         "or not, from --y0/--v0 (or, from rest, the simulated cell's end state); "
         "its label, multipliers and stability",
     )
+    p.add_argument(
+        "--from",
+        dest="store",
+        metavar="STORE",
+        help="the cell of this map's or basin's store nearest --omega and its second "
+        "axis' flag (e.g. --mu-cn, --phi1; a basin's --y0 --v0): its model from the "
+        "store, its values checked bit for bit against the stored ones",
+    )
+    p.add_argument(
+        "--direction",
+        choices=("down", "up"),
+        help="with --from on a store of chains.direction both: which chain (down)",
+    )
+    p.add_argument(
+        "--recompute",
+        action="store_true",
+        help="with --from on a store another kernel version wrote: compute with this "
+        "campar's kernel and say which values changed",
+    )
     p.set_defaults(handler=run_point)
 
 
-# Keys of the one-cell job ``campar point`` builds, and the flags that set them (with the
-# model's, ``model_flags``).
-POINT_FLAGS = {
-    "integrator.rtol": "--rtol",
-    "integrator.method": "--method",
-    "initial.y": "--y0",
-    "initial.v": "--v0",
-}
+def check_counts(args) -> None:
+    """--cycle and --attractors within their bounds, before anything is computed."""
+    from ..model.settings import MAX_PERIOD, MAX_STARTS, check_count
 
-
-def naming_flags(handler):
-    """A handler whose JobErrors name the command's flags instead of the job's keys."""
-
-    def run(args) -> int:
-        try:
-            return handler(args)
-        except JobError as exc:
-            text = str(exc)
-            for key, flag in {**POINT_FLAGS, **model_flags()}.items():
-                text = text.replace(f"point: {key}:", f"{flag}:")
-            raise JobError(text) from None
-
-    return run
-
-
-@naming_flags
-def run_point(args) -> int:
-    import json
-
-    from ..views.point import simulate_point
-
-    settings = {
-        **parameter_values(args),
-        **model_options(args),
-        **transient_options(args),
-        "rtol": args.rtol,
-        "method": args.method,
-    }
-    if args.attractors is not None:
-        return run_attractors(args, settings)
-    if args.cycle is not None:
-        return run_cycle(args, settings)
-    if args.plot:
-        from ..views.output import figure_file
-
-        figure_file(args.plot)  # before computing
-    result = simulate_point(
-        args.omega,
-        y0=args.y0,
-        v0=args.v0,
-        **settings,
-        multipliers=args.multipliers,
-        lyapunov=args.lyapunov,
-        trace=bool(args.plot),
-    )
-    if args.json:
-        print(json.dumps(result.to_dict()))
-    else:
-        print(format_point(result))
-    if args.plot:
-        from ..views.plot import plot_orbit
-
-        plot_orbit(result).savefig(args.plot, dpi=150)
-    return 0
-
-
-def run_attractors(args, settings) -> int:
-    import json
-
-    from ..views.attractors import describe_attractors, find_attractors
-
-    given = [(args.y0, args.v0)] if (args.y0, args.v0) != (0.0, 0.0) else []
-    if args.attractors < len(given) + 1:
-        raise JobError(
-            f"--attractors must be ≥ {len(given) + 1} (rest and --y0/--v0), got {args.attractors}"
-        )
-    if args.plot:
+    try:
+        if args.cycle is not None:
+            check_count("--cycle", args.cycle, 1, MAX_PERIOD)
+        if args.attractors is not None:
+            check_count("--attractors", args.attractors, 2, MAX_STARTS)
+    except ValueError as exc:
+        raise JobError(str(exc)) from None
+    if args.cycle is not None and (args.plot or args.lyapunov):
+        raise JobError("--cycle reports the cycle's multipliers: without --plot and --lyapunov")
+    if args.attractors is not None and args.plot:
         raise JobError(
             "--plot draws one orbit: use it without --attractors, from an "
             "attractor's state (--y0 --v0)"
         )
-    census = find_attractors(
-        args.omega, count=args.attractors, given=given, lyapunov=args.lyapunov, **settings
+
+
+def run_point(args) -> int:
+    import json
+
+    check_counts(args)
+    if args.store is not None:
+        from .point_from import run_from
+
+        return run_from(args)
+    if args.direction or args.recompute:
+        raise JobError("--direction and --recompute go with --from STORE")
+    if args.omega is None and not args.job:
+        raise JobError("give --omega (or --from STORE, or --job FILE with a fixed omega)")
+    model = model_of(args, omega=args.omega, **parameter_values(args))
+    if args.attractors is not None:
+        return run_attractors(args, model, model.start)
+    if args.cycle is not None:
+        return run_cycle(args, model, None if model.start == (0.0, 0.0) else model.start)
+    if args.plot:
+        from ..views.output import figure_file
+
+        figure_file(args.plot)  # before computing
+    from ..views.point import simulate_point
+
+    result = simulate_point(
+        model, multipliers=args.multipliers, lyapunov=args.lyapunov, trace=bool(args.plot)
     )
+    print(json.dumps(result.to_dict()) if args.json else format_point(result))
+    if args.plot:
+        save_orbit(result, args.plot)
+    return 0
+
+
+def save_orbit(result, path) -> None:
+    from ..views.plot import plot_orbit
+
+    plot_orbit(result).savefig(path, dpi=150)
+
+
+def run_attractors(args, model, state) -> int:
+    """The census of ``model``'s cell; ``state``, a start tried right after rest."""
+    import json
+
+    from ..views.attractors import describe_attractors, find_attractors
+
+    given = [state] if state != (0.0, 0.0) else []
+    if args.attractors < len(given) + 1:
+        raise JobError(
+            f"--attractors must be ≥ {len(given) + 1} (rest and --y0/--v0), got {args.attractors}"
+        )
+    census = find_attractors(model, count=args.attractors, given=given, lyapunov=args.lyapunov)
     print(json.dumps(census.to_dict()) if args.json else describe_attractors(census))
     return 0
 
 
-def run_cycle(args, settings) -> int:
+def run_cycle(args, model, guess) -> int:
+    """The ``--cycle`` orbit of ``model`` from ``guess`` (None: the simulated cell's end)."""
     import json
 
     from ..continuation.orbit import find_cycle
     from ..views.point import simulate_point
 
-    if args.cycle < 1:
-        raise JobError(f"--cycle must be ≥ 1, got {args.cycle}")
-    if args.plot or args.lyapunov:
-        raise JobError("--cycle reports the cycle's multipliers: without --plot and --lyapunov")
-    guess = (args.y0, args.v0)
-    if guess == (0.0, 0.0):  # from rest: the simulated cell's end state is the guess
-        guess = simulate_point(args.omega, **settings).state
-    model = {name: settings[name] for name in ("tensile", "duty_cycle", "cam_velocity")}
-    parameters = {name: settings[name] for name in ("f0", "mu_kn", "mu_cn", "zeta")}
-    orbit = find_cycle(args.cycle, guess, model=model, omega=args.omega, **parameters)
+    if guess is None:  # from rest: the simulated cell's end state is the guess
+        guess = simulate_point(model).state
+    orbit = find_cycle(args.cycle, guess, model=model, **model.parameters)
     print(json.dumps(orbit.to_dict()) if args.json else format_cycle(orbit))
     return 0
 
@@ -182,9 +175,30 @@ def format_point(r) -> str:
         f"  {r.revolutions} revolutions, {r.steps} steps"
         + (f", flags: {', '.join(r.flags)}" if r.flags else ""),
     ]
+    if r.model is not None:
+        changed = non_default_keys(r.model)
+        if changed:
+            lines.append("  model: " + ", ".join(f"{k}={v}" for k, v in changed.items()))
     if r.multipliers is not None:
         mult = ", ".join(f"{m.real:+.6f}{m.imag:+.6f}j (|λ|={abs(m):.6f})" for m in r.multipliers)
         lines.append(f"  Floquet multipliers: {mult}")
     if r.lyapunov is not None:
         lines.append(f"  largest Lyapunov exponent: {r.lyapunov:+.6f} per unit time")
     return "\n".join(lines)
+
+
+def non_default_keys(model) -> dict:
+    """The model's keys (not its parameters, nor the force law's options the first line
+    names) whose value is not the default."""
+    from ..model import FIELDS
+
+    shown = ("model.tensile", "model.duty_cycle", "model.cam_velocity")
+    return {
+        f.key: model.value(f.key)
+        for f in FIELDS.values()
+        if f.key not in shown and model.value(f.key) != f.default
+    }
+
+
+def warn(text: str) -> None:
+    print(text, file=sys.stderr)

@@ -32,9 +32,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import ContinuationError
+from ..model.laws import LAW_PARAMETERS
 from .branch_result import Branch, assemble
 from .orbit import PeriodicOrbit, multipliers_of, newton, orbit_at
-from .section_map import PARAMETER_ORDER, SectionMap, Shot, in_range, parameter_index
+from .section_map import SectionMap, Shot, in_range
 from .special import (
     LOCATE_TOL,
     PD,
@@ -106,7 +107,7 @@ class Continuation:
         self.smap = smap
         self.par = np.array(par, dtype=np.float64)
         self.name = name
-        self.index = parameter_index(name)
+        self.index = smap.index(name)
         self.n = n
         self.lo, self.hi = sorted(window)
         self.settings = settings or BranchSettings()
@@ -405,7 +406,7 @@ class Continuation:
             labels=(f"{self.n}-{a.p}", f"{self.n}-{b.p}"),
             stable=(stable_a, stable_b),
             accuracy=accuracy,
-            parameters=dict(zip(PARAMETER_ORDER, map(float, par), strict=True)),
+            parameters=dict(zip(self.smap.order, map(float, par), strict=True)),
             eigenvector=vector,
             arclength=float(pt.s),
         )
@@ -478,8 +479,9 @@ def continue_branch(
     >>> [(sp.type, round(sp.value, 6)) for sp in branch.special], branch.end
     ([('PD', 3.542608)], 'left the window at omega=3')
     """
-    smap = section_map or SectionMap(orbit.model)
-    par = np.array([orbit.parameters[name] for name in PARAMETER_ORDER])
+    law = parameter if parameter in LAW_PARAMETERS else None
+    smap = section_map or SectionMap(orbit.model, law_parameter=law)
+    par = smap.vector(orbit.parameters)
     engine = Continuation(smap, par, parameter, orbit.n, window, settings)
     value = orbit.parameters[parameter]
     if direction is None:

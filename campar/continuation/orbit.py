@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ContinuationError
-from .section_map import PARAMETER_ORDER, SectionMap, Shot, describe, parameter_vector
+from ..model.laws import LAW_PARAMETERS
+from .section_map import SectionMap, Shot, describe
 
 NEWTON_START_ITERATIONS = 40  # from a rough guess, before giving up
 MAX_NEWTON_STEP = 0.5  # longest Newton step from a rough guess (y units); damps the far ones
@@ -96,7 +97,9 @@ def find_cycle(
     model : dict, optional
         The force law's options (tensile, duty_cycle, cam_velocity), defaults as a job's.
     **parameters : float
-        omega (required), f0, mu_kn, mu_cn, zeta (the paper's base values by default).
+        omega (required), f0, mu_kn, mu_cn, zeta (the paper's base values by default);
+        and a law parameter (``phi1`` … ``phi4``, ``n``, ``restitution``), which the
+        section map then takes as a parameter of its own (``SectionMap.law_parameter``).
 
     Returns
     -------
@@ -118,10 +121,19 @@ def find_cycle(
     >>> orbit.label, orbit.stable, round(orbit.multipliers[0].real, 6)
     ('1-1', False, -1.003854)
     """
+    return solve_cycle(n, guess, parameters, section_map=section_map, model=model)
+
+
+def solve_cycle(
+    n: int, guess, parameters: dict, *, section_map: SectionMap | None = None, model=None
+) -> PeriodicOrbit:
+    """``find_cycle`` with the parameters as one mapping (a law parameter may be named
+    ``n``, the contact's exponent)."""
     if n < 1:
         raise ContinuationError(f"the period must be ≥ 1 revolution, got {n}")
-    smap = section_map or SectionMap(model)
-    par = parameter_vector(parameters)
+    law = [name for name in parameters if name in LAW_PARAMETERS]
+    smap = section_map or SectionMap(model, law_parameter=law[0] if law else None)
+    par = smap.vector(parameters)
     x = np.array(guess, dtype=np.float64)
     shot, iterations = newton(smap, x, par, n, NEWTON_START_ITERATIONS, damped=True)
     return orbit_at(smap, shot, par, n, iterations)
@@ -155,7 +167,7 @@ def newton(
         x = x + step
     raise ContinuationError(
         f"Newton's method found no {n}-cycle from ({x[0]:.6g}, {x[1]:.6g}) at "
-        f"{describe(par)}: residual "
+        f"{describe(par, smap.order)}: residual "
         f"{np.max(np.abs(residual)):.3g} after {iteration} iterations (try a closer guess, "
         f"another period, or a simulation's end state)"
     )
@@ -186,7 +198,7 @@ def orbit_at(
         points = points[:d]
         n = d
     return PeriodicOrbit(
-        parameters=dict(zip(PARAMETER_ORDER, map(float, par), strict=True)),
+        parameters=dict(zip(smap.order, map(float, par), strict=True)),
         model=dict(smap.model),
         n=n,
         p=shot.detachments,

@@ -13,6 +13,7 @@ only enters the Jacobian, so it costs convergence speed, never accuracy
 from dataclasses import dataclass, replace
 
 import numpy as np
+from pydantic import ValidationError
 
 from ..core.codes import status_message
 from ..core.shooting import (
@@ -27,11 +28,18 @@ from ..core.shooting import (
     compile_shooter,
 )
 from ..errors import ContinuationError, JobError
-from ..sweep.job import PAPER_VALUES, Job, check_parameter
-from ..sweep.tile import cell_settings, solver_options
+from ..model import Model
+from ..model.compute import cell_settings, output_bits, solver_options
+from ..model.laws import LAW_PARAMETERS, kernel_law
+from ..model.sections import PAPER_VALUES
+from ..model.settings import check_parameter
 
 # The model's parameters in the order the compiled core takes them (model.make_params).
 PARAMETER_ORDER = ("omega", "zeta", "f0", "mu_kn", "mu_cn")
+# A law parameter continued: its laws' kernels kept at once (a branch's step and its two
+# difference quotients each need one; older ones are rebuilt if a branch turns back).
+MAX_SHOOTERS = 16
+DEFAULT_RESTITUTION = 0.8  # the contact laws' own default (campar.model.laws.kernel_law)
 
 
 @dataclass(frozen=True)
@@ -119,48 +127,95 @@ def in_range(name: str, value: float) -> bool:
 class SectionMap:
     """Pⁿ(x; λ), DPⁿ and ∂Pⁿ/∂λ for one force law at one precision.
 
-    ``model``: the job model's options (``model_settings``); ``precision``: a Precision.
+    ``model``: a Model (its ``model`` section: the force law's options, cam and contact),
+    or that section as a mapping (``model_settings``); ``precision``: a Precision, whose
+    integrator settings replace the model's.
     """
 
-    def __init__(self, model: dict | None = None, precision: Precision | None = None):
+    def __init__(self, model=None, precision: Precision | None = None, law_parameter=None):
+        if isinstance(model, Model):
+            model = model.model.model_dump(mode="json")
         self.model = model_settings(**(model or {}))
         self.precision = precision or Precision()
-        job = self._job()
-        self.law = job.model.law
-        solver = solver_options(job)
-        settings = cell_settings(job)
-        compile_shooter(self.law, solver, settings)
-        self._shooter = Shooter(self.law, solver, settings)
-
-    def _job(self) -> Job:
-        """A one-cell job: validates the model's options and the integrator settings."""
         pr = self.precision
-        data = {
-            "name": "continuation",
-            "sweep": {
-                "omega": {"from": 1.0, "to": 1.0, "points": 1},
-                "f0": {"from": 0.5, "to": 0.5, "points": 1},
-            },
-            "model": self.model,
-            "integrator": {"method": pr.method, "rtol": pr.rtol, "atol": pr.atol},
-        }
-        return Job.from_dict(data, source="continuation")
+        integrator = {"method": pr.method, "rtol": pr.rtol, "atol": pr.atol}
+        # validates the options and the integrator settings (ω: any value in range)
+        self.cell = Model.build({"omega": 1.0, "model": self.model, "integrator": integrator})
+        if law_parameter is not None and law_parameter not in LAW_PARAMETERS:
+            raise JobError(
+                f"{law_parameter!r} is not a law parameter; one of {', '.join(LAW_PARAMETERS)}"
+            )
+        self.law_parameter = law_parameter
+        # the vector's names: the parameters, and the law parameter continued (if any)
+        self.order = PARAMETER_ORDER + ((law_parameter,) if law_parameter else ())
+        self.law = self._law(None)
+        self._solver = solver_options(self.cell)
+        self._settings = cell_settings(self.cell, output_bits(("dc", "eps", "pn")))
+        compile_shooter(self.law, self._solver, self._settings)
+        self._shooter = Shooter(self.law, self._solver, self._settings)
+        self._shooters = {}  # a law parameter's value → the Shooter of that law
+        self._retired = 0  # shots of shooters dropped from that cache
+
+    def _law(self, value):
+        """The kernel's Law at the law parameter's ``value`` (None: the model's own)."""
+        if self.law_parameter is None or value is None:
+            swept = (self.law_parameter,) if self.law_parameter else ()
+            return kernel_law(self.cell.model, swept=swept)
+        try:
+            return kernel_law(
+                self.cell.model, self.law_parameter, value, swept=(self.law_parameter,)
+            )
+        except (ValueError, ValidationError) as exc:
+            raise ContinuationError(f"{self.law_parameter}={value:.10g}: {exc}") from None
+
+    def _shooter_at(self, par) -> Shooter:
+        if len(par) == len(PARAMETER_ORDER):
+            return self._shooter
+        value = float(par[-1])
+        if value not in self._shooters:
+            if len(self._shooters) >= MAX_SHOOTERS:  # a branch moves on: keep the newest
+                oldest = next(iter(self._shooters))
+                self._retired += self._shooters.pop(oldest).shots
+            self._shooters[value] = Shooter(self._law(value), self._solver, self._settings)
+        return self._shooters[value]
+
+    def vector(self, parameters: dict) -> np.ndarray:
+        """The parameter vector (``order``) of a dict: ``parameter_vector``'s, and the law
+        parameter's value (default the model's) when one is continued."""
+        par = parameter_vector({k: v for k, v in parameters.items() if k != self.law_parameter})
+        if self.law_parameter is None:
+            return par
+        value = parameters.get(self.law_parameter)
+        if value is None:
+            value = self.cell.value(self.law_parameter)
+        if value is None:  # a restitution left at its law's default
+            value = DEFAULT_RESTITUTION
+        return np.append(par, float(value))
+
+    def index(self, name: str) -> int:
+        """Where the parameter ``name`` lies in the vector (``order``)."""
+        if name in self.order:
+            return self.order.index(name)
+        return parameter_index(name)
 
     def with_precision(self, **changes) -> "SectionMap":
-        return SectionMap(self.model, replace(self.precision, **changes))
+        return SectionMap(self.model, replace(self.precision, **changes), self.law_parameter)
 
     @property
     def shots(self) -> int:
         """Integrations of n revolutions so far (for the benchmarks)."""
-        return self._shooter.shots
+        others = sum(shooter.shots for shooter in self._shooters.values())
+        return self._shooter.shots + others + self._retired
 
     def shoot(self, x, par: np.ndarray, n: int, jacobian: bool = True) -> Shot:
-        """Integrate n revolutions from x at parameters ``par`` (PARAMETER_ORDER)."""
+        """Integrate n revolutions from x at parameters ``par`` (``order``: PARAMETER_ORDER,
+        and the law parameter's value when one is continued)."""
         start = np.array(x, dtype=np.float64)
-        status, result, jac, points = self._shooter(par, start, n, jacobian)
+        shooter = self._shooter_at(par)
+        status, result, jac, points = shooter(par[: len(PARAMETER_ORDER)], start, n, jacobian)
         if status != 0:
             raise ContinuationError(
-                f"integration failed at {describe(par)}: {status_message(status)}"
+                f"integration failed at {describe(par, self.order)}: {status_message(status)}"
             )
         return Shot(
             start=start,
@@ -177,7 +232,7 @@ class SectionMap:
         )
 
     def parameter_derivative(self, x, par: np.ndarray, n: int, index: int) -> np.ndarray:
-        """∂Pⁿ/∂λ at x for parameter ``index`` of PARAMETER_ORDER (central differences)."""
+        """∂Pⁿ/∂λ at x for parameter ``index`` of ``order`` (central differences)."""
         h = self.precision.fd_step * max(1.0, abs(par[index]))
         up = par.copy()
         down = par.copy()
@@ -188,7 +243,5 @@ class SectionMap:
         return (forward - backward) / (2.0 * h)
 
 
-def describe(par) -> str:
-    return ", ".join(
-        f"{name}={value:.10g}" for name, value in zip(PARAMETER_ORDER, par, strict=True)
-    )
+def describe(par, order=PARAMETER_ORDER) -> str:
+    return ", ".join(f"{name}={value:.10g}" for name, value in zip(order, par, strict=False))

@@ -21,7 +21,7 @@ from ..errors import ContinuationError
 from .branch import BranchSettings, Continuation, continue_branch
 from .branch_result import Branch, assemble
 from .orbit import PeriodicOrbit, minimal_period, section_points
-from .section_map import PARAMETER_ORDER, SectionMap
+from .section_map import SectionMap
 from .special import PD, SpecialPoint
 
 log = logging.getLogger("campar.continue")
@@ -42,7 +42,7 @@ def switch_at_pd(
     """
     if sp.type != PD or sp.eigenvector is None:
         raise ContinuationError(f"branch switching needs a PD point, got {sp.type}")
-    par = np.array([sp.parameters[name] for name in PARAMETER_ORDER])
+    par = smap.vector(sp.parameters)
     engine = Continuation(smap, par, sp.parameter, 2 * sp.n, window, settings)
     v = np.array(sp.eigenvector)
     normal = np.array([v[0], v[1], 0.0])

@@ -13,7 +13,7 @@ as a function s(u) of the phase fraction u ∈ [0, 1] with s(0) = 0, s(1) = 1:
 
 S = s(u), S' = s'(u)/Φ, S'' = s''(u)/Φ² on a rise of angle Φ; a fall is 1 − s. A
 measured or designed cam is a ``TabulatedCam``: a periodic C² cubic spline through a
-table of (θ, S), one formula for the whole revolution (campar.sweep.cam_table builds it).
+table of (θ, S), one formula for the whole revolution (campar.model.cam_table builds it).
 
 Each law is a named tuple class of its own, and ``lift`` picks the law's formula by the
 tuple's class when numba types the call (``overload``): the kernel a job compiles holds
@@ -100,7 +100,7 @@ class TabulatedCam(NamedTuple):
 
 
 def tabulated_cam(knots, coef, bounds) -> TabulatedCam:
-    """The TabulatedCam of a spline (campar.sweep.cam_table) and the cam's phase bounds."""
+    """The TabulatedCam of a spline (campar.model.cam_table) and the cam's phase bounds."""
     knots = np.ascontiguousarray(knots, dtype=np.float64)
     last = len(knots) - 2  # the last interval
     span = np.empty((4, 2), dtype=np.int64)
@@ -125,7 +125,7 @@ def segment(name: str, start: float, width: float):
 
 def phase_bounds(angles) -> tuple[float, float, float, float, float]:
     """0, Φ1, Φ1+Φ2, Φ1+Φ2+Φ3, 2π (the last exactly 2π, whatever the rounding of the sum;
-    the job checks the angles: campar.sweep.cam_table.check_angles)."""
+    the job checks the angles: campar.model.cam_table.check_angles)."""
     p1, p2, p3, _ = (float(a) for a in angles)
     return (0.0, p1, p1 + p2, p1 + p2 + p3, TWO_PI)
 

@@ -119,9 +119,10 @@ class Evidence:
 
     def line(self, omega, points: int, **options):
         """A continuation line (``campar.views.line``) with this evidence's law and options."""
-        from ..views.line import compute_line, line_job
+        from ..views.line import compute_line, line_spec
 
-        return compute_line(self.job(line_job(omega, points, tensile=self.tensile, **options)))
+        spec = line_spec(omega, points, tensile=self.tensile, **self.options, **options)
+        return compute_line(spec)
 
     def continued(self, omega: float, mu_kn: float):
         """The orbit at ω reached by continuation along ω from 6.0 in steps ≤ 0.005 (as

@@ -32,8 +32,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..model import Model
 from ..sweep.job import PAPER_VALUES
-from ..views.point import point_job
 from . import setups
 from .figure_files import MAP_FIGURES, PLANE_SYMBOLS, write_yaml
 from .structure_figures import draw_structure
@@ -236,7 +236,7 @@ def draw_lines(g: Gallery) -> None:
     recipe = {
         "command": f"campar line --omega 6:0.02 --points {points} --mu-kn {mu_list} "
         f"--tensile {g.tensile} -o {g.name('fig5_lines')}.png",
-        "jobs": [
+        "lines": [
             setups.paper_line_job(mu, g.size, g.tensile).to_dict() for mu in setups.FIG5_MU_KN
         ],
     }
@@ -323,11 +323,11 @@ def cell_recipe(cell) -> dict:
 
 
 def point_recipe(omega: float, tensile: str, params: dict) -> dict:
-    job = point_job(omega=omega, tensile=tensile, **params)
+    model = Model.build(omega=omega, tensile=tensile, **params)
     flags = " ".join(f"--{k.replace('_', '-')} {v:g}" for k, v in params.items())
     return {
         "command": f"campar point --omega {omega:g} {flags} --tensile {tensile}",
-        "job": job.to_dict(),
+        "model": model.to_dict(),
     }
 
 

@@ -34,11 +34,12 @@ from ..sweep.job import DEFAULT_MODEL, Job, ModelSettings, field_choices, load_j
 from ..views.line import (
     PAPER_START,
     BifurcationLine,
+    LineSpec,
     bifurcation_line,
     compute_line,
     compute_lines,
     continued_state,
-    line_job,
+    line_spec,
 )
 
 PLANES = ("omega_f0", "mu_kn", "mu_cn")
@@ -155,9 +156,9 @@ def fine_line(mu_kn: float, tensile: str = LAW) -> BifurcationLine:
     return bifurcation_line((hi, lo), points, tensile=tensile, mu_kn=mu_kn)
 
 
-def paper_line_job(mu_kn: float, size: str = "full", tensile: str = LAW) -> Job:
+def paper_line_job(mu_kn: float, size: str = "full", tensile: str = LAW) -> LineSpec:
     """A Fig. 5 line: ω from 6.0 down to 0.02 at μkn, the other parameters at base values."""
-    return line_job(
+    return line_spec(
         LINE_OMEGA, SIZES[size].line, tensile=tensile, mu_kn=mu_kn, name=f"line_mu_kn_{mu_kn:g}"
     )
 
@@ -195,7 +196,7 @@ def continued_point(omega: float, tensile: str = LAW, **params) -> ContinuedPoin
 
 def section_cloud(omega: float, state, revolutions: int = CLOUD_REVOLUTIONS, **options):
     """σn points (m, 2) of ``revolutions`` revolutions from ``state`` (a Poincaré section)."""
-    job = line_job(
+    spec = line_spec(
         (omega, omega),
         1,
         initial=state,
@@ -205,7 +206,7 @@ def section_cloud(omega: float, state, revolutions: int = CLOUD_REVOLUTIONS, **o
         name="cloud",
         **options,
     )
-    points = compute_line(job).sections[0]
+    points = compute_line(spec).sections[0]
     return points[np.isfinite(points[:, 0])]
 
 

@@ -20,7 +20,7 @@ from typing import Annotated, Literal, NamedTuple
 import numpy as np
 from pydantic import Field, model_validator
 
-from .settings import MAX_COUNT, MAX_POINTS, Settings
+from ..model.settings import MAX_COUNT, MAX_POINTS, Settings
 
 CURVE_AXES = ("point", "task")  # a curves job's sweep keys: columns, rows
 CURVES_PER_TASK = 3  # curves a task may find (a group of seeds may stand for several)

@@ -10,7 +10,6 @@ Errors name the offending key and what is allowed, e.g.
 
 import hashlib
 import json
-import math
 import typing
 from pathlib import Path
 from typing import Annotated, Literal
@@ -19,28 +18,46 @@ import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from ..errors import JobError
-from .curves_job import CURVE_AXES, CurvesSettings, check_curves_axes, check_curves_job
-from .job_file import check_store_path, format_validation_error, parse_job_text
-from .laws import LAW_PARAMETERS, CamSettings, ContactSettings, check_law_axis
-from .settings import (  # noqa: F401 (their home for the schema's users)
+from ..model import Model
+from ..model.laws import LAW_PARAMETERS, check_law_axis
+from ..model.sections import (  # noqa: F401 (the model's sections, the job's too)
+    DEFAULT_CLASSIFY,
+    DEFAULT_INITIAL,
+    DEFAULT_INTEGRATOR,
+    DEFAULT_MODEL,
+    DEFAULT_TRANSIENT,
+    MODEL_OPTION_DEFAULTS,
+    PAPER_VALUES,
+    PARAMETERS,
+    ClassifySettings,
+    InitialState,
+    IntegratorSettings,
+    ModelSettings,
+    TransientSettings,
+    field_choices,
+    with_paper_values,
+)
+from ..model.settings import (  # noqa: F401 (their home for the schema's users)
     MAX_COUNT,
     MAX_POINTS,
     MAX_START,
+    MAX_STARTS,
     MAX_STEPS,
     Axis,
     Settings,
     check_parameter,
     wants_number,
 )
+from .curves_job import CURVE_AXES, CurvesSettings, check_curves_axes, check_curves_job
+from .job_file import check_store_path, format_validation_error, parse_job_text
 
-PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 MAP_AXES = (*PARAMETERS, *LAW_PARAMETERS)
+# The job's sections that are a Model's (campar.model.Model): with the grid's parameters
+# they make each cell's model.
+MODEL_SECTIONS = ("model", "integrator", "transient", "classify", "initial")
 # The axes of a basin job: the initial state (y, y') at θ = 0, y along the first
 # (columns), y' along the second (rows); its parameters are all fixed.
 BASIN_AXES = ("y0", "ydot0")
-# The paper's base values (docs/model.md, sweeps) for parameters a job does not sweep or
-# fix. Points, lines, the CLI, the benchmarks and the paper's set-ups take them from here.
-PAPER_VALUES = {"f0": 0.5, "mu_kn": 0.8, "mu_cn": 0.8, "zeta": 0.2}
 
 # The sweep directions of a ``chains.direction: both`` job, in the order of the store's
 # ``direction`` dimension (its tiles: every row range down, then every one up).
@@ -48,18 +65,6 @@ DIRECTIONS = ("down", "up")
 
 OUTPUT_NAMES = ("label", "dc", "eps", "pn", "sections", "multipliers", "lyapunov", "separation")
 DEFAULT_OUTPUTS = ("label", "dc", "eps", "pn")
-
-
-def with_paper_values(parameters: dict[str, float]) -> dict[str, float]:
-    """f0, mu_kn, mu_cn, zeta (PAPER_VALUES order): those given, the paper's base values for
-    the rest. JobError for a name that is none of them."""
-    unknown = [name for name in parameters if name not in PAPER_VALUES]
-    if unknown:
-        raise JobError(
-            f"unknown parameter {unknown[0]!r}; the model's parameters besides omega: "
-            f"{', '.join(PAPER_VALUES)}"
-        )
-    return {name: parameters.get(name, value) for name, value in PAPER_VALUES.items()}
 
 
 def cell_edges(centres) -> np.ndarray:
@@ -72,122 +77,6 @@ def cell_edges(centres) -> np.ndarray:
         return np.array([c[0] - half, c[0] + half])
     mid = 0.5 * (c[1:] + c[:-1])
     return np.concatenate([[2 * c[0] - mid[0]], mid, [2 * c[-1] - mid[-1]]])
-
-
-class ModelSettings(Settings):
-    tensile: Literal["clamp", "allow"] = "clamp"
-    """clamp: Pn = max(0, …), contact cannot pull (default); allow: the paper's literal formula."""
-    duty_cycle: Literal["separation", "force"] = "separation"
-    """separation: DC is the time with ε < 0 (default); force: the time with Pn = 0, the
-    paper's other word for detachment (under the clamp it adds the time the follower is
-    ahead of the cam without force; under allow the two are the same)."""
-    cam_velocity: Literal["chain", "literal"] = "chain"
-    """chain: the force's ε' uses ẏc = ω dyc/dθ, the chain rule (default); literal: ẏc =
-    dyc/dθ, the paper's eq. 6 as printed (without the factor ω)."""
-    cam: CamSettings = CamSettings()
-    """The cam's motion laws and phase angles, or a table (docs/design.md)."""
-    contact: ContactSettings = ContactSettings()
-    """The contact force law (docs/design.md)."""
-
-    @property
-    def law_bits(self) -> int:
-        """The kernel's LAW_* bits of these settings (campar.core.model.law_flags)."""
-        from ..core.model import law_flags  # here: numba only for those who compute
-
-        return law_flags(self.tensile, self.duty_cycle, self.cam_velocity)
-
-    @property
-    def law(self):
-        """The kernel's ``law`` (campar.core.model.Law) of these settings: what make_params,
-        run_chain and trace_orbit take (``laws.kernel_law``)."""
-        from .laws import kernel_law
-
-        return kernel_law(self)
-
-
-# Model options whose default leaves a job's hash as it was before the option existed,
-# so stores computed then stay valid (``job_digest``).
-MODEL_OPTION_DEFAULTS = {
-    "duty_cycle": "separation",
-    "cam_velocity": "chain",
-    "cam": CamSettings().model_dump(mode="json"),
-    "contact": ContactSettings().model_dump(mode="json"),
-}
-
-
-class InitialState(Settings):
-    y: float = 0.0
-    v: float = 0.0
-
-    @field_validator("y", "v")
-    @classmethod
-    def finite(cls, value: float) -> float:
-        if not math.isfinite(value):
-            raise ValueError("must be a finite number")
-        return value
-
-
-class IntegratorSettings(Settings):
-    method: Literal["dp54", "dop853", "rk4"] = "dop853"
-    """dop853: Dormand–Prince 8(5,3), the default; dp54: Dormand–Prince 5(4) (use rtol
-    1e-8 with it); rk4: fixed-step RK4, the paper's method."""
-    rtol: Annotated[float, Field(gt=1e-15, lt=1.0)] = 1e-7
-    atol: Annotated[float, Field(gt=0.0, lt=1.0)] = 1e-10
-    rk4_steps: Annotated[int, Field(ge=6, le=10_000_000)] = 600
-    """RK4 steps per revolution (a multiple of 6 lands on every cam phase boundary)."""
-    event_tol: Annotated[float, Field(gt=0.0, lt=1e-3)] = 1e-12
-    """Event times are located to event_tol × max(1, revolution period)."""
-    max_steps: Annotated[int, Field(ge=1000, le=MAX_STEPS)] = 5_000_000
-    """Steps per cell before the cell fails with 'step budget'."""
-
-
-class TransientSettings(Settings):
-    mode: Literal["converged", "fixed"] = "converged"
-    """converged: stop once the section has converged to a cycle; fixed: the paper's recipe."""
-    max_revolutions: Annotated[int, Field(ge=1, le=1_000_000)] = 500
-    """converged: the revolution budget; fixed: revolutions discarded before the read window."""
-    newton: bool = True
-    """Shorten the transient with capped Newton jumps to the estimated cycle (converged only)."""
-    jump_cap: Annotated[float, Field(gt=0.0)] = 0.02
-    jump_residual: Annotated[float, Field(gt=0.0)] = 1e-3
-    """Newton jumps are tried only where |x_k − x_{k−n}| is below this."""
-    max_jumps: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 20
-    jump_agree: Annotated[float, Field(ge=0.0, lt=1.0)] = 0.1
-    """Also jump (up to 0.2) where the estimate agrees with the one n revolutions
-    earlier to this fraction of its distance, whatever the residual (0: off)."""
-    conv_tol: Annotated[float, Field(gt=0.0, lt=1e-2)] = 1e-8
-    """Distance to the cycle (Newton estimate) at which a cell has converged."""
-    window_tol: Annotated[float, Field(gt=0.0, lt=1e-1)] = 1e-6
-    """… and the distance of the read window's first point from it."""
-    extrapolate: Annotated[int, Field(ge=0, le=2)] = 2
-    """Warm start: 0 the previous cell's state; 1 linear, 2 quadratic extrapolation
-    through the previous cells' fixed points (where they are cycles of one period)."""
-    chaos_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 96
-    """From this revolution on, a clearly chaotic motion ends the transient (0: never)."""
-    chaos_lyapunov: Annotated[float, Field(gt=0.0)] = 0.1
-    """Lyapunov exponent per revolution (last read window) that counts as clearly chaotic."""
-    quasiperiodic_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 0
-    """From this revolution on, a quasi-periodic motion (|Lyapunov exponent| ≤ lyap_tol)
-    ends the transient (0: never)."""
-
-
-class ClassifySettings(Settings):
-    n_max: Annotated[int, Field(ge=1, le=256)] = 32
-    chatter_p: Annotated[int, Field(ge=1, le=MAX_COUNT)] = 7
-    window_revolutions: Annotated[int, Field(ge=1, le=100_000)] = 64
-    """Read window: fixed transient, and non-periodic verdicts (Lyapunov exponent)."""
-    period_tol: Annotated[float, Field(gt=0.0, lt=1.0)] = 1e-6
-    """Section points closer than this (∞-norm) count as one point of σn."""
-    lyap_tol: Annotated[float, Field(gt=0.0)] = 0.01
-    """|largest Lyapunov exponent per revolution| below this: quasi-periodic; above: chaos."""
-    sections: Annotated[int, Field(ge=1, le=100_000)] | None = None
-    """σn points stored per cell (default n_max)."""
-
-    @model_validator(mode="after")
-    def window_at_least_two_revolutions(self):
-        if self.window_revolutions < 2:
-            raise ValueError("window_revolutions must be ≥ 2")
-        return self
 
 
 class TileSettings(Settings):
@@ -223,7 +112,7 @@ class ChainSettings(Settings):
 class AttractorSettings(Settings):
     """A census of coexisting attractors at every cell (``campar.sweep.multistable``)."""
 
-    starts: Annotated[int, Field(ge=2, le=4096)]
+    starts: Annotated[int, Field(ge=2, le=MAX_STARTS)]
     """Starts per cell (K): rest, then Halton points over a box of (y, y') at θ = 0, as
     ``campar point --attractors K``; the chain's own end state is one more record."""
     cap: Annotated[int, Field(ge=1, le=64)] = 4
@@ -233,22 +122,9 @@ class AttractorSettings(Settings):
 # Job sections whose absence (None) leaves a job's hash as it was before they existed.
 OPTIONAL_SECTIONS = ("attractors", "curves")
 
-# Every default of a job, as the settings a job without that section gets: code that
-# builds jobs by keyword (points, lines, the CLI, benchmarks) reads its defaults here,
-# e.g. DEFAULT_INTEGRATOR.rtol, so each default is the field default above and nowhere else.
-DEFAULT_MODEL = ModelSettings()
-DEFAULT_INITIAL = InitialState()
-DEFAULT_INTEGRATOR = IntegratorSettings()
-DEFAULT_TRANSIENT = TransientSettings()
-DEFAULT_CLASSIFY = ClassifySettings()
+# The defaults of the sweep's own sections (the model's: campar.model.sections).
 DEFAULT_TILES = TileSettings()
 DEFAULT_CHAINS = ChainSettings()
-
-
-def field_choices(settings: type[Settings], name: str) -> tuple[str, ...]:
-    """The values a Literal field allows: ``field_choices(ModelSettings, "tensile")`` is
-    ("clamp", "allow"); the CLI offers these as choices."""
-    return typing.get_args(settings.model_fields[name].annotation)
 
 
 class Job(Settings):
@@ -480,9 +356,37 @@ class Job(Settings):
         """Value of a parameter that is not swept."""
         return self.fixed[name]
 
+    def model_at(self, first: float, second: float) -> Model:
+        """The Model of the cell at (``first``, ``second``) on the job's axes: a map's ω
+        and second parameter (a law parameter set in the model's cam or contact), the
+        rest the job's; a basin's start (y0, ydot0) at its fixed parameters."""
+        sections = {name: getattr(self, name) for name in MODEL_SECTIONS}
+        if self.kind == "basin":
+            start = InitialState(y=float(first), v=float(second))
+            return Model(**self.fixed, **{**sections, "initial": start})
+        if self.kind != "map":
+            raise ValueError(f"job {self.name} is a {self.kind} job: its cells have no model")
+        values = {**self.fixed, "omega": float(first)}
+        name, value = self.second, float(second)
+        if name in LAW_PARAMETERS:
+            options = self.model
+            if LAW_PARAMETERS[name] == "cam":
+                options = options.model_copy(update={"cam": options.cam.with_angle(name, value)})
+            else:
+                contact = options.contact.model_copy(update={name: value})
+                options = options.model_copy(update={"contact": contact})
+            sections["model"] = options
+        else:
+            values[name] = value
+        return Model(**values, **sections)
+
+    def cell_model(self, row: int, col: int) -> Model:
+        """The Model of cell (row, col) of the job's grid (``model_at``)."""
+        return self.model_at(self.first_values[col], self.second_values[row])
+
     def law(self, row: int = 0):
         """The kernel's Law (core.model.Law) of chain ``row`` (``laws.row_law``)."""
-        from .laws import row_law
+        from ..model.laws import row_law
 
         return row_law(self.model, self.second, self.second_values, row)
 
@@ -603,3 +507,20 @@ def load_job(path: str | Path) -> Job:
     except ValueError as exc:  # a NUL byte in the path
         raise JobError(f"cannot read job file {path!r}: {exc}") from None
     return Job.from_dict(parse_job_text(data, f"job file {path}"), source=f"job file {path}")
+
+
+def cell_job(model: Model | None = None, outputs=DEFAULT_OUTPUTS, name="cell", **fields) -> Job:
+    """The 1 × 1 map of a Model (``fields`` changing it, as ``Model.build`` takes them; ω
+    and f0 swept over one value each): a map whose one cell computes what
+    ``campar.simulate_point(model)`` computes."""
+    data = Model.build(model, **fields).to_dict()
+    fixed = {key: data.pop(key) for key in ("mu_kn", "mu_cn", "zeta")}
+    sweep = {
+        key: {"from": value, "to": value, "points": 1}
+        for key, value in (("omega", data.pop("omega")), ("f0", data.pop("f0")))
+    }
+    data["model"]["cam"].pop("table_sha256", None)  # computed again as the job is read
+    return Job.from_dict(
+        {"name": name, "sweep": sweep, "fixed": fixed, **data, "outputs": list(outputs)},
+        source=name,
+    )

@@ -10,13 +10,13 @@ the problem; the numbers are YAML 1.2's (``1e-8`` is a float, not text).
 """
 
 import re
-import reprlib
 import typing
 from pathlib import Path
 
 import yaml
 
 from ..errors import JobError
+from ..model.settings import short_repr
 
 
 def format_validation_error(exc, source: str, allowed_keys) -> str:
@@ -58,23 +58,6 @@ def format_validation_error(exc, source: str, allowed_keys) -> str:
         else:
             lines.append(text)
     return f"{source}: " + "; ".join(lines)
-
-
-SHOWN_CHARS = 60  # of a bad value in a message: a value may be huge (a list from aliases)
-
-
-def short_repr(value) -> str:
-    """``repr(value)`` cut to SHOWN_CHARS, without building the whole of a huge value."""
-    if isinstance(value, (list, tuple, dict, set)) and len(value) > 8:
-        return f"a {type(value).__name__} of {len(value)} items"
-    text = reprlib_repr(value)
-    return text if len(text) <= SHOWN_CHARS else text[: SHOWN_CHARS - 1] + "…"
-
-
-def reprlib_repr(value) -> str:
-    shown = reprlib.Repr()
-    shown.maxstring, shown.maxother, shown.maxlevel = SHOWN_CHARS, SHOWN_CHARS, 3
-    return shown.repr(value)
 
 
 def check_store_path(path) -> str:

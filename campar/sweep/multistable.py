@@ -19,10 +19,10 @@ the chain's own arrays. Cost: K + 1 cold one-cell runs per cell (benchmarks/RESU
 import numpy as np
 
 from ..core.kernel import OUT_MULTIPLIERS, OUT_SECTIONS, OUT_STATS, CellOutputs, run_chain
+from ..model.compute import allocate_outputs, cell_settings, solver_options
 from .census import CHAOS_AFTER, CLOUD_POINTS, cycle_tolerance, group_cells
 from .census import spread_starts as census_starts
 from .job import Job
-from .tile import allocate_outputs, cell_settings, solver_options
 
 # What every start computes: the outputs of ``campar point --attractors`` (its σn cloud,
 # multipliers and window statistics), so its trajectory is that command's, bit for bit.
@@ -39,7 +39,7 @@ def run_starts(
     census's outputs, ``n_sections`` σn points); the records stacked, one per start.
     ``law``: the cell's (job.law of its row; default the job's first row's)."""
     solver = solver_options(job)
-    settings = cell_settings(job)._replace(chaos_after=CHAOS_AFTER, output_bits=CENSUS_BITS)
+    settings = cell_settings(job, CENSUS_BITS)._replace(chaos_after=CHAOS_AFTER)
     records = allocate_outputs(len(starts), CENSUS_BITS, n_sections)
     law = job.law() if law is None else law
     for i, x0 in enumerate(starts):

@@ -8,118 +8,31 @@ depend on the number of ranks or on interruptions.
 
 import numpy as np
 
-from ..core import split_compile
-from ..core.integrator import DOP853, DP54, RK4, SolverOptions, method_tag
-from ..core.jit import collector_paused
 from ..core.jitcache import ensure_fresh_cache, located_cache_dir  # noqa: F401 (runner's)
-from ..core.kernel import (
-    CONVERGED,
-    FIXED,
-    OUT_LYAPUNOV,
-    OUT_MULTIPLIERS,
-    OUT_SECTIONS,
-    OUT_STATS,
-    CellOutputs,
-    CellSettings,
-    chain_loaded,
-    chain_signature,
-    compile_chain,
-    run_chain,
-)
+from ..core.kernel import CellOutputs, CellSettings, run_chain
 from ..core.model import N_STATE
 from ..core.revolution import make_trace
-from ..core.tracer import compile_tracer, trace_orbit
+from ..core.tracer import trace_orbit
+from ..model import compute
+from ..model.compute import allocate_outputs, output_bits  # noqa: F401 (the sweep's users)
+from ..model.laws import LAW_PARAMETERS
 from .arrays import array_names, array_spec
+from .basin import run_basin_tile
 from .curves_job import NOT_THE_KERNELS
 from .job import Job
-from .laws import LAW_PARAMETERS
+from .multistable import census_row
 from .plan import Tile, chain_order, chain_parameters, first_column_parameters
+from .separation import SEPARATION_ARRAYS, separation_row
 
 
-def output_bits(job: Job) -> int:
-    bits = 0
-    if any(job.wants(name) for name in ("dc", "eps", "pn", "separation")):
-        bits |= OUT_STATS
-    if job.wants("sections"):
-        bits |= OUT_SECTIONS
-    if job.wants("multipliers"):
-        bits |= OUT_MULTIPLIERS
-    if job.wants("lyapunov"):
-        bits |= OUT_LYAPUNOV
-    return bits
-
-
-METHODS = {"dp54": DP54, "dop853": DOP853, "rk4": RK4}  # the job's integrator.method
-
-
-def solver_options(job: Job) -> SolverOptions:
-    """The job's integrator options; the kernel scales h_fixed, h_min and event_tol
-    to each cell's period (core.revolution.scale_solver_options)."""
-    integ = job.integrator
-    return SolverOptions(
-        method=method_tag(METHODS[integ.method]),
-        rtol=integ.rtol,
-        atol=integ.atol,
-        h_fixed=0.0,
-        h_min=0.0,
-        event_tol=integ.event_tol,
-        n_err=N_STATE,
-    )
+def solver_options(job: Job):
+    """The job's integrator options (``campar.model.compute.solver_options``)."""
+    return compute.solver_options(job)
 
 
 def cell_settings(job: Job) -> CellSettings:
-    """The kernel's settings for every cell of the job (field names as the job's, see
-    CellSettings)."""
-    tr = job.transient
-    cl = job.classify
-    integ = job.integrator
-    return CellSettings(
-        transient=CONVERGED if tr.mode == "converged" else FIXED,
-        max_revolutions=tr.max_revolutions,
-        window_revolutions=cl.window_revolutions,
-        n_max=cl.n_max,
-        conv_tol=tr.conv_tol,
-        window_tol=tr.window_tol,
-        period_tol=cl.period_tol,
-        newton=tr.newton,
-        jump_residual=tr.jump_residual,
-        jump_cap=tr.jump_cap,
-        max_jumps=tr.max_jumps,
-        jump_agree=tr.jump_agree,
-        lyap_tol=cl.lyap_tol,
-        max_steps=integ.max_steps,
-        extrapolate=tr.extrapolate,
-        rk4_steps=integ.rk4_steps,
-        chaos_after=tr.chaos_after,
-        chaos_lyapunov=tr.chaos_lyapunov,
-        quasiperiodic_after=tr.quasiperiodic_after,
-        output_bits=output_bits(job),
-    )
-
-
-def allocate_outputs(n_cells: int, bits: int, n_sections: int) -> CellOutputs:
-    """Kernel output buffers for n_cells; unrequested optional arrays have length 0."""
-
-    def cells(wanted: bool) -> int:
-        return n_cells if wanted else 0
-
-    return CellOutputs(
-        n=np.zeros(n_cells, np.int32),
-        p=np.zeros(n_cells, np.int32),
-        kind=np.zeros(n_cells, np.int8),
-        status=np.zeros(n_cells, np.int8),
-        flags=np.zeros(n_cells, np.int16),
-        dc=np.full(n_cells, np.nan),
-        eps_min=np.full(n_cells, np.nan),
-        eps_max=np.full(n_cells, np.nan),
-        pn_max=np.full(n_cells, np.nan),
-        state=np.zeros((n_cells, N_STATE)),
-        revolutions=np.zeros(n_cells, np.int32),
-        steps=np.zeros(n_cells, np.int64),
-        lyapunov=np.full(cells(bool(bits & OUT_LYAPUNOV)), np.nan),
-        multipliers=np.full((cells(bool(bits & OUT_MULTIPLIERS)), 2, 2), np.nan),
-        sections=np.full((cells(bool(bits & OUT_SECTIONS)), n_sections, 2), np.nan),
-    )
+    """The kernel's settings of every cell of the job, its outputs' bits included."""
+    return compute.cell_settings(job, output_bits(job.outputs))
 
 
 def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
@@ -130,8 +43,6 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     (``curves_job.CurvesWork``)."""
     ensure_fresh_cache()
     if job.kind == "basin":
-        from .basin import run_basin_tile  # it builds on this module's settings and buffers
-
         return run_basin_tile(job, tile, array_names(job))
     if job.kind == "curves":
         raise ValueError(NOT_THE_KERNELS)
@@ -145,31 +56,40 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     for name in names:
         dtype, tail = array_spec(job, name)
         result[name] = np.zeros((tile.n_rows, n_omega, *tail), dtype)
-    solver = solver_options(job)
-    settings = cell_settings(job)
-    starts = chain_starts(job)
     order = chain_order(job)
     for r, row in enumerate(range(tile.row_start, tile.row_stop)):
-        par = chain_parameters(job, row)
-        out = allocate_outputs(n_omega, settings.output_bits, job.n_sections)
-        run_chain(
-            par["omega"],
-            par["zeta"],
-            par["f0"],
-            par["mu_kn"],
-            par["mu_cn"],
-            job.law(row),
-            starts[row],
-            solver,
-            settings,
-            out,
-        )
-        extra = census_of(job, par, out.state, job.law(row))
+        par, out, law = run_row(job, row)
+        extra = census_of(job, par, out.state, law)
         if job.wants("separation"):
-            extra.update(separation_of(job, par, out, job.law(row), solver, settings))
+            extra.update(separation_of(job, par, out, law, solver_options(job), cell_settings(job)))
         for name in names:
             result[name][r][order] = extra[name] if name in extra else getattr(out, name)
     return result
+
+
+def run_row(job: Job, row: int, cells: int | None = None):
+    """(parameters, outputs, law) of chain ``row`` of a one-direction map job, its cells in
+    the order the chain runs: all of them, or its first ``cells`` (each cell depends on
+    those before it alone, so a chain's first cells are the whole chain's bit for bit)."""
+    par = chain_parameters(job, row)
+    if cells is not None:
+        par = {name: values[:cells] for name, values in par.items()}
+    settings = cell_settings(job)
+    out = allocate_outputs(len(par["omega"]), settings.output_bits, job.n_sections)
+    law = job.law(row)
+    run_chain(
+        par["omega"],
+        par["zeta"],
+        par["f0"],
+        par["mu_kn"],
+        par["mu_cn"],
+        law,
+        chain_starts(job)[row],
+        solver_options(job),
+        settings,
+        out,
+    )
+    return par, out, law
 
 
 def load_kernel(job: Job, share=None) -> None:
@@ -196,36 +116,20 @@ def compile_kernel(job: Job, share=None, trace: bool = False) -> None:
         raise ValueError(NOT_THE_KERNELS)
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
-    solver = solver_options(job)
-    law = job.law()  # every row's law has one type: one kernel serves the job
-    if chain_loaded(solver, law):
-        return
-    settings = cell_settings(job)
-    out = allocate_outputs(0, settings.output_bits, job.n_sections)
-    x_init = np.array([job.initial.y, job.initial.v])
-    with collector_paused():
-        helper = split_compile.start_helper(solver, settings, trace, law)
-        signature = chain_signature(law, x_init, solver, settings, out)
-        split_compile.share_with_ranks(share, solver, settings, signature, law)
-        compile_chain(signature, solver, settings, law)
-        if trace:
-            compile_tracer(law, solver, settings)
-        split_compile.reap(helper)
+    # every row's law has one type: one kernel serves the job
+    compute.compile_cells(job, job.law(), output_bits(job.outputs), job.n_sections, share, trace)
 
 
 def census_of(job: Job, par: dict, state: np.ndarray, law) -> dict[str, np.ndarray]:
     """The ``attractors`` census arrays of a chain (``multistable.census_row``); {} if off."""
     if job.attractors is None:
         return {}
-    from .multistable import census_row  # it builds on this module's settings and buffers
-
     return census_row(job, par, state, law)
 
 
 def separation_of(job: Job, par: dict, out: CellOutputs, law, solver, settings) -> dict:
     """The ``separation`` arrays of a chain: its row's values in every cell (one chunk a
     tile, as every per-cell array)."""
-    from .separation import SEPARATION_ARRAYS, separation_row
 
     def allocate(n):
         return allocate_outputs(n, settings.output_bits, job.n_sections)

@@ -175,37 +175,38 @@ def same_attractor(a: PointResult, b: PointResult, tol: float) -> bool:
 
 
 def find_attractors(
-    omega: float,
+    model=None,
     *,
     count: int = DEFAULT_STARTS,
     starts=None,
     given=(),
     lyapunov: bool = False,
-    **settings,
+    **fields,
 ) -> AttractorCensus:
     """Run ``count`` starts at one cell and group them into distinct attractors.
 
     Two periodic results are one attractor when their σn points agree up to a cyclic
-    shift within ``match_tolerance()``; quasi-periodic and chaotic results are grouped
+    shift within ``match_tolerance``; quasi-periodic and chaotic results are grouped
     by kind and by the overlap of their section clouds. Multipliers are always computed.
 
     Parameters
     ----------
-    omega : float
-        Cam speed ω.
+    model : Model, mapping or float, optional
+        The cell's model, or ω (``campar.simulate_point``'s first argument); ``fields``
+        change it.
     count : int
-        Number of starts K: rest, then ``given``, then Halton points over
-        y ∈ [−1, 2], y' ∈ ±1.5 ω at θ = 0 (``spread_starts``).
+        Number of starts K (2 to MAX_STARTS): rest, then ``given``, then Halton points
+        over y ∈ [−1, 2], y' ∈ ±1.5 ω at θ = 0 (``spread_starts``).
     starts : array_like, optional
         (K, 2) starts (y, y') at θ = 0, replacing that spread.
     given : sequence of (float, float)
         Starts to try right after rest.
     lyapunov : bool
         Also compute each start's largest Lyapunov exponent.
-    **settings
-        The keywords of :func:`campar.simulate_point` but ``y0``, ``v0`` and
-        ``sections``; ``chaos_after`` defaults to ``CHAOS_AFTER`` (a chaos verdict waits
-        for the whole budget).
+    **fields
+        Any key of the model (``campar.simulate_point``) but the start and ``sections``;
+        ``chaos_after`` defaults to ``CHAOS_AFTER`` (a chaos verdict waits for the whole
+        budget), as a map's census.
 
     Returns
     -------
@@ -215,7 +216,7 @@ def find_attractors(
     Raises
     ------
     campar.errors.JobError
-        A parameter unknown or out of range.
+        A key unknown, a value out of range, or ``count`` outside its bounds.
 
     Examples
     --------
@@ -224,30 +225,31 @@ def find_attractors(
     >>> [(a.label, a.fraction) for a in census.attractors]
     [('1-1', 0.5625), ('3-2', 0.4375)]
     """
-    settings.setdefault("chaos_after", CHAOS_AFTER)
+    from ..errors import JobError
+    from ..model import Model
+    from ..model.settings import MAX_STARTS, check_count
+
+    fields.setdefault("chaos_after", CHAOS_AFTER)
+    model = Model.build(model, sections=CLOUD_POINTS, **fields)
     if starts is None:
-        starts = spread_starts(count, omega, given)
+        try:
+            check_count("count", count, 1, MAX_STARTS)
+        except ValueError as exc:
+            raise JobError(str(exc)) from None
+        starts = spread_starts(count, model.omega, given)
     starts = np.asarray(starts, dtype=float).reshape(-1, 2)
     results = [
-        simulate_point(
-            omega,
-            y0=float(y),
-            v0=float(v),
-            multipliers=True,
-            lyapunov=lyapunov,
-            sections=CLOUD_POINTS,
-            **settings,
-        )
+        simulate_point(model, state=(float(y), float(v)), multipliers=True, lyapunov=lyapunov)
         for y, v in starts
     ]
-    tol = match_tolerance()
+    tol = match_tolerance(model.transient.window_tol, model.classify.period_tol)
     # the grouping a map's census uses too (campar.sweep.multistable): one rule
     groups, basin = group_records(
         [KIND_CODES[r.kind] for r in results], [r.sections for r in results], tol
     )
     unsettled = [(i, r) for i, r in enumerate(results) if basin[i] < 0]
     attractors = tuple(Attractor(results[g[0]], tuple(g), len(g) / len(starts)) for g in groups)
-    parameters = results[0].parameters if results else {"omega": omega}
+    parameters = results[0].parameters if results else {"omega": model.omega}
     return AttractorCensus(parameters, starts, attractors, basin, tuple(unsettled), tol)
 
 

@@ -492,20 +492,9 @@ def store_tracer(job, arrays, omega, second):
     its stored final state with the job's integrator settings ((None, None) if it fails)."""
     from .point import trace_steady
 
-    fixed = {
-        name: float(job.parameter(name))
-        for name in ("f0", "mu_kn", "mu_cn", "zeta")
-        if name != job.second
-    }
-
     def trace(row: int, col: int, revolutions: int):
-        parameters = {
-            **fixed,
-            job.second: float(second[row]),
-            "omega": float(omega[col]),
-            "tensile": job.model.tensile,
-        }
-        orbit = trace_steady(job, parameters, arrays["state"][row, col], max(revolutions, 1))
+        model = job.model_at(omega[col], second[row])
+        orbit = trace_steady(model, arrays["state"][row, col], max(revolutions, 1))
         return (None, None) if orbit is None else (orbit.t, orbit.eps)
 
     return trace

@@ -16,10 +16,12 @@ import numpy as np
 from ..continuation.branch import BranchSettings
 from ..continuation.branch_result import Branch
 from ..continuation.curves import CURVE_TYPES, BifurcationCurve, continue_curve
-from ..continuation.orbit import PeriodicOrbit, find_cycle
-from ..continuation.section_map import PARAMETER_ORDER, SectionMap, parameter_vector
+from ..continuation.orbit import PeriodicOrbit, find_cycle, solve_cycle
+from ..continuation.section_map import PARAMETER_ORDER, SectionMap
 from ..continuation.switching import continue_with_switching
 from ..errors import ContinuationError, JobError
+from ..model import Model
+from ..model.laws import LAW_PARAMETERS
 from .point import simulate_point
 
 
@@ -79,7 +81,8 @@ def continue_from_cell(
     Parameters
     ----------
     parameter : str
-        The continuation parameter: omega, f0, mu_kn, mu_cn or zeta.
+        The continuation parameter: omega, f0, mu_kn, mu_cn, zeta, or a law parameter of
+        the model (phi1 … phi4, n, restitution; campar.model.laws.LAW_PARAMETERS).
     span : (float, float)
         Where the branch starts and the far end of its window.
     fixed : dict
@@ -90,8 +93,11 @@ def continue_from_cell(
         The period solved for; by default the simulated cell's period.
     switch : int
         Period doublings to follow from each PD point (0: none).
-    model : dict, optional
-        The force law's options (tensile, duty_cycle, cam_velocity).
+    model : Model or dict, optional
+        The cell's model (``campar.model.Model``: the force law, cam, contact and
+        settings of the simulated start), or the force law's options (tensile,
+        duty_cycle, cam_velocity). The parameters in ``fixed`` and ``span`` take
+        precedence over its own.
     settings : BranchSettings, optional
         Step control of the branches.
     curve_types : iterable of str
@@ -130,12 +136,14 @@ def continue_from_cell(
     """
     check_request(parameter, span, fixed, curve_types, second, second_window)
     began = time.perf_counter()
-    model = dict(model or {})
-    smap = section_map or SectionMap(model)
-    shots0 = smap.shots
     values = {**fixed, parameter: span[0]}
-    omega = values.pop("omega")
-    cell = simulate_point(omega, y0=y0, v0=v0, **model, **values)
+    base = model if isinstance(model, Model) else Model.build({"omega": values["omega"]})
+    if isinstance(model, dict):  # the force law's options (the model section's keys)
+        base = base.replace(**model)
+    law = parameter if parameter in LAW_PARAMETERS else None
+    smap = section_map or SectionMap(base, law_parameter=law)
+    shots0 = smap.shots
+    cell = simulate_point(base, y0=y0, v0=v0, **values)
     period = cycle or cell.n
     if not period:
         raise ContinuationError(
@@ -144,7 +152,7 @@ def continue_from_cell(
         )
     if not all(map(math.isfinite, cell.state)):
         raise ContinuationError(f"the cell at {parameter}={span[0]} failed: {cell.status}")
-    start = find_cycle(period, cell.state, section_map=smap, **{**fixed, parameter: span[0]})
+    start = solve_cycle(period, cell.state, {**fixed, parameter: span[0]}, section_map=smap)
     direction = 1.0 if span[1] > span[0] else -1.0
     root = continue_with_switching(
         start, parameter, span, switch, direction=direction, section_map=smap, settings=settings
@@ -174,10 +182,11 @@ def check_request(parameter, span, fixed, curve_types=(), second=None, second_wi
     line): a parameter the model does not have, a range that is empty, not finite or
     leaves the model's range of its parameter, a fixed value out of range, curves of an
     unknown type, or curves without a second parameter and window (low:high) of their own.
-    The ranges are the model's own (``parameter_vector``)."""
-    if parameter not in PARAMETER_ORDER:
-        raise JobError(f"cannot continue along {parameter!r}; one of {', '.join(PARAMETER_ORDER)}")
-    parameter_vector({"omega": 1.0, **fixed})  # each fixed value in its range
+    The ranges are the model's own (``Model.build`` checks each value)."""
+    if parameter not in (*PARAMETER_ORDER, *LAW_PARAMETERS):
+        allowed = ", ".join((*PARAMETER_ORDER, *LAW_PARAMETERS))
+        raise JobError(f"cannot continue along {parameter!r}; one of {allowed}")
+    Model.build({"omega": 1.0}, **fixed)  # each fixed value in its range
     check_range(parameter, span, f"the range {span[0]:g}:{span[1]:g} of {parameter}")
     if span[0] == span[1]:
         raise JobError(f"the range of {parameter} is empty: {span[0]:g}:{span[1]:g}")
@@ -211,7 +220,7 @@ def check_range(name: str, span, where: str) -> None:
     naming ``where``)."""
     for value in span:
         try:
-            parameter_vector({"omega": 1.0, name: value})
+            Model.build({"omega": 1.0}, **{name: value})
         except JobError as exc:
             raise JobError(f"{where}: {exc}") from None
 
@@ -359,14 +368,14 @@ def line_structure(
     (its state within 1e-6 of a branch point at the same ω, up to a cyclic shift) starts
     none.
     """
-    from .line import compute_line, line_job
+    from .line import compute_line, line_spec
 
     began = time.perf_counter()
     model = dict(model or {})
     smap = section_map or SectionMap(model)
     shots0 = smap.shots
     others = {k: v for k, v in fixed.items() if k != "omega"}
-    line = compute_line(line_job(window, points, **model, **others), transitions=False)
+    line = compute_line(line_spec(window, points, **model, **others), transitions=False)
     runs, start = [], 0
     labels = list(line.labels)
     for i in range(1, len(labels) + 1):

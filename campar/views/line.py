@@ -4,8 +4,8 @@ A line is one continuation chain of the kernel: ω decreasing from its largest
 value, each cell warm-started from the previous cell's final state, exactly
 as one row of a two-parameter map (the paper's Fig. 5 is such a row, drawn as
 σn points y against ω with the detachment count p beneath). It is computed
-as a one-row job with the ``sections`` output through ``run_tile``, so a line
-and the map row with the same parameters give the same cells.
+from a Model by ``campar.model.compute.run_cells``, the chain a map's row runs,
+so a line and the map row with the same model give the same cells.
 
 Every line also computes the Floquet multipliers of its periodic cells (the
 kernel integrates the variational equations in the transient anyway, so they
@@ -26,20 +26,9 @@ import numpy as np
 
 from ..core.codes import Kind, cell_label
 from ..errors import JobError
-from ..sweep.job import (
-    DEFAULT_CLASSIFY,
-    DEFAULT_INITIAL,
-    DEFAULT_INTEGRATOR,
-    DEFAULT_MODEL,
-    DEFAULT_TRANSIENT,
-    Job,
-    with_paper_values,
-)
-from ..sweep.plan import Tile
+from ..model import Model
+from ..model.sections import DEFAULT_CLASSIFY
 
-# Second parameter of the one-row job (any swept parameter would do; its one value
-# is the line's μkn).
-ROW_PARAMETER = "mu_kn"
 PAPER_START = 6.0  # ω where the paper's continuations start (docs/model.md, sweeps)
 CONTINUATION_STEP = 0.005  # ω step of ``continued_state``: a third of the paper's map step
 DEFAULT_SECTIONS = 64  # σn points kept per non-periodic cell (periodic ones keep n)
@@ -66,7 +55,7 @@ class BifurcationLine:
     state : numpy.ndarray
         (N, 2) final (y, y') at θ = 0 of each cell.
     parameters : dict
-        f0, μkn, μcn, ζ (floats) and ``tensile``.
+        f0, μkn, μcn, ζ (floats), ``tensile``, ``duty_cycle`` and ``cam_velocity``.
     chatter_p, window : int
         p from which a label is chattering; the read window in revolutions.
     multipliers : numpy.ndarray or None
@@ -77,8 +66,8 @@ class BifurcationLine:
         (N,) extremes of ε over the steady window.
     transitions : tuple of Transition
         The typed boundaries between labels (:func:`find_transitions`).
-    job : Job or None
-        The line's job.
+    model : Model or None
+        The line's model (its ω: the line's first).
 
     Examples
     --------
@@ -103,7 +92,7 @@ class BifurcationLine:
     eps_min: np.ndarray | None = None  # (N,) min ε over the steady window (< 0: detached)
     eps_max: np.ndarray | None = None  # (N,) max ε (intrusion depth)
     transitions: tuple = ()  # campar.views.transitions.Transition per label boundary
-    job: Job | None = field(default=None, repr=False, compare=False)  # the line's job
+    model: Model | None = field(default=None, repr=False, compare=False)  # the line's model
 
     @property
     def labels(self) -> list[str]:
@@ -154,92 +143,83 @@ class BifurcationLine:
         }
 
 
-def line_job(
-    omega: tuple[float, float],
-    points: int,
-    *,
-    tensile: str = DEFAULT_MODEL.tensile,
-    duty_cycle: str = DEFAULT_MODEL.duty_cycle,
-    cam_velocity: str = DEFAULT_MODEL.cam_velocity,
-    sections: int = DEFAULT_SECTIONS,
-    transient: str = DEFAULT_TRANSIENT.mode,
-    revolutions: int = DEFAULT_TRANSIENT.max_revolutions,
-    initial: tuple[float, float] = (DEFAULT_INITIAL.y, DEFAULT_INITIAL.v),
-    rtol: float = DEFAULT_INTEGRATOR.rtol,
-    name: str = "line",
-    **parameters: float,
-) -> Job:
-    """The one-row job of a line: ``points`` ω values from max(omega) down to min(omega).
+@dataclass(frozen=True)
+class LineSpec:
+    """What a line computes: the model (its ω the line's first) and the ω values, in the
+    order the chain runs (decreasing)."""
+
+    model: Model
+    omega: np.ndarray
+    name: str = "line"
+
+    def to_dict(self) -> dict:
+        """The line as a mapping: its name, ω range and points, and its model's keys."""
+        omega = {"from": float(self.omega[0]), "to": float(self.omega[-1])}
+        return {
+            "name": self.name,
+            "omega": {**omega, "points": len(self.omega)},
+            **self.model.to_dict(),
+        }
+
+
+def line_spec(
+    omega: tuple[float, float], points: int, model=None, *, name: str = "line", **fields
+) -> LineSpec:
+    """The line of ``points`` ω values from max(omega) down to min(omega).
 
     Parameters
     ----------
     omega : tuple of float
         The ω range, either order; the chain runs from the larger value down.
     points : int
-        Number of ω values.
-    tensile, duty_cycle, cam_velocity : str
-        The job's ``model:`` section: the force law (``"clamp"`` or ``"allow"``) and its
-        options (docs/model.md).
-    sections : int
-        σn points stored per non-periodic cell (chaos, quasi-periodic clouds).
-    transient : str
-        ``"converged"`` or ``"fixed"``, as in a job's ``transient.mode``.
-    revolutions : int
-        The transient's budget (converged) or length (fixed).
-    initial : tuple of float
-        The start (y, y') at θ = 0 of the line's first cell.
-    rtol : float
-        The integrator's relative tolerance.
+        Number of ω values (1 to MAX_POINTS).
+    model : Model or mapping, optional
+        The line's model; ``fields`` change it (any key ``Model.build`` takes: ``f0``,
+        ``mu_kn``, ``tensile``, ``rise``, ``rtol``, ``transient``, ``revolutions``,
+        ``y0``, ``v0`` for the first cell's start, …). ``sections``, the σn points kept
+        per non-periodic cell, defaults to DEFAULT_SECTIONS.
     name : str
-        The job's name.
-    **parameters : float
-        f0, mu_kn, mu_cn, zeta; those not given take the paper's base values.
+        The line's name.
 
     Returns
     -------
-    Job
-        A validated one-row job with the outputs a line needs.
+    LineSpec
 
     Raises
     ------
     campar.errors.JobError
-        A parameter unknown or out of range.
+        A key unknown or a value out of range.
 
     Examples
     --------
-    >>> from campar.views.line import line_job
-    >>> job = line_job((2.0, 4.0), 50, mu_kn=0.91)
-    >>> float(job.omega[0]), float(job.omega[-1]), job.shape
-    (4.0, 2.0, (1, 50))
+    >>> from campar.views.line import line_spec
+    >>> spec = line_spec((2.0, 4.0), 50, mu_kn=0.91)
+    >>> float(spec.omega[0]), float(spec.omega[-1]), spec.model.mu_kn
+    (4.0, 2.0, 0.91)
     """
+    from ..model.settings import MAX_POINTS, check_count
+
+    try:
+        check_count("points", points, 1, MAX_POINTS)
+    except ValueError as exc:
+        raise JobError(str(exc)) from None
     hi, lo = max(omega), min(omega)
-    values = with_paper_values(parameters)
-    row = values.pop(ROW_PARAMETER)
-    data = {
-        "name": name,
-        "sweep": {
-            "omega": {"from": hi, "to": lo, "points": points},
-            ROW_PARAMETER: {"from": row, "to": row, "points": 1},
-        },
-        "fixed": values,
-        "model": {"tensile": tensile, "duty_cycle": duty_cycle, "cam_velocity": cam_velocity},
-        "initial": {"y": initial[0], "v": initial[1]},
-        "integrator": {"rtol": rtol},
-        "transient": {"mode": transient, "max_revolutions": revolutions},
-        "classify": {"sections": sections},
-        "outputs": list(LINE_OUTPUTS),
-        "tiles": {"rows": 1},
-    }
-    return Job.from_dict(data, source=f"line {name}")
+    if "initial" in fields:  # the start as a pair (y, y')
+        fields["y0"], fields["v0"] = fields.pop("initial")
+    base = Model.build(model, omega=hi, **fields)
+    if base.classify.sections is None:
+        base = base.replace(sections=DEFAULT_SECTIONS)
+    Model.build(base, omega=lo)  # both ends in range
+    return LineSpec(base, np.linspace(hi, lo, points), name)
 
 
-def compute_line(job: Job, *, transitions: bool = True) -> BifurcationLine:
-    """Run the chain of a one-row job (``line_job``) and collect its cells.
+def compute_line(spec: LineSpec, *, transitions: bool = True) -> BifurcationLine:
+    """Run the chain of a line (``line_spec``) and collect its cells.
 
     Parameters
     ----------
-    job : Job
-        A one-row job with the ``sections`` output (:func:`line_job`).
+    spec : LineSpec
+        The line's model and ω values (:func:`line_spec`).
     transitions : bool
         Type the line's label boundaries (:func:`campar.views.transitions.find_transitions`).
 
@@ -248,43 +228,39 @@ def compute_line(job: Job, *, transitions: bool = True) -> BifurcationLine:
     BifurcationLine
         The line's cells in the order computed.
 
-    Raises
-    ------
-    ValueError
-        The job has more than one row or no ``sections`` output.
-
     Examples
     --------
-    >>> from campar.views.line import compute_line, line_job
-    >>> line = compute_line(line_job((2.0, 4.0), 50, mu_kn=0.91))
+    >>> from campar.views.line import compute_line, line_spec
+    >>> line = compute_line(line_spec((2.0, 4.0), 50, mu_kn=0.91))
     >>> [(t.type, t.before.label, t.after.label) for t in line.transitions]
     [('G', '2-1', '2-2'), ('PD', '2-2', '1-1')]
     """
-    if job.shape[0] != 1 or not job.wants("sections"):
-        raise ValueError("compute_line needs a one-row job with the 'sections' output")
-    from ..sweep.tile import run_tile  # numba loads here: the CLI reads this module's defaults
+    from ..model.compute import run_cells  # numba loads here: the CLI reads this module's defaults
     from .transitions import find_transitions
 
-    cells = {name: values[0] for name, values in run_tile(job, Tile(0, 0, 1)).items()}
-    parameters = {name: float(job.parameter(name)) for name in ("f0", "mu_cn", "zeta")}
-    parameters[ROW_PARAMETER] = float(job.second_values[0])
-    parameters.update(job.model.model_dump())  # tensile, duty_cycle, cam_velocity
+    model = spec.model
+    out = run_cells(model, omega=spec.omega, outputs=LINE_OUTPUTS, compile=False)
+    parameters = {name: float(getattr(model, name)) for name in ("f0", "mu_kn", "mu_cn", "zeta")}
+    options = model.model
+    parameters.update(
+        tensile=options.tensile, duty_cycle=options.duty_cycle, cam_velocity=options.cam_velocity
+    )
     line = BifurcationLine(
-        omega=job.omega,
-        sections=cells["sections"],
-        n=cells["n"],
-        p=cells["p"],
-        kind=cells["kind"],
-        dc=cells["dc"],
-        state=cells["state"],
+        omega=spec.omega,
+        sections=out.sections,
+        n=out.n,
+        p=out.p,
+        kind=out.kind,
+        dc=out.dc,
+        state=out.state,
         parameters=parameters,
-        chatter_p=job.classify.chatter_p,
-        window=job.classify.window_revolutions,
-        multipliers=cells.get("multipliers"),
-        flags=cells["flags"],
-        eps_min=cells.get("eps_min"),
-        eps_max=cells.get("eps_max"),
-        job=job,
+        chatter_p=model.classify.chatter_p,
+        window=model.classify.window_revolutions,
+        multipliers=out.multipliers,
+        flags=out.flags,
+        eps_min=out.eps_min,
+        eps_max=out.eps_max,
+        model=model,
     )
     return replace(line, transitions=find_transitions(line)) if transitions else line
 
@@ -292,7 +268,7 @@ def compute_line(job: Job, *, transitions: bool = True) -> BifurcationLine:
 def bifurcation_line(omega: tuple[float, float], points: int, **options) -> BifurcationLine:
     """A bifurcation line along ω with its typed transitions.
 
-    ``compute_line(line_job(omega, points, **options))``.
+    ``compute_line(line_spec(omega, points, **options))``.
 
     Parameters
     ----------
@@ -301,7 +277,7 @@ def bifurcation_line(omega: tuple[float, float], points: int, **options) -> Bifu
     points : int
         Number of ω values.
     **options
-        The keywords of :func:`line_job`.
+        The keywords of :func:`line_spec` (a ``model`` and any of its keys).
 
     Returns
     -------
@@ -320,7 +296,7 @@ def bifurcation_line(omega: tuple[float, float], points: int, **options) -> Bifu
     >>> len(line.omega), line.labels[0], line.labels[-1]
     (50, '2-1', '1-1')
     """
-    return compute_line(line_job(omega, points, **options))
+    return compute_line(line_spec(omega, points, **options))
 
 
 def continuation_points(
@@ -336,21 +312,21 @@ def continued_state(
     """Reach ``omega`` by continuation from ``start`` (ω decreasing, from (0, 0) at θ = 0).
 
     Returns the line and the last cell's final state: the attractor the paper's
-    procedure lands on at this ω. ``options`` as for ``line_job`` (sections 1).
+    procedure lands on at this ω. ``options`` as for ``line_spec`` (sections 1).
     """
     options.setdefault("sections", 1)
     line = bifurcation_line((start, omega), continuation_points(omega, start, step), **options)
     return line, (float(line.state[-1, 0]), float(line.state[-1, 1]))
 
 
-def compute_lines(jobs: list[Job], threads: int = 2) -> list[BifurcationLine]:
+def compute_lines(specs: list[LineSpec], threads: int = 2) -> list[BifurcationLine]:
     """Several lines at once: the kernel releases the GIL, so threads use the cores."""
-    if len(jobs) == 1 or threads <= 1:
-        return [compute_line(job) for job in jobs]
+    if len(specs) == 1 or threads <= 1:
+        return [compute_line(spec) for spec in specs]
     from concurrent.futures import ThreadPoolExecutor
 
-    with ThreadPoolExecutor(min(threads, len(jobs))) as pool:
-        return list(pool.map(compute_line, jobs))
+    with ThreadPoolExecutor(min(threads, len(specs))) as pool:
+        return list(pool.map(compute_line, specs))
 
 
 def varied_parameters(values: dict[str, list[float]]) -> list[dict[str, float]]:

@@ -8,24 +8,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core import model
+from ..core import model as core_model
 from ..core.codes import KIND_NAMES, Flag, Kind, cell_label, status_message
 from ..core.revolution import make_trace
 from ..core.tracer import trace_orbit
-from ..errors import JobError
-from ..sweep.job import (
-    DEFAULT_CLASSIFY,
-    DEFAULT_INITIAL,
-    DEFAULT_INTEGRATOR,
-    DEFAULT_MODEL,
-    DEFAULT_TRANSIENT,
-    PARAMETERS,
-    Job,
-    check_parameter,
-    with_paper_values,
-)
-from ..sweep.plan import Tile
-from ..sweep.tile import cell_settings, compile_kernel, run_tile, solver_options
+from ..model import Model
+from ..model.compute import cell_settings, model_law, output_bits, run_cells, solver_options
 
 # Event codes of a trace: 2·(contact mode before) + (event index), see core.revolution.Trace.
 EVENT_NAMES = {0: "impact", 2: "detachment", 3: "force zero", 4: "detachment", 5: "force resumes"}
@@ -36,14 +24,14 @@ POINT_OUTPUTS = ("label", "dc", "eps", "pn", "sections")
 # The cam phases of one revolution as the model defines them: (name, start θ, end θ).
 # Handed to the plots on every OrbitTrace, which draw them without importing the model.
 _PHASE_NAMES = {
-    model.RISE: "rise",
-    model.FAR_DWELL: "far dwell",
-    model.FALL: "fall",
-    model.NEAR_DWELL: "near dwell",
+    core_model.RISE: "rise",
+    core_model.FAR_DWELL: "far dwell",
+    core_model.FALL: "fall",
+    core_model.NEAR_DWELL: "near dwell",
 }
 CAM_PHASES = tuple(
-    (_PHASE_NAMES[i], float(model.PHASE_BOUNDS[i]), float(model.PHASE_BOUNDS[i + 1]))
-    for i in range(model.N_PHASES)
+    (_PHASE_NAMES[i], float(core_model.PHASE_BOUNDS[i]), float(core_model.PHASE_BOUNDS[i + 1]))
+    for i in range(core_model.N_PHASES)
 )
 
 
@@ -138,6 +126,8 @@ class PointResult:
     multipliers: tuple[complex, ...] | None = None
     lyapunov: float | None = None
     trace: OrbitTrace | None = field(default=None, repr=False)
+    model: Model | None = field(default=None, repr=False, compare=False)
+    """The cell's whole model (``campar.model.Model``)."""
 
     def to_dict(self) -> dict:
         """JSON-ready summary (multipliers as [re, im] pairs; NaN as None)."""
@@ -162,6 +152,8 @@ class PointResult:
             "sections": [[num(a), num(b)] for a, b in self.sections],
             "parameters": self.parameters,
         }
+        if self.model is not None:
+            data["model"] = self.model.to_dict()
         if self.multipliers is not None:
             data["multipliers"] = [[num(m.real), num(m.imag)] for m in self.multipliers]
         if self.lyapunov is not None:
@@ -169,90 +161,36 @@ class PointResult:
         return data
 
 
-def point_job(
-    *,
-    omega: float,
-    tensile: str = DEFAULT_MODEL.tensile,
-    duty_cycle: str = DEFAULT_MODEL.duty_cycle,
-    cam_velocity: str = DEFAULT_MODEL.cam_velocity,
-    y0: float = DEFAULT_INITIAL.y,
-    v0: float = DEFAULT_INITIAL.v,
-    transient: str = DEFAULT_TRANSIENT.mode,
-    revolutions: int = DEFAULT_TRANSIENT.max_revolutions,
-    chaos_after: int = DEFAULT_TRANSIENT.chaos_after,
-    rtol: float = DEFAULT_INTEGRATOR.rtol,
-    atol: float = DEFAULT_INTEGRATOR.atol,
-    method: str = DEFAULT_INTEGRATOR.method,
-    sections: int | None = DEFAULT_CLASSIFY.sections,
-    outputs=POINT_OUTPUTS,
-    **parameters: float,
-) -> Job:
-    """A one-cell job (validated like any job) from (y0, v0) at θ = 0.
-
-    ``parameters``: f0, mu_kn, mu_cn, zeta; those not given take the paper's base values.
-    Every setting defaults to the job model's (``campar.sweep.job``): the force law and
-    its options (``duty_cycle``: separation or force; ``cam_velocity``: chain or literal), the
-    transient (``revolutions`` is its budget when converged, its length when fixed;
-    ``chaos_after`` the earliest chaotic verdict, 0: only at the budget), the integrator
-    and the σn points kept of a non-periodic cell (``sections``, None: n_max).
-    Raises JobError for a parameter unknown or out of range.
-    """
-    values = with_paper_values(parameters)
-    for name, value in {"omega": omega, **values}.items():
-        try:
-            check_parameter(name, float(value))
-        except ValueError as exc:
-            raise JobError(str(exc)) from None
-    f0 = values.pop("f0")  # swept (one value): a job sweeps ω and one more parameter
-    data = {
-        "name": "point",
-        "sweep": {
-            "omega": {"from": omega, "to": omega, "points": 1},
-            "f0": {"from": f0, "to": f0, "points": 1},
-        },
-        "fixed": values,
-        "model": {"tensile": tensile, "duty_cycle": duty_cycle, "cam_velocity": cam_velocity},
-        "initial": {"y": y0, "v": v0},
-        "integrator": {"method": method, "rtol": rtol, "atol": atol},
-        "transient": {
-            "mode": transient,
-            "max_revolutions": revolutions,
-            "chaos_after": chaos_after,
-        },
-        "classify": {"sections": sections},
-        "outputs": list(outputs),
-        "tiles": {"rows": 1},
-    }
-    return Job.from_dict(data, source="point")
-
-
-def point_parameters(job: Job) -> dict:
-    """The model parameters of a one-cell job (ω first, as PARAMETERS), its force law and the
-    law's options (duty_cycle, cam_velocity)."""
-    values = {"omega": float(job.omega[0]), job.second: float(job.second_values[0]), **job.fixed}
-    model = job.model
+def point_parameters(model: Model) -> dict:
+    """ω, f0, μkn, μcn, ζ of a cell (PARAMETERS order), its force law and the law's
+    options (duty_cycle, cam_velocity)."""
+    options = model.model
     return {
-        **{name: values[name] for name in PARAMETERS},
-        "tensile": model.tensile,
-        "duty_cycle": model.duty_cycle,
-        "cam_velocity": model.cam_velocity,
+        **model.parameters,
+        "tensile": options.tensile,
+        "duty_cycle": options.duty_cycle,
+        "cam_velocity": options.cam_velocity,
     }
 
 
 def simulate_point(
-    omega: float,
+    model=None,
     *,
+    state=None,
     multipliers: bool = False,
     lyapunov: bool = False,
     trace: bool = False,
-    **settings,
+    **fields,
 ) -> PointResult:
-    """Simulate one cell from (y0, v0) at θ = 0 and classify its steady motion.
+    """Simulate one cell from a start at θ = 0 and classify its steady motion.
 
     Parameters
     ----------
-    omega : float
-        Cam speed ω (dimensionless; θ = ωt).
+    model : Model, mapping or float, optional
+        The cell's model (``campar.model.Model``), a mapping of a job's keys, or ω; the
+        ``fields`` change it.
+    state : (float, float), optional
+        The start (y, y') at θ = 0; default the model's ``initial`` (rest).
     multipliers : bool
         Also compute the cycle's Floquet multipliers.
     lyapunov : bool
@@ -260,32 +198,26 @@ def simulate_point(
     trace : bool
         Integrate the steady orbit once more from the final state (its period, or up to
         64 revolutions when not periodic) and record it densely (``PointResult.trace``).
-    **settings
-        The keywords of ``point_job``, each defaulting to the paper's base value or the
-        job model's default (jobs/README.md):
-
-        - ``f0``, ``mu_kn``, ``mu_cn``, ``zeta`` : float — preload, contact stiffness
-          and damping ratios, damping (0.5, 0.8, 0.8, 0.2);
-        - ``tensile`` : ``"clamp"`` or ``"allow"`` — the contact force law;
-        - ``duty_cycle`` : ``"separation"`` or ``"force"``;
-          ``cam_velocity`` : ``"chain"`` or ``"literal"`` — the paper's ambiguities;
-        - ``y0``, ``v0`` : float — the start (y, y') at θ = 0 (0, 0);
-        - ``transient`` : ``"converged"`` or ``"fixed"``; ``revolutions`` : int — its
-          budget or length (500); ``chaos_after`` : int — the earliest chaotic verdict
-          (0: only at the budget);
-        - ``method`` : ``"dop853"``, ``"dp54"`` or ``"rk4"``; ``rtol``, ``atol`` : float;
-        - ``sections`` : int or None — σn points kept of a non-periodic cell.
+    **fields
+        Any key of the model by its name (``Model.build``): the parameters ``omega``,
+        ``f0``, ``mu_kn``, ``mu_cn``, ``zeta`` (the paper's base values but ω); the force
+        law's options ``tensile``, ``duty_cycle``, ``cam_velocity``; the cam's ``rise``,
+        ``fall``, ``phi1`` … ``phi4``, ``table``; the contact's ``law``, ``n``,
+        ``restitution``; the start ``y0``, ``v0``; the integrator's ``method``, ``rtol``,
+        ``atol``, …; the transient's ``transient`` (its mode), ``revolutions``,
+        ``chaos_after``, …; the classification's ``n_max``, ``sections``, … (jobs/README.md
+        gives every key and its default; ``campar point --help`` its flag).
 
     Returns
     -------
     PointResult
-        The cell's label, kind, duty cycle, ε extremes, Pn max, final state, σn points
-        and what was asked for.
+        The cell's label, kind, duty cycle, ε extremes, Pn max, final state, σn points,
+        its model and what was asked for.
 
     Raises
     ------
     campar.errors.JobError
-        A parameter unknown or out of range.
+        A key unknown or a value out of range.
 
     Examples
     --------
@@ -295,38 +227,61 @@ def simulate_point(
     ('1-1', 0.4802)
     >>> campar.simulate_point(3.15, mu_kn=0.91, multipliers=True).label
     '2-2'
+    >>> campar.simulate_point(omega=2.0, rise="cycloidal", fall="cycloidal").label
+    '1-1'
     >>> campar.simulate_point(3.0, mu_kn=2.0)
     Traceback (most recent call last):
     ...
     campar.errors.JobError: mu_kn must be in (0, 1), got 2.0
     """
+    model = Model.build(model, **fields)
+    start = model.start if state is None else checked_state(state)
     outputs = [*POINT_OUTPUTS]
     if multipliers:
         outputs.append("multipliers")
     if lyapunov:
         outputs.append("lyapunov")
-    job = point_job(omega=omega, outputs=outputs, **settings)
-    compile_kernel(job, trace=trace)  # on two cores if the cache is empty
-    cell = {name: arr[0, 0] for name, arr in run_tile(job, Tile(0, 0, 1)).items()}
-    result = point_result(job, cell)
+    law = model_law(model)
+    if trace:
+        from ..model.compute import compile_cells
+
+        compile_cells(model, law, output_bits(outputs), model.n_sections, trace=True)
+    out = run_cells(model, start=start, outputs=outputs, law=law)
+    cell = {name: values[0] for name, values in out._asdict().items() if len(values)}
+    result = point_result(model, cell)
     if trace and result.kind != KIND_NAMES[Kind.FAILED]:
-        n_revs = result.n or min(job.classify.window_revolutions, MAX_TRACE_REVOLUTIONS)
-        orbit = trace_steady(job, result.parameters, result.state, n_revs, result.steps)
+        n_revs = result.n or min(model.classify.window_revolutions, MAX_TRACE_REVOLUTIONS)
+        orbit = trace_steady(model, result.state, n_revs, result.steps, law)
         if orbit is not None:
             result = PointResult(**{**result.__dict__, "trace": orbit})
     return result
 
 
-def point_result(job: Job, cell: dict) -> PointResult:
-    """The PointResult of one cell of ``job``: ``cell`` maps each array name of run_tile
-    to that cell's value (multipliers and Lyapunov exponent where the job computed them)."""
+def checked_state(state) -> tuple[float, float]:
+    """A start (y, y') as two finite floats within ±MAX_START; JobError otherwise."""
+    from ..errors import JobError
+    from ..model.settings import MAX_START
+
+    try:
+        y, v = (float(x) for x in state)
+    except (TypeError, ValueError):
+        raise JobError(f"state: a start is two numbers (y, y'), got {state!r}") from None
+    if not all(math.isfinite(x) and abs(x) <= MAX_START for x in (y, v)):
+        raise JobError(f"state: a start is two finite numbers within ±{MAX_START:g}, got {state!r}")
+    return (y, v)
+
+
+def point_result(model: Model, cell: dict) -> PointResult:
+    """The PointResult of one cell of ``model``: ``cell`` maps each output array's name
+    (``CellOutputs``, a map's arrays) to that cell's value (multipliers and Lyapunov
+    exponent where they were computed)."""
     kind = Kind(int(cell["kind"]))
     n = int(cell["n"])
-    sections = cell["sections"][: n if n else job.n_sections]
+    sections = cell.get("sections", np.empty((0, 2)))[: n if n else model.n_sections]
     sections = sections[~np.isnan(sections[:, 0])]
     return PointResult(
-        parameters=point_parameters(job),
-        label=cell_label(kind, n, int(cell["p"]), job.classify.chatter_p),
+        parameters=point_parameters(model),
+        label=cell_label(kind, n, int(cell["p"]), model.classify.chatter_p),
         n=n,
         p=int(cell["p"]),
         kind=KIND_NAMES[kind],
@@ -346,28 +301,29 @@ def point_result(job: Job, cell: dict) -> PointResult:
             else None
         ),
         lyapunov=float(cell["lyapunov"]) if "lyapunov" in cell else None,
+        model=model,
     )
 
 
 def trace_steady(
-    job: Job, parameters: dict, state, revolutions: int, steps: int = 0
+    model: Model, state, revolutions: int, steps: int = 0, law=None
 ) -> OrbitTrace | None:
-    """``revolutions`` revolutions from ``state`` (y, y') at θ = 0, sampled densely with the
-    integrator settings of ``job``; ``parameters`` as ``point_parameters`` gives them and
-    ``steps`` the cell's step count (sizes the buffer). None when the integration fails."""
-    par = parameters
+    """``revolutions`` revolutions of ``model`` from ``state`` (y, y') at θ = 0, sampled
+    densely with the model's integrator settings; ``steps`` the cell's step count (sizes
+    the buffer); ``law`` the kernel's Law (default the model's). None when the
+    integration fails."""
     max_samples = SAMPLES_PER_STEP * max(steps, 1000) * 4 + 16
     rec = make_trace(max_samples, 64 * revolutions + 64, SAMPLES_PER_STEP)
     status, _, _ = trace_orbit(
-        par["omega"],
-        par["zeta"],
-        par["f0"],
-        par["mu_kn"],
-        par["mu_cn"],
-        job.law(),
+        model.omega,
+        model.zeta,
+        model.f0,
+        model.mu_kn,
+        model.mu_cn,
+        model_law(model) if law is None else law,
         np.array(state, dtype=float),
-        solver_options(job),
-        cell_settings(job),
+        solver_options(model),
+        cell_settings(model, output_bits(POINT_OUTPUTS)),
         revolutions,
         rec,
     )
@@ -383,6 +339,15 @@ def trace_steady(
         pn=samples[:, 5],
         contact=samples[:, 6].astype(np.int8),
         events=rec.events[: rec.count[1]].copy(),
-        period=2 * math.pi / par["omega"],
-        cam_phases=CAM_PHASES,
+        period=2 * math.pi / model.omega,
+        cam_phases=cam_phases(model),
     )
+
+
+def cam_phases(model: Model) -> tuple[tuple[str, float, float], ...]:
+    """The cam phases of one revolution of the model's cam: (name, start θ, end θ)."""
+    from ..model.cam_table import phase_bounds
+
+    bounds = phase_bounds(model.model.cam.angles)
+    names = [_PHASE_NAMES[i] for i in range(core_model.N_PHASES)]
+    return tuple((name, bounds[i], bounds[i + 1]) for i, name in enumerate(names))

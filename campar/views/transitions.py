@@ -383,11 +383,11 @@ def find_transitions(line, *, trace=None) -> tuple[Transition, ...]:
     Parameters
     ----------
     line : BifurcationLine
-        The line; its job must compute multipliers for PD, SN and NS to be told.
+        The line; it must hold multipliers for PD, SN and NS to be told.
     trace : callable, optional
         ``trace(index, revolutions)`` returns the (t, ε) samples of cell ``index``'s
         steady orbit over that many revolutions, or (None, None); by default the line's
-        own job traces it (``campar.views.point.trace_steady``); without a job, no
+        own model traces it (``campar.views.point.trace_steady``); without a model, no
         grazing evidence.
 
     Returns
@@ -397,9 +397,9 @@ def find_transitions(line, *, trace=None) -> tuple[Transition, ...]:
 
     Examples
     --------
-    >>> from campar.views.line import compute_line, line_job
+    >>> from campar.views.line import compute_line, line_spec
     >>> from campar.views.transitions import find_transitions
-    >>> line = compute_line(line_job((2.0, 4.0), 50, mu_kn=0.91), transitions=False)
+    >>> line = compute_line(line_spec((2.0, 4.0), 50, mu_kn=0.91), transitions=False)
     >>> [t.type for t in find_transitions(line)]
     ['G', 'PD']
     """
@@ -501,17 +501,15 @@ def graze_distance(t, eps) -> float | None:
 
 def line_tracer(line):
     """trace(index, revolutions) -> (t, ε) samples of a cell's steady orbit (None, None
-    when the integration fails), from the line's job; None for a line without job."""
-    job = getattr(line, "job", None)
-    if job is None:
+    when the integration fails), from the line's model; None for a line without one."""
+    model = getattr(line, "model", None)
+    if model is None:
         return None
     from .point import trace_steady
 
-    parameters = {"omega": 0.0, **line.parameters}
-
     def trace(index: int, revolutions: int):
-        par = {**parameters, "omega": float(line.omega[index])}
-        orbit = trace_steady(job, par, line.state[index], max(revolutions, 1))
+        cell = model.model_copy(update={"omega": float(line.omega[index])})
+        orbit = trace_steady(cell, line.state[index], max(revolutions, 1))
         return (None, None) if orbit is None else (orbit.t, orbit.eps)
 
     return trace

@@ -26,6 +26,7 @@ from importlib import metadata
 import numpy as np
 
 from ... import __version__
+from ...core.version import KERNEL_VERSION
 from ...errors import StoreError, StoreMismatch
 from ..arrays import COMPONENTS, PARTS, TAIL_DIMS, array_names, array_spec
 from ..job import DIRECTIONS, Job, job_digest
@@ -183,9 +184,10 @@ def store_arrays(job: Job) -> list[ArraySchema]:
 
 
 def versions() -> dict[str, str]:
-    """campar's and its dependencies' versions (read from metadata: importing mpi4py.MPI
-    would start MPI)."""
-    found = {"campar": __version__}
+    """campar's, its numerical kernel's (``kernel``: KERNEL_VERSION, what ``campar point
+    --from`` checks) and its dependencies' versions (read from metadata: importing
+    mpi4py.MPI would start MPI)."""
+    found = {"campar": __version__, "kernel": str(KERNEL_VERSION)}
     for name in DEPENDENCIES:
         try:
             found[name] = metadata.version(name)

@@ -1,7 +1,7 @@
 """The job's cam and contact laws (``model.cam``, ``model.contact``): their settings, the
 law parameters a map may sweep, and the kernel's Law built from them (docs/design.md).
 
-Validation needs numpy alone (campar.sweep.cam_table); ``kernel_law`` loads the compiled
+Validation needs numpy alone (campar.model.cam_table); ``kernel_law`` loads the compiled
 core's law classes.
 """
 
@@ -45,7 +45,7 @@ class CamSettings(Settings):
     phi4: float = PAPER_ANGLES[3]
     table: str | None = None
     """A CSV of (θ in radians, S in units of the stroke) over one revolution: the cam is the
-    periodic C² cubic spline through it (campar.sweep.cam_table); rise and fall then have
+    periodic C² cubic spline through it (campar.model.cam_table); rise and fall then have
     no say, the angles only say where the revolution's steps end."""
     table_joins: Literal["smooth", "phases"] = "smooth"
     """smooth: one periodic C² spline through the table; phases: a C² spline on each

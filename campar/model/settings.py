@@ -1,8 +1,9 @@
 """The base of every job section: frozen pydantic settings that refuse unknown keys, and
 YAML's true/false or text where a number belongs; the bounds of every integer and the
-grid axis (campar.sweep.job, campar.sweep.laws)."""
+grid axis (campar.sweep.job, campar.model.laws)."""
 
 import math
+import reprlib
 import typing
 from typing import Annotated
 
@@ -47,6 +48,12 @@ MAX_POINTS = 100_000  # per axis
 MAX_STEPS = 10**12  # integrator steps per cell: at ~1 µs a step, days for one cell
 MAX_COUNT = 1_000_000  # revolutions, jumps and other per-cell counts
 MAX_START = 1e3  # a basin's starts (lifts h, h per unit time): far outside every attractor
+# Parameter bounds: the integrator's steps per revolution grow with ω/ωn and with f0, ζ
+# (stiff springs), so values far beyond any cam's would only exhaust the step budget.
+MAX_OMEGA = 100.0  # cam speed / natural frequency
+MAX_LOAD = 1e3  # f0 and zeta
+MAX_PERIOD = 256  # a cycle's period in revolutions (classify.n_max's bound, --cycle N)
+MAX_STARTS = 4096  # starts of an attractor census (attractors.starts, --attractors K)
 
 
 class Axis(Settings):
@@ -75,6 +82,10 @@ def check_parameter(name: str, value: float) -> float:
         raise ValueError(f"{name} must be a finite number, got {value}")
     if name == "omega" and not value > 0.0:
         raise ValueError(f"omega must be > 0, got {value}")
+    if name == "omega" and value > MAX_OMEGA:
+        raise ValueError(f"omega must be ≤ {MAX_OMEGA:g}, got {value:g}")
+    if name in ("f0", "zeta") and value > MAX_LOAD:
+        raise ValueError(f"{name} must be ≤ {MAX_LOAD:g}, got {value:g}")
     if name in ("mu_kn", "mu_cn") and not 0.0 < value < 1.0:
         raise ValueError(f"{name} must be in (0, 1), got {value}")
     if name == "zeta" and not value >= 0.0:
@@ -82,3 +93,28 @@ def check_parameter(name: str, value: float) -> float:
     if name == "f0" and not value >= 0.0:
         raise ValueError(f"f0 must be ≥ 0, got {value}")
     return value
+
+
+def check_count(what: str, value: int, low: int, high: int) -> int:
+    """``value`` unless outside [low, high]: ValueError "WHAT must be from LOW to HIGH, got
+    VALUE" (a count or size the user gives: starts, a cycle's period, points)."""
+    if type(value) is not int or not low <= value <= high:
+        raise ValueError(f"{what} must be an integer from {low} to {high}, got {value}")
+    return value
+
+
+SHOWN_CHARS = 60  # of a bad value in a message: a value may be huge (a list from aliases)
+
+
+def short_repr(value) -> str:
+    """``repr(value)`` cut to SHOWN_CHARS, without building the whole of a huge value."""
+    if isinstance(value, (list, tuple, dict, set)) and len(value) > 8:
+        return f"a {type(value).__name__} of {len(value)} items"
+    text = reprlib_repr(value)
+    return text if len(text) <= SHOWN_CHARS else text[: SHOWN_CHARS - 1] + "…"
+
+
+def reprlib_repr(value) -> str:
+    shown = reprlib.Repr()
+    shown.maxstring, shown.maxother, shown.maxlevel = SHOWN_CHARS, SHOWN_CHARS, 3
+    return shown.repr(value)
