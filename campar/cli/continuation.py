@@ -138,7 +138,7 @@ def run_continue(args) -> int:
     import json
 
     from ..continuation.branch import BranchSettings
-    from ..sweep.settings import MAX_POINTS
+    from ..model.settings import MAX_PERIOD, MAX_POINTS
     from ..views.continuation import continue_from_cell, describe_continuation
 
     parameter, span, fixed = split_parameters(args)
@@ -146,8 +146,8 @@ def run_continue(args) -> int:
     fixed = {k: v for k, v in model.parameters.items() if k != parameter}
     if args.switch < 0:
         raise JobError(f"--switch must be ≥ 0, got {args.switch}")
-    if args.cycle is not None and args.cycle < 1:
-        raise JobError(f"--cycle must be ≥ 1, got {args.cycle}")
+    if args.cycle is not None and not 1 <= args.cycle <= MAX_PERIOD:
+        raise JobError(f"--cycle must be from 1 to {MAX_PERIOD}, got {args.cycle}")
     if not 0.0 < args.max_step <= 1.0:
         raise JobError(f"--max-step must be in (0, 1], got {args.max_step}")
     if not 2 <= args.max_points <= MAX_POINTS:
