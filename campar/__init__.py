@@ -14,8 +14,8 @@ The package, layer by layer (each may import only the layers above it):
   per command family.
 
 The public names (``dir(campar)``, docs/cli.md): ``run``, ``forecast``, ``line``,
-``open``, ``simulate_point``, ``PointResult``, ``cell``, ``StoredCell``, ``Model``,
-``find_attractors``, ``BifurcationLine``, ``Job``, ``load_job``.
+``open``, ``committed``, ``simulate_point``, ``PointResult``, ``cell``, ``StoredCell``,
+``Model``, ``find_attractors``, ``BifurcationLine``, ``Job``, ``load_job``.
 
 Importing campar does nothing but define names: the numba cache is checked when
 the kernel is first run (``campar.core.jitcache.ensure_fresh_cache``).
@@ -29,6 +29,7 @@ _EXPORTS = {
     "forecast": "campar.api",
     "line": "campar.api",
     "open": "campar.views.dataset",
+    "committed": "campar.views.dataset",
     "simulate_point": "campar.views.point",
     "cell": "campar.views.cell",
     "StoredCell": "campar.views.cell",

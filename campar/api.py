@@ -16,14 +16,18 @@ from .views.line import DEFAULT_POINTS, BifurcationLine
 
 
 def job_of(job, settings: dict | None = None) -> Job:
-    """A validated Job from a Job, a job file's path or a job mapping, with the dotted
-    keys of ``settings`` changed (``campar.sweep.overrides``)."""
+    """A validated Job from a Job, a job file's path, a store's path (its job, writing into
+    it) or a job mapping, with the dotted keys of ``settings`` changed
+    (``campar.sweep.overrides``)."""
     from .sweep.overrides import with_settings
+    from .sweep.store import is_store, stored_job
 
     if isinstance(job, Job):
         found = job
     elif isinstance(job, dict):
         found = Job.from_dict(job)
+    elif isinstance(job, (str, Path)) and is_store(job):
+        found = stored_job(job)  # a store's own job: resume it, with the table it keeps
     elif isinstance(job, (str, Path)):
         found = load_job(job)
     else:

@@ -22,6 +22,7 @@ def test_dir_lists_the_public_names():
         "forecast",
         "line",
         "open",
+        "committed",
         "simulate_point",
         "PointResult",
         "find_attractors",

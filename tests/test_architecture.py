@@ -210,16 +210,9 @@ def test_the_cycle_finder_finds_a_loop_and_only_a_loop():
     assert import_cycles({"a": {"b"}, "b": {"c"}, "c": set()}) == []
 
 
-# Cycles in others' areas, named so that their removal is seen: each entry goes when its
-# loop is broken (the test then fails until it is taken out).
-KNOWN_CYCLES = [
-    ["campar.sweep.store._h5guard", "campar.sweep.store._hdf5"],
-]
-
-
 def test_the_import_graph_has_no_cycle_even_through_function_level_imports():
     graph = {name: imported_modules(name, path) for name, path in MODULES.items()}
-    assert import_cycles(graph) == sorted(KNOWN_CYCLES)
+    assert import_cycles(graph) == []
 
 
 def test_no_module_registers_itself_into_another_when_imported():

@@ -51,6 +51,20 @@ def _swap(a, b):
     tmp.rename(b)
 
 
+def _both(store, name, change):
+    """An array's metadata changed alike in its own zarr.json and the consolidated copy."""
+    _edit_json(store / name / "zarr.json", change)
+    _consolidated(store, name, change)
+
+
+def _big_endian(document):
+    document["codecs"][0]["configuration"]["endian"] = "big"
+
+
+def _chunk_shape(document):
+    document["chunk_grid"]["configuration"]["chunk_shape"] = [1, 7]
+
+
 def _zarr_set(store, name, index, value):
     array = zarr.open_array(store / name, mode="r+")
     array[index] = value
@@ -103,6 +117,34 @@ ZARR_DAMAGE = [
         [],
         "(global attributes)",
     ),
+    # The commit flags and the tiles' checksums, under the root record (``_root``).
+    ("a done chunk deleted", lambda s: (s / "done" / "c.0").unlink(), [0], None),
+    ("a done flag set to 0", lambda s: _zarr_set(s, "done", 2, 0), [2], None),
+    ("a tile's checksum edited", lambda s: _zarr_set(s, "checksum", 1, 12345), [1], None),
+    ("a checksum chunk deleted", lambda s: (s / "checksum" / "c.2").unlink(), [2], None),
+    # An array's metadata, in both copies: the tiles are kept, read through the job's.
+    ("p's data type", lambda s: _both(s, "p", lambda d: d.update(data_type="uint32")), [], "p"),
+    ("p's shape", lambda s: _both(s, "p", lambda d: d.update(shape=[5, 8])), [], "p"),
+    ("p's fill value", lambda s: _both(s, "p", lambda d: d.update(fill_value=7)), [], "p"),
+    ("p's codecs", lambda s: _both(s, "p", lambda d: d.update(codecs=d["codecs"][:1])), [], "p"),
+    ("p's byte order", lambda s: _both(s, "p", _big_endian), [], "p"),
+    ("p's chunk shape", lambda s: _both(s, "p", _chunk_shape), [], "p"),
+    ("p's Zarr format", lambda s: _both(s, "p", lambda d: d.update(zarr_format=2)), [], "p"),
+    (
+        "the group's Zarr format",
+        lambda s: _edit_json(s / "zarr.json", lambda d: d.update(zarr_format=2)),
+        [],
+        "(global attributes)",
+    ),
+    (
+        "the checksums attribute deleted, a long_name edited",
+        lambda s: (
+            _edit_json(s / "zarr.json", lambda d: d["attributes"].pop("metadata_checksums")),
+            _consolidated(s, "dc", lambda m: m["attributes"].update(long_name="edited")),
+        ),
+        [],
+        "dc",
+    ),
     (
         "the checksums attribute garbage",
         lambda s: zarr.open_group(s, mode="r+").attrs.update({"metadata_checksums": "[1"}),
@@ -112,6 +154,8 @@ ZARR_DAMAGE = [
 ]
 QUICK_ZARR = (
     "value edited through zarr",
+    "a done chunk deleted",
+    "p's data type",
     "kind chunks swapped",
     "dc/zarr.json deleted",
     "scale_factor in the consolidated copy",

@@ -89,9 +89,11 @@ def stores(tmp_path, real_job):
 
 def test_xarray_alone_opens_zarr_and_hdf5_stores_identically(stores):
     """Identical but for each store's checksums of its own variables' metadata: a Zarr
-    document and an HDF5 dataset's properties are different bytes (``_metadata``)."""
+    document and an HDF5 dataset's properties are different bytes (``_metadata``); the
+    HDF5 file holds its root record as an attribute, a Zarr store as a file of its own."""
     zarr_path, h5_path = stores
     with xr.open_zarr(zarr_path) as a, xr.open_dataset(h5_path, engine="h5netcdf") as b:
+        assert json.loads(b.attrs.pop("campar_root").splitlines()[0])["campar_root"] == 1
         sums = [ds.attrs.pop("metadata_checksums") for ds in (a, b)]
         assert sums[0] != sums[1] and json.loads(sums[0]).keys() == json.loads(sums[1]).keys()
         xr.testing.assert_identical(a, b)

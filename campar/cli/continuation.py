@@ -261,6 +261,13 @@ def run_curves(args) -> int:
         )
     if not 2 <= args.points <= 100_000:
         raise JobError(f"--points must be from 2 to 100000, got {args.points}")
+    if args.store is not None:  # refused as `campar run` refuses it, before the map is read
+        from ..sweep.job_file import check_store_path
+
+        try:
+            check_store_path(args.store)
+        except ValueError as exc:
+            raise JobError(f"store {args.store!r}: {exc}") from None
     job = curves_job(args.map, types, points=args.points, store=args.store)
     setup_logging()
     path = run(job, overwrite=args.overwrite, grace=args.grace)

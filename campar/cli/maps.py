@@ -38,7 +38,7 @@ def add_run(sub):
         epilog=RUN_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("job", help="job file (YAML)")
+    p.add_argument("job", help="job file (YAML), or a store: resume it with its own job")
     p.add_argument(
         "--set",
         action="append",
@@ -55,7 +55,7 @@ def add_run(sub):
         "write nothing",
     )
     p.add_argument(
-        "--ranks", type=int, default=1, metavar="N", help="with --dry-run: plan for N MPI ranks (1)"
+        "--ranks", type=int, metavar="N", help="with --dry-run: plan for N MPI ranks (1)"
     )
     p.add_argument("--store", metavar="PATH", help="result store (default: the job's store:)")
     p.add_argument("--overwrite", action="store_true", help="replace a store of another job")
@@ -86,12 +86,19 @@ def add_run(sub):
 
 def run_run(args) -> int:
     from ..api import forecast, job_of, run
+    from ..errors import JobError
     from ..sweep.overrides import parse_assignment
 
+    if args.ranks is not None and not args.dry_run:
+        raise JobError(
+            f"--ranks {args.ranks} plans a run with --dry-run; a run takes its ranks from "
+            f"mpirun: mpirun -n {args.ranks} campar run {args.job}"
+        )
     job = job_of(args.job, dict(map(parse_assignment, args.set)))  # before the disk is touched
     limits = dict(max_store=args.max_store, max_memory=args.max_memory)
     if args.dry_run:
-        plan = forecast(job, store=args.store, ranks=args.ranks, overwrite=args.overwrite, **limits)
+        ranks = 1 if args.ranks is None else args.ranks
+        plan = forecast(job, store=args.store, ranks=ranks, overwrite=args.overwrite, **limits)
         print(plan.describe())
         return 0
     from ..sweep.runner import setup_logging
@@ -125,13 +132,20 @@ def add_verify(sub):
         "lists damaged tiles (exit 65 if any)",
     )
     p.add_argument("store", help="result store (Zarr directory or HDF5 file)")
+    p.add_argument(
+        "--adopt",
+        action="store_true",
+        help="adopt a store written before root records: check it against its job, rewrite "
+        "its metadata from the job, leave damaged tiles pending, write its root record "
+        "(docs/restart.md)",
+    )
     p.set_defaults(handler=run_verify)
 
 
 def run_verify(args) -> int:
     from ..errors import StoreDamaged
-    from ..sweep.progress import verify_report
+    from ..sweep.progress import adopt_report, verify_report
 
-    text, intact = verify_report(args.store)
+    text, intact = (adopt_report if args.adopt else verify_report)(args.store)
     print(text)
     return 0 if intact else StoreDamaged.exit_code

@@ -22,11 +22,15 @@ from pathlib import Path
 
 import numpy as np
 
+from .files import read_bounded
+
 TWO_PI = 2.0 * math.pi
 ANGLE_TOL = 1e-9  # the four phase angles must sum to 2π within this
 MIN_POINTS = 16
 MAX_GAP = TWO_PI / 32  # the widest spacing of a table (≈ 11°)
 CLOSURE_TOL = 1e-9  # a point at 2π repeats the first lift to this (in units of the stroke)
+MAX_TABLE_BYTES = 1 << 20  # ~40,000 lines of θ, S: far more than a cam needs
+_KNOWN: dict[str, "CamTable"] = {}  # tables by sha256 that stores keep (``remember_table``)
 ANGLE_NAMES = ("phi1 (rise)", "phi2 (far dwell)", "phi3 (fall)", "phi4 (near dwell)")
 
 
@@ -58,6 +62,7 @@ class CamTable:
     lift: np.ndarray
     sha256: str  # of the file's bytes
     name: str = "cam table"
+    text: str = ""  # the file's text, as a store keeps it
 
     def spline(self, joins: str = "smooth", bounds=None) -> tuple[np.ndarray, np.ndarray]:
         """(knots with 2π appended, coefficients (a, b, c, e) a knot interval). ``joins``:
@@ -69,23 +74,40 @@ class CamTable:
         return phase_splines(self.theta, self.lift, bounds, self.name)
 
 
-def read_table(path: str | Path) -> CamTable:
-    """The checked table at ``path`` (ValueError with one line naming the problem)."""
+def read_table(path: str | Path, sha256: str | None = None) -> CamTable:
+    """The checked table at ``path`` (ValueError with one line naming the problem); the
+    table of that ``sha256`` a store keeps if one was read (``remember_table``): a stored
+    job reads as it was computed with, wherever the file is and whatever it holds."""
+    if sha256 is not None and sha256 in _KNOWN:
+        return _KNOWN[sha256]
     path = Path(path)
     try:
         stat = path.stat()
     except OSError as exc:
         raise ValueError(f"cannot read cam table {path}: {exc.strerror}") from None
+    except ValueError as exc:  # a NUL byte in the path
+        raise ValueError(f"cannot read cam table {str(path)!r}: {exc}") from None
     return _read(str(path.resolve()), stat.st_mtime_ns, stat.st_size)
 
 
 @functools.lru_cache(maxsize=16)
 def _read(path: str, mtime_ns: int, size: int) -> CamTable:
+    data = read_bounded(path, MAX_TABLE_BYTES, "cam table")
     try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise ValueError(f"cannot read cam table {path}: {exc.strerror}") from None
-    return parse_table(data.decode("utf-8", errors="replace"), path, data)
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(
+            f"cam table {path}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start})"
+        ) from None
+    return parse_table(text, path, data)
+
+
+def remember_table(text: str, name: str = "cam table") -> CamTable:
+    """A table a store keeps (its file's text), known by its sha256 from now on in this
+    process: ``read_table`` of that digest returns it without reading the file."""
+    table = parse_table(text, name, text.encode())
+    _KNOWN[table.sha256] = table
+    return table
 
 
 def parse_table(text: str, name: str = "cam table", raw: bytes | None = None) -> CamTable:
@@ -142,7 +164,7 @@ def parse_table(text: str, name: str = "cam table", raw: bytes | None = None) ->
             f"2π/32 = {MAX_GAP:.4g} rad apart"
         )
     digest = hashlib.sha256(raw if raw is not None else text.encode()).hexdigest()
-    return CamTable(theta, lift, digest, name)
+    return CamTable(theta, lift, digest, name, text)
 
 
 def periodic_spline(theta: np.ndarray, lift: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -65,7 +65,7 @@ class CamSettings(Settings):
             return self
         if (self.rise, self.fall) != ("cosine", "cosine"):
             raise ValueError("a cam is either a table or rise/fall laws, not both")
-        table = read_table(self.table)
+        table = read_table(self.table, self.table_sha256)
         if self.table_joins == "phases":
             table.spline("phases", phase_bounds(self.angles))  # its boundaries are points
         digest = table.sha256
@@ -166,7 +166,8 @@ def kernel_law(model, name: str | None = None, value: float | None = None, swept
         con = con.model_copy(update={name: value})
     if settings.table is not None:
         bounds = cam.phase_bounds(settings.angles)
-        knots, coef = read_table(settings.table).spline(settings.table_joins, bounds)
+        table = read_table(settings.table, settings.table_sha256)
+        knots, coef = table.spline(settings.table_joins, bounds)
         the_cam = cam.tabulated_cam(knots, coef, bounds)
     else:
         the_cam = cam.phased_cam(settings.rise, settings.fall, settings.angles)

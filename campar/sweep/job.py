@@ -19,6 +19,7 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 
 from ..errors import JobError
 from ..model import Model
+from ..model.files import read_bounded
 from ..model.laws import LAW_PARAMETERS, check_law_axis
 from ..model.sections import (  # noqa: F401 (the model's sections, the job's too)
     DEFAULT_CLASSIFY,
@@ -49,7 +50,7 @@ from ..model.settings import (  # noqa: F401 (their home for the schema's users)
     wants_number,
 )
 from .curves_job import CURVE_AXES, CurvesSettings, check_curves_axes, check_curves_job
-from .job_file import check_store_path, format_validation_error, parse_job_text
+from .job_file import MAX_JOB_BYTES, check_store_path, format_validation_error, parse_job_text
 
 MAP_AXES = (*PARAMETERS, *LAW_PARAMETERS)
 # The job's sections that are a Model's (campar.model.Model): with the grid's parameters
@@ -500,12 +501,10 @@ def load_job(path: str | Path) -> Job:
     'dop853'
     """
     path = Path(path)
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise JobError(f"cannot read job file {path}: {exc.strerror}") from None
-    except ValueError as exc:  # a NUL byte in the path
-        raise JobError(f"cannot read job file {path!r}: {exc}") from None
+    try:  # a FIFO, a device or a directory refused before a byte is read; at most the limit
+        data = read_bounded(path, MAX_JOB_BYTES, "job file")
+    except ValueError as exc:  # also a NUL byte in the path
+        raise JobError(str(exc)) from None
     return Job.from_dict(parse_job_text(data, f"job file {path}"), source=f"job file {path}")
 
 

@@ -128,6 +128,17 @@ def _bounded_int(loader: UniqueKeyLoader, node: yaml.ScalarNode):
     return loader.construct_yaml_int(node)
 
 
+def _refused_tag(loader: UniqueKeyLoader, node: yaml.Node):
+    line = node.start_mark.line + 1
+    raise yaml.YAMLError(
+        f"line {line}: a {node.tag.replace('tag:yaml.org,2002:', '!!')} value is not allowed in "
+        "a job (numbers, text, true/false, lists and mappings only; quote it to make it text)"
+    )
+
+
+# The safe loader's other types (bytes, dates, sets, ordered pairs) are no job's values.
+for _tag in ("binary", "timestamp", "set", "omap", "pairs"):
+    UniqueKeyLoader.add_constructor(f"tag:yaml.org,2002:{_tag}", _refused_tag)
 UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _unique_mapping)
 UniqueKeyLoader.add_constructor("tag:yaml.org,2002:int", _bounded_int)
 

@@ -11,7 +11,7 @@ import yaml
 
 from ..errors import JobError
 from .job import Job
-from .job_file import UniqueKeyLoader
+from .job_file import UniqueKeyLoader, yaml_problem
 
 
 def parse_assignment(text: str) -> tuple[str, object]:
@@ -23,7 +23,9 @@ def parse_assignment(text: str) -> tuple[str, object]:
     try:
         value = yaml.load(raw, Loader=UniqueKeyLoader)
     except yaml.YAMLError as exc:
-        raise JobError(f"--set {key}: the value {raw!r} is not valid YAML: {exc}") from None
+        raise JobError(
+            f"--set {key}: the value {raw!r} is not valid YAML: {yaml_problem(exc)}"
+        ) from None
     return key.strip(), value
 
 

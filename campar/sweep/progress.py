@@ -25,7 +25,7 @@ from ..core.codes import KIND_NAMES, Kind, cell_label, status_message
 from .attractor_sets import attractor_sets
 from .curves_job import CURVE_TYPES
 from .job import DIRECTIONS
-from .store import read_store, verify_store
+from .store import adopt_store, read_store, verify_store
 
 log = logging.getLogger("campar.run")
 
@@ -301,17 +301,39 @@ def verify_report(path) -> tuple[str, bool]:
     how = "checksums" if report.checksums else "readability only (a format without checksums)"
     lines = [
         f"store   {path}  (job {job.name}, {report.tiles} tiles)",
-        f"checked {committed} committed tiles ({how}) in {format_duration(seconds)}: "
-        + (
-            f"{damaged} damaged"
-            if damaged
-            else "all intact" + (", but:" if report.problems else "")
+        (
+            f"checked {committed} committed tiles ({how}) in {format_duration(seconds)}: "
+            + (
+                f"{damaged} damaged"
+                if damaged
+                else "all intact" + (", but:" if not report.clean else "")
+            )
+            if report.tiles_checked
+            else "tiles not checked, the metadata they are read through is damaged:"
         ),
         *(f"  {line}" for line in report.lines()),
     ]
+    lines += [f"note    {note}" for note in report.notes]
+    if report.root_digest:
+        lines.append(f"root    {report.root_digest} (the root record's digest)")
     if not report.clean:
         lines.append(
             "`campar run` on this store repairs it: damaged variables rewritten from the job, "
             "damaged tiles computed again"
         )
     return "\n".join(lines), report.clean
+
+
+def adopt_report(path) -> tuple[str, bool]:
+    """(the text ``campar verify --adopt`` prints, True): the store checked and adopted."""
+    report = adopt_store(path)
+    kept = int(report.verified.sum())
+    lines = [f"store   {path}: adopted, its root record written over {kept} verified tiles"]
+    lines += [
+        f"  variable {name}: {why} (rewritten from the job)"
+        for name, why in report.variables.items()
+    ]
+    lines += [f"  tile {i}: {why} (left pending)" for i, why in sorted(report.damaged.items())]
+    with read_store(path) as reader:
+        lines.append(f"root    {reader.root.digest} (the root record's digest)")
+    return "\n".join(lines), True

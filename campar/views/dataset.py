@@ -7,8 +7,11 @@ h5netcdf engine for HDF5) and both backends give the same Dataset, with:
 - integer arrays (codes and counts) kept integers: their ``_FillValue`` (-1, a
   cell not computed yet) stays an attribute instead of turning them into
   floats, so ``flags & mask`` and ``kind == code`` work; floats are NaN there;
-- the tiles an HDF5 run has committed to its journal but not checkpointed yet
-  (then the Dataset is loaded into memory), so it shows what ``campar status`` counts;
+- a snapshot: every per-cell array holds, tile by tile, the very bytes that were
+  read and verified against the store's root record (``campar.sweep.store._root``),
+  and the fill where a tile is not committed in the record the reader took, or is
+  damaged; ``done`` says which. A store that a run is writing (Zarr or HDF5, its
+  journal included) reads as it was at one commit, never a tile half written;
 - ``label``: every cell's n-p label as text ("2-2", "1-7~", "QP", "chaos", …;
   "" where not computed), as ``campar.core.codes.cell_label`` gives it with
   the job's ``classify.chatter_p``;
@@ -38,8 +41,10 @@ derived here as ``hysteresis`` is.
 
 A store of format 1 (before the CF metadata) is read through ``read_store``
 and given the current format's variables and attributes, built from its job:
-its numbers are laid out alike. The Dataset reads lazily; close it (or use
-``with``) to release the file.
+its numbers are laid out alike. The Dataset is in memory (the store's size
+uncompressed) and holds no file open. To follow a run, ``committed(path)`` says
+cheaply which tiles are committed now (the root record alone, no tile read): open
+the store again when it differs from the Dataset's ``done``.
 """
 
 import warnings
@@ -51,12 +56,13 @@ import xarray as xr
 from ..core.codes import KIND_LABELS, cell_label
 from ..errors import StoreDamaged, StoreDamageWarning
 from ..sweep.census import cycle_tolerance
-from ..sweep.plan import plan_tiles
 from ..sweep.store import (
     CHECKSUMS_ATTR,
     FORMAT,
+    ROOT_ATTRS,
     backend_name,
     cell_arrays,
+    committed_tiles,
     read_store,
     store_arrays,
     upgraded_attrs,
@@ -83,8 +89,10 @@ def open(path: str | Path) -> xr.Dataset:
     ``attractor_label``, a basin store ``basin`` and the attractors' variables.
 
     Nothing is read unverified: every committed tile is checked against its checksum and
-    every variable (coordinates, metadata, decoding attributes) against its own first
-    (docs/stores.md). A damaged tile reads as not computed (its cells the fill, its
+    every variable (coordinates, metadata, decoding attributes) against its own first, both
+    as the store's root record holds them (docs/stores.md). During a run the Dataset is a
+    snapshot: each tile whole as committed and verified, or not computed (``done`` 0). A
+    damaged tile reads as not computed (its cells the fill, its
     ``done`` 0), with a StoreDamageWarning naming it; ``campar run`` repairs it.
 
     Parameters
@@ -118,23 +126,30 @@ def open(path: str | Path) -> xr.Dataset:
     with read_store(path) as reader:
         if reader.file_damage:  # xarray would hand the damaged file to HDF5 itself
             raise StoreDamaged(f"{path}: {reader.file_damage}; `campar run` repairs it")
-        report = verify_store(reader)
-        if report.variables:
-            said = "; ".join(f"variable {name}: {why}" for name, why in report.variables.items())
+        cells = {a.name: np.full(a.shape, a.fill, a.dtype) for a in cell_arrays(reader.job)}
+
+        def take(check) -> None:  # a tile that verified: these very bytes, no second read
+            for name, values in check.arrays.items():
+                cells[name][check.tile.region] = values
+
+        report = verify_store(reader, take)
+        if report.variables or reader.root_problem:
+            said = [f"variable {name}: {why}" for name, why in report.variables.items()]
+            said += [reader.root_problem] if reader.root_problem else []
             raise StoreDamaged(
-                f"{path} is damaged: {said}; `campar run` rewrites it from the job "
+                f"{path} is damaged: {'; '.join(said)}; `campar run` rewrites it from the job "
                 "(`campar verify` lists every problem)"
             )
         if reader.format == FORMAT:
-            ds = _open_current(path, reader)
+            ds = _open_current(path, reader, cells, report)
         else:
-            ds = _from_reader(reader, report)
+            ds = _from_reader(reader, cells, report)
         if report.damaged:
-            ds = _without_damaged(ds, reader, report)
             warnings.warn(damage_warning(path, report.damaged), StoreDamageWarning, stacklevel=2)
         job = reader.job
     ds = _normalise(ds)
-    ds.attrs.pop(CHECKSUMS_ATTR, None)  # each backend's own, of its own bytes: checked above
+    for key in (CHECKSUMS_ATTR, *ROOT_ATTRS):  # the store's own bookkeeping, checked
+        ds.attrs.pop(key, None)
     if job.kind == "curves":  # its per-point arrays as stored (views.map_curves.read_curves)
         return ds
     c = job.classify.chatter_p
@@ -171,6 +186,40 @@ def open(path: str | Path) -> xr.Dataset:
     return ds
 
 
+def committed(path: str | Path) -> np.ndarray:
+    """Per tile (``ds.tile``), whether the store at ``path`` holds it committed now.
+
+    Reads the store's root record alone (and an HDF5 store's journal listing), no tile: a
+    view following a run asks this every second or so and calls ``open`` again when it
+    differs from its Dataset's ``done``. A tile committed here may still prove damaged
+    when ``open`` verifies it (then it reads as not computed, with a warning).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A Zarr store (a directory) or an HDF5 store (``.h5``, ``.hdf5``).
+
+    Returns
+    -------
+    numpy.ndarray
+        bool, one per tile.
+
+    Raises
+    ------
+    campar.errors.StoreError
+        No campar store with a root record at ``path``.
+    campar.errors.StoreDamaged
+        Its root record is damaged.
+
+    Examples
+    --------
+    >>> import campar
+    >>> ds = campar.open("results/smoke.zarr")
+    >>> fresh = (campar.committed("results/smoke.zarr") != ds.done.values.astype(bool)).any()
+    """
+    return committed_tiles(path)
+
+
 def cell_labels(kind, n, p, chatter_p: int = 7) -> np.ndarray:
     """``cell_label`` of every cell, vectorised: each distinct (kind, n, p) is labelled once.
 
@@ -200,19 +249,26 @@ def _label(kind: int, n: int, p: int, chatter_p: int) -> str:
         return f"kind {kind}"
 
 
-def _open_current(path: Path, reader) -> xr.Dataset:
+def _open_current(path: Path, reader, cells: dict, report) -> xr.Dataset:
+    """The store as xarray reads it (attributes, coordinates, encodings), its per-cell arrays
+    and per-tile flags and checksums replaced by the snapshot's, all in memory."""
     integers = {a.name: False for a in store_arrays(reader.job) if a.dtype.kind in "iu"}
     engine = "h5netcdf" if backend_name(path) == "hdf5" else "zarr"
-    ds = xr.open_dataset(path, engine=engine, mask_and_scale=integers, chunks=None)
-    if reader.journaled:
-        ds.load()
-        tiles, sums = plan_tiles(reader.job), reader.tile_checksums()[0]
-        for index, arrays in reader.journaled.items():
-            for name, values in arrays.items():
-                ds[name][tiles[index].region] = values  # positional: ([layer,] rows)
-            ds["checksum"][index] = sums[index]
-            ds["done"][index] = 1
-    return ds
+    with xr.open_dataset(path, engine=engine, mask_and_scale=integers, chunks=None) as lazy:
+        variables = {}
+        for name, values in {**cells, **_tile_variables(report)}.items():
+            old = lazy[name].variable
+            data = values.astype(old.dtype)
+            variables[name] = xr.Variable(old.dims, data, old.attrs, old.encoding)
+        return lazy.assign(variables).load()
+
+
+def _tile_variables(report) -> dict[str, np.ndarray]:
+    """``done`` and ``checksum`` as the snapshot has them: set on the tiles that verified."""
+    out = {"done": report.verified.astype(np.int8)}
+    if report.sums is not None:
+        out["checksum"] = np.where(report.verified, report.sums, 0).astype(np.uint64)
+    return out
 
 
 SHOWN_TILES = 5  # damaged tiles a warning names (with why); `campar verify` lists all
@@ -227,34 +283,7 @@ def damage_warning(path: Path, damaged: dict[int, str]) -> str:
     )
 
 
-def verified_cells(reader, report) -> dict[str, np.ndarray]:
-    """Every per-cell array: the fill, but in the tiles that verified (read tile by tile)."""
-    cells = {a.name: np.full(a.shape, a.fill, a.dtype) for a in cell_arrays(reader.job)}
-    tiles = plan_tiles(reader.job)
-    for index in np.flatnonzero(report.verified).tolist():
-        for name, values in cells.items():
-            values[tiles[index].region] = reader.read_tile(name, tiles[index])
-    return cells
-
-
-def _without_damaged(ds: xr.Dataset, reader, report) -> xr.Dataset:
-    """``ds`` with the damaged tiles as not computed: every per-cell array and the per-tile
-    flags and checksums in memory, from the tiles that verified (xarray would read the
-    damaged chunks, and a codec raise, or hand on changed values)."""
-    variables = {}
-    for name, values in verified_cells(reader, report).items():
-        old = ds[name].variable
-        variables[name] = xr.Variable(old.dims, values, old.attrs, old.encoding)
-    sums = reader.tile_checksums()[0]
-    for name, values in (("done", report.verified), ("checksum", sums)):
-        if values is not None:
-            old = ds[name].variable
-            kept = np.where(report.verified, values, 0).astype(old.dtype)
-            variables[name] = xr.Variable(old.dims, kept, old.attrs, old.encoding)
-    return ds.assign(variables)
-
-
-def _from_reader(reader, report=None) -> xr.Dataset:
+def _from_reader(reader, cells: dict, report) -> xr.Dataset:
     """An older store as the current format opens: variables and attributes from its job."""
     variables, coords = {}, []
     for a in store_arrays(reader.job):
@@ -266,13 +295,11 @@ def _from_reader(reader, report=None) -> xr.Dataset:
             data = a.values
             coords.append(a.name)
         elif a.name == "done":
-            data = reader.done.astype(a.dtype)
+            data = report.verified.astype(a.dtype)
         elif a.name == "checksum":  # none before format 3
             data = np.zeros(a.shape, a.dtype)
-        elif report is not None and report.damaged:
-            data = np.full(a.shape, a.fill, a.dtype)  # its tiles are set by _without_damaged
         else:
-            data = reader.read(a.name)
+            data = cells[a.name]
         variables[a.name] = xr.Variable(a.dims, data, attrs, encoding)
     ds = xr.Dataset(variables).set_coords(coords)
     ds.attrs = upgraded_attrs(reader.job, reader.attrs)

@@ -197,7 +197,7 @@ def curves_job(map_path, types=SEED_TYPES, *, points: int = 400, store=None):
         [[s.model_dump(mode="json") for s in t] for t in tasks],
         types=types,
         points=points,
-        store=str(store or curves_store_path(map_path)),
+        store=str(curves_store_path(map_path) if store is None else store),  # "" refused
     )
     return Job.from_dict(data, source=f"curves of {map_path}")
 

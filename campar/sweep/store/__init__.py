@@ -47,6 +47,7 @@ from ._base import Store, StoreReader
 from ._integrity import Verification, tile_checksum, verify_store
 from ._lock import StoreLock, holder_alive, lock_path
 from ._metadata import CHECKSUMS_ATTR
+from ._root import HDF5_ATTR, MARK_ATTR, RootDamaged
 from ._schema import (
     FORMAT,
     ArraySchema,
@@ -61,8 +62,11 @@ from ._schema import (
     upgraded_attrs,
 )
 
+ROOT_ATTRS = (HDF5_ATTR, MARK_ATTR)  # attributes of the root record's (``_root``)
+
 __all__ = [
     "CHECKSUMS_ATTR",
+    "ROOT_ATTRS",
     "FORMAT",
     "ArraySchema",
     "Store",
@@ -70,8 +74,12 @@ __all__ = [
     "TileWriter",
     "takes_direct_writes",
     "Verification",
+    "adopt_store",
     "backend_name",
     "cell_arrays",
+    "committed_tiles",
+    "is_store",
+    "stored_job",
     "fill_value",
     "job_differences",
     "lock_path",
@@ -175,6 +183,14 @@ def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job):
     try:
         with _READERS[backend](path, attrs, real) as reader:
             report = verify_store(reader)
+        if not report.tiles_checked:  # damaged metadata of tile arrays: rewritten first
+            for name, why in report.variables.items():
+                log.warning(
+                    "%s: variable %s is damaged (%s): rewritten from the job", path, name, why
+                )
+            backend.repair(real, job, report)
+            with _READERS[backend](path, backend.read_attrs(real), real) as reader:
+                report = verify_store(reader)
     except StoreDamaged as exc:
         if not hasattr(backend, "set_store_aside"):
             raise StoreDamaged(f"{exc}; --overwrite recomputes the store") from None
@@ -187,7 +203,7 @@ def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job):
         log.warning("%s: variable %s is damaged (%s): rewritten from the job", path, name, why)
     for index, why in sorted(report.damaged.items()):
         log.warning("%s: tile %d is damaged (%s): computed again", path, index, why)
-    if not report.clean or not report.metadata_checksums:
+    if not report.clean or not report.metadata_checksums or report.stray or report.root is None:
         backend.repair(real, job, report)
     if report.committed:
         log.info(
@@ -198,6 +214,42 @@ def _verify_for_resume(path: Path, real: Path, backend, attrs: dict, job: Job):
             len(report.damaged),
         )
     return report.verified
+
+
+def adopt_store(path: str | Path) -> Verification:
+    """Adopt a store written before root records (``_root``): under its lock, check every
+    variable against the stored job and every committed tile against its checksum, rewrite
+    the variables from the job, leave the damaged tiles pending, and write the root record of
+    the tiles that verified. Returns the check; StoreError if the store has a root record
+    already, StoreLocked if a run holds it."""
+    path = Path(path)
+    backend, real = _backend(path), real_path(path)
+    if not real.exists():
+        raise StoreError(f"no store at {path}")
+    lock = StoreLock.acquire(real)
+    try:
+        attrs = backend.read_attrs(real)
+        if attrs is None:
+            raise StoreError(f"{path} is not a campar {backend_name(path)} store")
+        check_readable(path, attrs)
+        if attrs.get("campar_store") != FORMAT:
+            raise StoreError(
+                f"{path} has store format {attrs.get('campar_store')!r}: it is read as it is "
+                f"(readability checks only); only format {FORMAT} stores are adopted"
+            )
+        backend.clean_leftovers(real, None)
+        with _READERS[backend](path, attrs, real, adopting=True) as reader:
+            if reader.root is not None:
+                raise StoreError(f"{path} has a sound root record: nothing to adopt")
+            job = reader.job
+            report = verify_store(reader)
+        report.adopting = True
+        backend.repair(real, job, report)
+        return report
+    except OSError as exc:
+        raise io_error(f"cannot adopt the store {path}", exc) from None
+    finally:
+        lock.release()
 
 
 def takes_direct_writes(path: str | Path) -> bool:
@@ -248,6 +300,38 @@ def read_store(path: str | Path) -> StoreReader:
             raise StoreError(f"{path} is not a campar {backend_name(path)} store")
         check_readable(path, attrs)
         return _READERS[backend](path, attrs, real)
+    except OSError as exc:
+        raise io_error(f"cannot read the store {path}", exc) from None
+
+
+def is_store(path: str | Path) -> bool:
+    """Whether ``path`` looks like a result store (a Zarr group, an HDF5 file), not a job file."""
+    path = Path(path)
+    if backend_name(path) == "hdf5":
+        return path.is_file()
+    return (path / "zarr.json").is_file()
+
+
+def stored_job(path: str | Path) -> Job:
+    """The job a store holds, writing into that store (``campar run STORE`` resumes it from
+    any directory: a tabulated cam's table comes from the store)."""
+    with read_store(path) as reader:
+        return reader.job.model_copy(update={"store": str(path)})
+
+
+def committed_tiles(path: str | Path) -> np.ndarray:
+    """Per tile, whether it is committed now, from the root record alone (and an HDF5
+    store's journal): no tile is read or verified, so this is cheap enough to ask every
+    second; ``campar.open`` verifies what it reads. StoreError if there is no campar store
+    with a root record at ``path``, StoreDamaged if the record is damaged."""
+    path = Path(path)
+    backend, real = _backend(path), real_path(path)
+    if not real.exists():
+        raise StoreError(f"no store at {path}")
+    try:
+        return backend.committed_now(real)
+    except RootDamaged as exc:
+        raise StoreDamaged(f"{path}: the root record is damaged ({exc})") from None
     except OSError as exc:
         raise io_error(f"cannot read the store {path}", exc) from None
 

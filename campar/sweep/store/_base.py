@@ -44,6 +44,7 @@ from ..plan import Tile, plan_tiles
 from ._integrity import describe_exception, tile_checksum
 from ._lock import StoreLock
 from ._metadata import CHECKSUMS_ATTR, GLOBAL, variable_problems
+from ._root import MARK_ATTR, Root, RootDamaged, root_problems
 from ._schema import (
     CHECKSUMS_FROM,
     FORMAT,
@@ -51,6 +52,7 @@ from ._schema import (
     check_tile_arrays,
     coordinates,
     layout_problems,
+    remember_stored_table,
     store_arrays,
 )
 
@@ -62,10 +64,18 @@ class StoreReader(ABC):
     the tiles are checked by ``_integrity.verify_store``, which reads them.
     """
 
-    def __init__(self, path: Path, attrs: dict, real: Path | None = None):
+    def __init__(
+        self, path: Path, attrs: dict, real: Path | None = None, *, adopting: bool = False
+    ):
         self.path = path  # as given, for messages
         self.real = real or path  # symbolic links resolved
         self.attrs = attrs
+        self.adopting = adopting  # a store without a root record is read, to adopt it
+        remember_stored_table(path, attrs)  # its job then reads without the table's file
+        self.root: Root | None = None  # the root record, once ``_take_root`` found it sound
+        self.root_problem: str | None = None  # why the record cannot vouch for the store
+        self.stray_flags: list[int] = []  # done flags set where the record holds tiles pending
+        self._cached: dict = {}  # the per-tile arrays, read once: the reader's snapshot
         try:
             self.job = Job.from_dict(attrs["job"], source=f"job stored in {path}")
         except (CamparError, KeyError, TypeError) as exc:
@@ -83,11 +93,55 @@ class StoreReader(ABC):
         self.coords = coordinates(self.job)
         self.array_dtypes = {a.name: a.dtype for a in cell_arrays(self.job)}
 
+    # Whether ``repair`` rewrites a damaged variable where it is, keeping the tiles (Zarr), so
+    # a check leaves the tiles until then; HDF5 rebuilds the file from the tiles that verify.
+    rewrites_variables_in_place = False
+
+    def _take_root(self, load) -> None:
+        """Take the root record ``load()`` returns (None: there is none; RootDamaged): sound,
+        or why not. A store of the current format without a record and without the mark of
+        one was written before root records: StoreError unless it is being adopted."""
+        if self.format != FORMAT:
+            return  # formats 1 and 2: read-only, checked for readability (``_integrity``)
+        try:
+            root = load()
+        except RootDamaged as exc:
+            self.root_problem = f"the root record is damaged ({exc})"
+            return
+        if root is None:
+            if self.attrs.get(MARK_ATTR):
+                self.root_problem = "the root record is missing (deleted?)"
+            elif not self.adopting:
+                raise StoreError(
+                    f"{self.path} has no root record (written by an earlier campar): nothing "
+                    "vouches for its commit flags; `campar verify --adopt "
+                    f"{self.path}` checks it against its job and adopts it (docs/restart.md)"
+                )
+            return
+        problems = root_problems(root, self.attrs, len(plan_tiles(self.job)))
+        if problems:
+            self.root_problem = "the root record disagrees with the store: " + "; ".join(problems)
+            return
+        self.root = root
+
+    def _outside_root(self) -> dict[int, int]:
+        """{tile: checksum} of tiles committed where the root record does not reach yet
+        (HDF5: the journal's entries between checkpoints)."""
+        return {}
+
+    def committed_tiles(self) -> np.ndarray:
+        """Per tile: committed in this reader's snapshot (the root record, and the journal)."""
+        committed = self.root.committed.copy()
+        committed[list(self._outside_root())] = True
+        return committed
+
     def _check_layout(self) -> None:
         """StoreDamaged unless the arrays are as the stored job says (backends call this
         once their file is open); ``array_shapes`` from then on."""
         self.array_shapes = self._shapes()
         problems = layout_problems(self.job, self.attrs, self.array_shapes)
+        if self.rewrites_variables_in_place and all(p.startswith("array ") for p in problems):
+            problems = []  # an array's shape is its metadata's: ``variable_damage``, repairable
         if problems:
             raise StoreDamaged(
                 f"{self.path}: its metadata disagrees with itself: " + "; ".join(problems)
@@ -100,20 +154,84 @@ class StoreReader(ABC):
         return self.tile_flags()[0]
 
     def tile_flags(self) -> tuple[np.ndarray, dict[int, str]]:
-        """(done per tile, {tile: why its flag is damaged}) — a damaged flag is unset."""
+        """(done per tile, {tile: why its flag is damaged}) — a damaged flag is unset. With a
+        root record: the tiles it holds committed, a flag of one of them that is not 1 is
+        damage ("commit flag lost"), and a flag set on any other tile is pending
+        (``stray_flags``)."""
+        if "flags" not in self._cached:
+            self._cached["flags"] = self._read_flags()
+        done, problems = self._cached["flags"]
+        return done.copy(), dict(problems)
+
+    def _read_flags(self) -> tuple[np.ndarray, dict[int, str]]:
         flags, problems = self._tile_values("done")
         flags = flags.astype(np.int64)  # bool in format 1, int8 from format 2 on
         for index in np.flatnonzero((flags != 0) & (flags != 1)).tolist():
             problems.setdefault(index, f"done flag holds {flags[index]}, neither 0 nor 1")
         done = flags == 1
         done[list(problems)] = False
-        return done, problems
+        if self.root is None:
+            return done, problems
+        committed = self.committed_tiles()
+        lost = {i: why for i, why in problems.items() if committed[i]}
+        for index in np.flatnonzero(committed & ~done).tolist():
+            lost.setdefault(
+                index,
+                f"commit flag lost: done holds {flags[index]} where the root record holds the "
+                "tile committed",
+            )
+        stray = (done & ~committed) | np.isin(np.arange(done.size), list(problems))
+        self.stray_flags = np.flatnonzero(stray & ~committed).tolist()
+        return committed & ~np.isin(np.arange(done.size), list(lost)), lost
 
     def tile_checksums(self) -> tuple[np.ndarray | None, dict[int, str]]:
-        """(checksum per tile, 0 none; {tile: why it cannot be read}); None before format 3."""
+        """(checksum per tile, 0 none; {tile: why it cannot be read}); None before format 3.
+        With a root record: the record's checksums (and the journal's), and a ``checksum``
+        element that differs from them is damage."""
         if (self.format or 0) < CHECKSUMS_FROM:
             return None, {}
-        return self._tile_values("checksum")
+        if "sums" not in self._cached:
+            self._cached["sums"] = self._read_sums()
+        sums, problems = self._cached["sums"]
+        return sums.copy(), dict(problems)
+
+    def _read_sums(self) -> tuple[np.ndarray, dict[int, str]]:
+        sums, problems = self._tile_values("checksum")
+        if self.root is None:
+            return sums, problems
+        expected = self.root.checksums.copy()
+        for index, checksum in self._outside_root().items():
+            expected[index] = checksum
+        wrong = {}
+        for index in np.flatnonzero(expected != 0).tolist():
+            if index in problems:
+                wrong[index] = problems[index]
+            elif int(sums[index]) != int(expected[index]):
+                wrong[index] = (
+                    f"its checksum element holds {int(sums[index]):016x}, the root record "
+                    f"{int(expected[index]):016x}"
+                )
+        return expected, wrong
+
+    def root_report(self) -> list[str]:
+        """What is wrong with the root record, or with what it vouches for outside the tiles:
+        the ``metadata_checksums`` attribute (a copy of the record's)."""
+        problems = [self.root_problem] if self.root_problem else []
+        if self.root is None:
+            return problems
+        if self.root.problem:
+            problems.append(
+                f"the root record's {self.root.problem}: the tiles committed after it read as "
+                "pending; `campar run` writes the record anew"
+            )
+        copy = self.attrs.get(CHECKSUMS_ATTR)
+        if copy != self.root.variables:
+            what = "differs from" if isinstance(copy, dict) else "cannot be read, unlike"
+            problems.append(
+                f"attribute {CHECKSUMS_ATTR} (the variables' checksums) {what} the root "
+                "record's copy; the root record's were used"
+            )
+        return problems
 
     def read(self, name: str) -> np.ndarray:
         """A per-cell array over ([direction,] second, omega[, tail]); uncomputed cells hold
@@ -161,7 +279,9 @@ class StoreReader(ABC):
         """Whether the store's variables carry checksums (a store of the current format
         written before them does not: its next run records them)."""
         stored = self.attrs.get(CHECKSUMS_ATTR)
-        return self.format != FORMAT or (isinstance(stored, dict) and GLOBAL in stored)
+        if self.root is not None or self.format != FORMAT:
+            return True
+        return isinstance(stored, dict) and GLOBAL in stored
 
     def variable_damage(self) -> dict[str, str]:
         """{variable: what changed} — coordinates, array metadata and the attributes that say
@@ -170,8 +290,13 @@ class StoreReader(ABC):
         if self.format != FORMAT:
             return {}
         arrays = store_arrays(self.job)
-        stored = self.attrs.get(CHECKSUMS_ATTR)  # unreadable: checked against the job instead
-        stored = stored if isinstance(stored, dict) else None
+        if self.root is not None:
+            stored = self.root.variables
+        elif self.adopting and not self.attrs.get(MARK_ATTR):
+            stored = None  # checksums of an earlier campar's: checked against the job instead
+        else:
+            stored = self.attrs.get(CHECKSUMS_ATTR)  # unreadable: checked against the job
+            stored = stored if isinstance(stored, dict) else None
         return variable_problems(self._describe(arrays), stored, lambda: self._fresh(arrays))
 
     @abstractmethod

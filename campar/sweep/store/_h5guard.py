@@ -38,7 +38,8 @@ import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 
-USERBLOCK = 512  # bytes at the start of the file that HDF5 leaves to the application
+from ._h5layout import USERBLOCK, build
+
 SIGNATURE = b"\x89HDF\r\n\x1a\n"  # where an HDF5 file's superblock starts
 MAGIC = b"campar-digest blake2b-16 "
 JOB = b"job "  # the second line of the seal: the job hash of the store
@@ -261,7 +262,6 @@ def _child(source: Path, into: Path | str | None) -> None:
 
     from ..job import Job
     from ..plan import plan_tiles
-    from ._hdf5 import build
     from ._integrity import describe_exception, tile_checksum
     from ._schema import cell_arrays, decode_attrs
 

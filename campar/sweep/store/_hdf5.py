@@ -43,7 +43,6 @@ attributes, which keeps that structure.
 
 import contextlib
 import errno
-import json
 import logging
 import os
 import re
@@ -55,13 +54,12 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ...errors import StoreDamaged
+from ...errors import StoreDamaged, StoreError
 from ..job import Job
 from ..plan import Tile, plan_tiles
 from ._base import Store, StoreReader, tile_values
 from ._h5guard import (
     FOREIGN,
-    USERBLOCK,
     open_checked,
     release,
     rescue,
@@ -71,6 +69,7 @@ from ._h5guard import (
     sealed_job,
     zeroed_start,
 )
+from ._h5layout import build, describe_file, file_root, fresh_variables
 from ._integrity import Verification, describe_exception
 from ._journal import (  # noqa: F401 (re-exported: the backend's journal)
     ENTRY,
@@ -85,15 +84,12 @@ from ._journal import (  # noqa: F401 (re-exported: the backend's journal)
     write_entry,
 )
 from ._lock import StoreLock
-from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests, global_document
+from ._metadata import CHECKSUMS_ATTR, VOLATILE_ATTRS
+from ._root import HDF5_ATTR
 from ._schema import (
     FORMAT,
-    TILE_ARRAYS,
-    ArraySchema,
     decode_attrs,
-    initial_attrs,
     run_attrs,
-    store_arrays,
 )
 
 log = logging.getLogger("campar.sweep.store")
@@ -161,16 +157,6 @@ def set_store_aside(path: Path) -> Path:
     return aside
 
 
-def write_attrs(node, attrs: dict, dtype: np.dtype | None = None) -> None:
-    """HDF5 attributes: text as UTF-8 strings, numbers typed as netCDF wants them."""
-    for key, value in attrs.items():
-        if key == "_FillValue" or isinstance(value, np.ndarray):
-            value = np.asarray(value, dtype)  # CF: the variable's own type
-        elif isinstance(value, bool | int):
-            value = np.int32(value)
-        node.attrs[key] = value
-
-
 def create(path: Path, job: Job) -> None:
     """Write the whole empty store aside, then rename it to ``path`` (nothing is left of a
     creation that fails)."""
@@ -183,115 +169,6 @@ def create(path: Path, job: Job) -> None:
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
-
-
-def build(tmp: Path, job: Job) -> None:
-    """A new empty store file of ``job`` at ``tmp``, with room for its seal (not sealed).
-    Built in memory and written by Python: HDF5 never meets a full disk."""
-    memory = dict(driver="core", backing_store=False, userblock_size=USERBLOCK)
-    with h5py.File(tmp.name, "w", track_order=True, **memory) as f:
-        _layout(f, job)
-        f.flush()
-        image = f.id.get_file_image()  # the HDF5 part: the user block is the caller's
-    with open(tmp, "wb") as fh:
-        fh.write(bytes(USERBLOCK))
-        fh.write(image)
-
-
-def _layout(f: h5py.File, job: Job) -> None:
-    arrays = store_arrays(job)
-    write_attrs(f, initial_attrs(job))
-    dims = [a.name for a in arrays if a.is_dimension]
-    for a in arrays:
-        data = _create_dataset(f, a)
-        if a.is_dimension:
-            data.make_scale(a.name)
-            data.attrs["_Netcdf4Dimid"] = np.int32(dims.index(a.name))
-        else:
-            for axis, dim in enumerate(a.dims):
-                data.dims[axis].attach_scale(f[dim])
-        write_attrs(data, a.attrs, a.dtype)
-    f.attrs[CHECKSUMS_ATTR] = json.dumps(digests(describe_file(f, arrays)))
-
-
-# Attributes HDF5 keeps for dimension scales: references to other datasets, which change
-# with the file's layout, not with what the values mean.
-SCALE_LINKS = ("DIMENSION_LIST", "REFERENCE_LIST")
-
-
-def describe_file(f: h5py.File, arrays) -> dict:
-    """{name: ``_metadata.Variable``, or why it cannot be read} of the variables ``arrays``
-    of an open store file: each dataset's type, shape, chunks, fill value, filters and
-    attributes, and a coordinate's values."""
-    attrs = {key: _plain(value) for key, value in f.attrs.items()}
-    found: dict = {GLOBAL: Variable({"attributes": global_document(attrs)})}
-    for a in arrays:
-        try:
-            data = f[a.name]
-            document = {
-                "dtype": data.dtype.str,
-                "shape": list(data.shape),
-                "chunks": list(data.chunks) if data.chunks else None,
-                "fillvalue": _plain(data.fillvalue),
-                "compression": data.compression,
-                "compression_opts": _plain(data.compression_opts),
-                "shuffle": data.shuffle,
-                "scaleoffset": data.scaleoffset,
-                "fletcher32": data.fletcher32,
-                "attrs": {
-                    key: _plain(value)
-                    for key, value in data.attrs.items()
-                    if key not in SCALE_LINKS
-                },
-            }
-            values = np.asarray(data[()]) if a.values is not None else None
-        except KeyError:
-            found[a.name] = f"dataset {a.name} is missing"
-            continue
-        except Exception as exc:  # h5py raises many kinds
-            found[a.name] = f"dataset {a.name} unreadable ({describe_exception(exc)})"
-            continue
-        found[a.name] = Variable({a.name: document}, values)
-    return found
-
-
-def _plain(value):
-    """An attribute or property as a JSON value (text from bytes, lists from arrays)."""
-    if isinstance(value, bytes):
-        return value.decode(errors="replace")
-    if isinstance(value, np.ndarray):
-        return [_plain(v) for v in value.tolist()]
-    if isinstance(value, np.generic):
-        return _plain(value.item())
-    if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
-    return value if isinstance(value, str | int | float | bool | type(None)) else repr(value)
-
-
-def fresh_variables(job: Job, arrays) -> dict:
-    """The variables of a store file of ``job`` built afresh (in memory)."""
-    memory = dict(driver="core", backing_store=False, userblock_size=USERBLOCK)
-    with h5py.File("expected.h5", "w", track_order=True, **memory) as f:
-        _layout(f, job)
-        return describe_file(f, arrays)
-
-
-def _create_dataset(f: h5py.File, a: ArraySchema) -> h5py.Dataset:
-    if a.dtype.kind == "U":
-        return f.create_dataset(
-            a.name, data=a.values.astype(object), dtype=h5py.string_dtype(), track_order=True
-        )
-    if a.values is not None:
-        return f.create_dataset(a.name, data=a.values, dtype=a.dtype, track_order=True)
-    return f.create_dataset(
-        a.name,
-        shape=a.shape,
-        dtype=a.dtype,
-        chunks=a.chunks,
-        fillvalue=a.fill,
-        compression=None if a.name in TILE_ARRAYS else "gzip",
-        track_order=True,
-    )
 
 
 def remove(path: Path) -> None:
@@ -319,22 +196,50 @@ def repair(path: Path, job: Job, report: Verification) -> None:
         build(tmp, job)
         with open(tmp, "ab") as fh:
             reserve(fh, _room(path, journal_entries(path).values()), tmp)
-        with Hdf5Reader(path, None, path) as old, h5py.File(tmp, "r+") as new:
+        with Hdf5Reader(path, None, path, adopting=True) as old, h5py.File(tmp, "r+") as new:
             for key, value in old._file.attrs.items():  # date created, history, run log
-                if key in VOLATILE_ATTRS and key != CHECKSUMS_ATTR:  # the rest: the job's
-                    new.attrs[key] = value
-            sums = old.tile_checksums()[0]
+                if key in VOLATILE_ATTRS and key not in (CHECKSUMS_ATTR, HDF5_ATTR):
+                    set_in_place(new.attrs, key, value)  # the rest: the job's
+            sums = report.sums if report.sums is not None else old.tile_checksums()[0]
             for index in keep:
                 tile = old._tiles[index]
                 for name in old.names:
                     new[name][tile.region] = old.read_tile(name, tile)
                 new["checksum"][index] = sums[index]
                 new["done"][index] = 1
+            root = file_root(new.attrs).with_sums(np.where(report.verified, sums, 0))
+            new.attrs.modify(HDF5_ATTR, root.encode())
     for index, entry in journal_entries(path).items():
         if index in report.damaged:
             set_aside(entry, report.damaged[index])
         else:
             entry.unlink(missing_ok=True)  # in the new file now
+
+
+def set_in_place(attrs, key: str, value) -> None:
+    """Set an attribute where it is in the file's order of attributes (``attrs[key] = …``
+    deletes it and adds it last), or add it last if the file has none of that name."""
+    if key in attrs:
+        attrs.modify(key, value)
+    else:
+        attrs[key] = value
+
+
+def committed_now(path: Path) -> np.ndarray:
+    """Per tile, committed now: in the file's root record or in the journal
+    (``committed_tiles``). The journal is listed first: an entry a checkpoint folds into the
+    file meanwhile is then in the file."""
+    journaled = list(journal_entries(path))
+    f, state = open_checked(path)
+    if f is None:
+        raise StoreDamaged(f"{path} is damaged ({state}): `campar verify` says more")
+    with f:
+        root = file_root(f.attrs)
+    if root is None:
+        raise StoreError(f"{path} has no root record (see `campar verify --adopt`)")
+    committed = root.committed.copy()
+    committed[[i for i in journaled if i < committed.size]] = True
+    return committed
 
 
 def glob_escape(name: str) -> str:
@@ -380,10 +285,17 @@ def apply_journal(path: Path, job: Job, runs: list[dict] | None = None) -> list[
                     for name, values in arrays.items():
                         f[name][tiles[index].region] = values
                     applied.append(entry)
-            for entry in applied:  # the flags last
+            for entry in applied:  # the flags, then the root record
                 f["done"][int(ENTRY.match(entry.name).group(1))] = 1
+            root = file_root(f.attrs)
+            sums = root.checksums.copy()
+            for entry in applied:
+                index = int(ENTRY.match(entry.name).group(1))
+                sums[index] = f["checksum"][index]
+            f.attrs.modify(HDF5_ATTR, root.with_sums(sums).encode())
             if runs is not None:
-                write_attrs(f, run_attrs(job, decode_attrs(f.attrs), runs))
+                for key, value in run_attrs(job, decode_attrs(f.attrs), runs).items():
+                    set_in_place(f.attrs, key, value)
     for entry in applied:
         entry.unlink(missing_ok=True)
     return damaged
@@ -454,7 +366,7 @@ class Hdf5Store(Store):
 
 
 class Hdf5Reader(StoreReader):
-    def __init__(self, path: Path, attrs: dict | None, real: Path):
+    def __init__(self, path: Path, attrs: dict | None, real: Path, *, adopting: bool = False):
         del attrs  # re-read below, after the journal: the file may have been replaced since
         # Journal first, file second: an entry a checkpoint removes meanwhile is then in the file.
         raw = {}
@@ -470,8 +382,9 @@ class Hdf5Reader(StoreReader):
             read_attrs(real)  # StoreDamaged if it is a damaged HDF5 file
             raise StoreDamaged(f"{path} cannot be opened ({describe_exception(exc)})") from None
         try:
-            super().__init__(path, decode_attrs(self._file.attrs), real)
+            super().__init__(path, decode_attrs(self._file.attrs), real, adopting=adopting)
             self._check_layout()
+            self._take_root(lambda: file_root(self._file.attrs))
         except BaseException:
             self.close()
             raise
@@ -529,6 +442,9 @@ class Hdf5Reader(StoreReader):
     @property
     def journaled(self) -> dict[int, dict[str, np.ndarray]]:
         return dict(self._journal)
+
+    def _outside_root(self) -> dict[int, int]:
+        return {index: int(self._sums.get(index, 0)) for index in self._journal}
 
     @property
     def journal_problems(self) -> dict[int, str]:

@@ -72,6 +72,16 @@ class Verification:
     variables: dict[str, str] = field(default_factory=dict)  # variable → what changed in it
     checksums: bool = True  # the format carries checksums (else: readability only)
     metadata_checksums: bool = True  # the variables carry checksums (``_metadata``)
+    root: object = None  # the sound root record the check went by (``_root.Root``), or None
+    sums: np.ndarray | None = None  # per tile, the checksum the tile was verified against
+    stray: list[int] = field(default_factory=list)  # flags set on pending tiles
+    notes: list[str] = field(default_factory=list)  # worth saying, not damage
+    adopting: bool = False  # a check to adopt a store without a root record
+    tiles_checked: bool = True  # False: a tile array's metadata is damaged (see verify_store)
+
+    @property
+    def root_digest(self) -> str | None:
+        return None if self.root is None else self.root.digest
 
     @property
     def verified(self) -> np.ndarray:
@@ -120,11 +130,24 @@ def verify_store(reader, visit: Callable[[TileCheck], None] | None = None) -> Ve
     report.problems += reader.metadata_problems()
     report.variables = reader.variable_damage()
     report.metadata_checksums = reader.metadata_checksums
+    report.root, report.adopting = reader.root, reader.adopting
     if CHECKSUMS_ATTR in reader.attrs and not report.metadata_checksums:
         report.problems.append(
             f"the variables' checksums (attribute {CHECKSUMS_ATTR}) cannot be read: every "
             "variable was checked against the stored job instead; `campar run` records them"
         )
+    unsure = [n for n in report.variables if n in reader.names or n in ("done", "checksum")]
+    if unsure and reader.rewrites_variables_in_place:
+        # Tiles read through damaged metadata (another data type, codec or chunk shape) would
+        # all fail their checksums, and a resume would recompute them all: the metadata is
+        # rewritten from the job first, then every tile checked (``open_store``).
+        report.tiles_checked = False
+        report.problems.append(
+            f"tiles not checked: the metadata of {', '.join(unsure)} is damaged; `campar run` "
+            "rewrites it from the job, then checks every tile"
+        )
+        report.root = reader.root
+        return report
     for check in check_tiles(reader):
         report.committed.append(check.tile.index)
         if check.problem:
@@ -136,6 +159,15 @@ def verify_store(reader, visit: Callable[[TileCheck], None] | None = None) -> Ve
             report.committed.append(index)
             report.damaged[index] = why
     report.committed.sort()
+    report.sums = reader.tile_checksums()[0]
+    report.problems += reader.root_report()
+    report.stray = list(reader.stray_flags)
+    if report.stray:
+        shown = ", ".join(map(str, report.stray[:8])) + (", …" if len(report.stray) > 8 else "")
+        report.notes.append(
+            f"done flag set on tiles {shown}, which the root record holds pending: a commit "
+            "under way, or one a kill interrupted; pending (`campar run` clears the flags)"
+        )
     return report
 
 

@@ -36,7 +36,16 @@ DIGEST_BYTES = 8
 # (the job, the model's settings, the format), not those a run appends to or that say when
 # and by which versions it was made.
 GLOBAL = "(global attributes)"
-VOLATILE_ATTRS = ("runs", "history", "date_created", "campar_version", "versions", CHECKSUMS_ATTR)
+# The root record (``_root``) of an HDF5 store is an attribute too: it vouches for the rest.
+VOLATILE_ATTRS = (
+    "runs",
+    "history",
+    "date_created",
+    "campar_version",
+    "versions",
+    CHECKSUMS_ATTR,
+    "campar_root",
+)
 
 
 def global_document(attrs: dict) -> dict:

@@ -27,12 +27,14 @@ import numpy as np
 
 from ... import __version__
 from ...core.version import KERNEL_VERSION
-from ...errors import StoreError, StoreMismatch
+from ...errors import StoreDamaged, StoreError, StoreMismatch
+from ...model.cam_table import read_table, remember_table
 from ..arrays import COMPONENTS, PARTS, TAIL_DIMS, array_names, array_spec
 from ..job import DIRECTIONS, Job, job_digest
 from ..plan import Tile, plan_tiles
 from ._cf import cell_attrs, checksum_attrs, coordinate_attrs, done_attrs, global_attrs, history
 from ._metadata import CHECKSUMS_ATTR
+from ._root import MARK_ATTR
 
 # Bumped when the layout changes in a way old readers cannot follow. 1: no CF
 # metadata, tail dimension "var" unlabelled, ``done`` bool, Zarr attributes as
@@ -205,11 +207,39 @@ def initial_attrs(job: Job) -> dict:
     return {
         **global_attrs(job, utc_now()),
         "campar_store": FORMAT,
+        MARK_ATTR: 1,
         "job": json.dumps(job.to_dict()),
         "job_hash": job.digest(),
+        **table_attrs(job),
         "versions": json.dumps(versions()),
         "runs": "[]",
     }
+
+
+TABLE_ATTR = "cam_table"  # a tabulated cam's table, its file's text (under the checksums)
+
+
+def table_attrs(job: Job) -> dict:
+    """A tabulated cam's table, kept in the store: the store is read, verified, plotted and
+    resumed without the file (``cam_table.remember_table``); {} for a cam of motion laws."""
+    cam = job.model.cam
+    if cam.table is None:
+        return {}
+    return {TABLE_ATTR: read_table(cam.table, cam.table_sha256).text}
+
+
+def remember_stored_table(path, attrs: dict) -> None:
+    """Make the table a store keeps known by its digest, so that its stored job reads (and
+    computes) as it did wherever the file is; StoreDamaged if the kept table is damaged."""
+    text = attrs.get(TABLE_ATTR)
+    if text is None:
+        return
+    try:
+        if not isinstance(text, str):
+            raise ValueError("it is not text")
+        remember_table(text, f"the cam table kept in {path}")
+    except ValueError as exc:
+        raise StoreDamaged(f"{path} is damaged: the cam table it keeps is ({exc})") from None
 
 
 def upgraded_attrs(job: Job, attrs: dict) -> dict:
@@ -364,6 +394,13 @@ def check_same_job(path, attrs: dict, job: Job) -> None:
     if attrs.get("job_hash") == job.digest():
         return
     diffs = job_differences(attrs.get("job", {}), job) or ["(the job hashes differ)"]
+    if len(diffs) == 1 and diffs[0].startswith("model.cam.table_sha256:"):
+        raise StoreMismatch(
+            f"{path}: the cam table {job.model.cam.table} has changed since this store was "
+            f"computed ({diffs[0].split(': ', 1)[1]}); restore the table the store was "
+            "computed with (the store keeps a copy: attribute cam_table), or run into "
+            "another --store path"
+        )
     raise StoreMismatch(
         f"{path} holds results of a different job:\n  "
         + "\n  ".join(diffs)

@@ -26,6 +26,7 @@ import re
 import shutil
 import struct
 import tempfile
+import uuid
 import warnings
 from pathlib import Path
 
@@ -35,7 +36,7 @@ from zarr.codecs import Crc32cCodec, ZstdCodec
 from zarr.core.sync import sync
 from zarr.errors import ZarrUserWarning
 
-from ...errors import StoreDamaged
+from ...errors import StoreDamaged, StoreError
 from ..job import Job
 from ..plan import Tile, plan_tiles
 from ._base import Store, StoreReader, tile_values
@@ -43,6 +44,7 @@ from ._chunks import DirectChunk
 from ._integrity import Verification, describe_exception
 from ._lock import StoreLock
 from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests, global_document
+from ._root import Root, RootLog, new_root, read_zarr_root, write_zarr_root
 from ._schema import (
     TILE_ARRAYS,
     cell_arrays,
@@ -58,7 +60,9 @@ PARTIAL = re.compile(r"\.[0-9a-f]{32}\.partial$")
 
 def read_attrs(path: Path) -> dict | None:
     """Attributes of the campar store at ``path``, or None if it is none; StoreDamaged if it
-    has a campar store's layout but its metadata cannot be read."""
+    has a campar store's layout but its metadata cannot be read. Read from the group's
+    zarr.json as JSON, not through zarr: an array's damaged metadata in the consolidated
+    copy (a data type its fill value does not fit) must not hide which job the store holds."""
     if not (path / "zarr.json").is_file():
         if (path / "done").is_dir() and (path / "checksum").is_dir():
             raise StoreDamaged(
@@ -67,11 +71,14 @@ def read_attrs(path: Path) -> dict | None:
             )
         return None
     try:
-        attrs = zarr.open_group(path, mode="r").attrs.asdict()
+        document = json.loads((path / "zarr.json").read_bytes())
+        attrs = document["attributes"]
+        if not isinstance(attrs, dict):
+            raise TypeError("its attributes are not an object")
         return decode_attrs(attrs) if "job_hash" in attrs else None
     except PermissionError:
         raise
-    except (OSError, ValueError, TypeError) as exc:  # JSON errors are ValueErrors
+    except (OSError, ValueError, TypeError, KeyError) as exc:  # JSON errors are ValueErrors
         if (path / "done").is_dir():
             raise StoreDamaged(
                 f"{path} has a campar store's layout but its metadata (zarr.json) cannot be "
@@ -129,19 +136,23 @@ def _build(tmp: Path, job: Job, separator: str | None = None) -> None:
         )
         if a.values is not None:
             array[...] = a.values
-    record_checksums(tmp, arrays)
+    variables = record_checksums(tmp, arrays)
+    write_zarr_root(tmp, new_root(initial_attrs(job), variables, len(plan_tiles(job))))
 
 
-def record_checksums(path: Path, arrays) -> None:
+def record_checksums(path: Path, arrays) -> dict[str, str]:
     """Record the checksums of the variables as their own documents hold them
-    (``_metadata``), then consolidate every document into the store's zarr.json."""
+    (``_metadata``), then consolidate every document into the store's zarr.json; returns
+    them (what the root record holds)."""
     group = zarr.open_group(path, mode="r+", use_consolidated=False)
     found = describe_variables(path, arrays, group, consolidated=False)
-    group.attrs[CHECKSUMS_ATTR] = json.dumps(digests(found))
+    recorded = digests(found)
+    group.attrs[CHECKSUMS_ATTR] = json.dumps(recorded)
     with warnings.catch_warnings():
         # "consolidated metadata is not part of the v3 spec": xarray reads it, and we want that.
         warnings.simplefilter("ignore", ZarrUserWarning)
         zarr.consolidate_metadata(path)
+    return recorded
 
 
 # Chunk files named c.<i>.<j> beside the array's zarr.json, not c/<i>/<j>: a tile's first
@@ -149,6 +160,7 @@ def record_checksums(path: Path, arrays) -> None:
 # lanes (docs/scaling.md). Readers follow the metadata.
 CHUNK_KEYS = {"name": "default", "separator": "."}
 CONSOLIDATED = "zarr.json (consolidated)"  # where campar and xarray read a variable's metadata
+GROUP_KEYS = ("zarr_format", "node_type")  # the group's own, under the global checksum
 
 
 def describe_variables(path: Path, arrays, group, consolidated: bool = True) -> dict:
@@ -159,7 +171,8 @@ def describe_variables(path: Path, arrays, group, consolidated: bool = True) -> 
     found: dict = {GLOBAL: "the store's zarr.json cannot be read"}
     try:
         document = json.loads((path / "zarr.json").read_bytes())
-        found[GLOBAL] = Variable({"zarr.json": global_document(document["attributes"])})
+        own = {f"(zarr.json) {key}": document.get(key) for key in GROUP_KEYS}
+        found[GLOBAL] = Variable({"zarr.json": {**global_document(document["attributes"]), **own}})
         if consolidated:
             copies = document["consolidated_metadata"]["metadata"]
     except (OSError, ValueError, KeyError, TypeError):
@@ -222,17 +235,15 @@ def chunk_separator(path: Path, job: Job) -> str:
     return "/" if any((path / a.name / "c").is_dir() for a in cell_arrays(job)) else "."
 
 
-def repair_variables(path: Path, job: Job, names) -> None:
+def repair_variables(path: Path, job: Job, names) -> dict[str, str]:
     """Rewrite the variables ``names`` from the job — metadata documents, and coordinates'
     values — each file written aside and renamed into place, then record the checksums and
     consolidate. The cells' chunks are left as they are (their tiles verify on their own)."""
     arrays = store_arrays(job)
+    if not names:
+        return record_checksums(path, arrays)
     if GLOBAL in names:  # what the store holds, from the job; what its runs wrote is kept
-        group = zarr.open_group(path, mode="r+", use_consolidated=False)
-        wanted = {k: v for k, v in initial_attrs(job).items() if k not in VOLATILE_ATTRS}
-        for key in [k for k in group.attrs if k not in wanted and k not in VOLATILE_ATTRS]:
-            del group.attrs[key]
-        group.attrs.update(wanted)
+        _rewrite_group(path, job)
     fresh = Path(tempfile.mkdtemp(prefix=f"{path.name}.creating-", dir=path.parent))
     try:
         _build(fresh / "store", job, chunk_separator(path, job))
@@ -251,7 +262,32 @@ def repair_variables(path: Path, job: Job, names) -> None:
             os.replace(source / "zarr.json", target / "zarr.json")
     finally:
         shutil.rmtree(fresh, ignore_errors=True)
-    record_checksums(path, arrays)
+    return record_checksums(path, arrays)
+
+
+def committed_now(path: Path) -> np.ndarray:
+    """Per tile, committed in the store's root record now (``committed_tiles``)."""
+    root = read_zarr_root(path)
+    if root is None:
+        raise StoreError(f"{path} has no root record (see `campar verify --adopt`)")
+    return root.committed
+
+
+def _rewrite_group(path: Path, job: Job) -> None:
+    """The group's zarr.json as a new store of ``job`` has it — its own keys (the Zarr
+    format) and the attributes that say what it holds — keeping what its runs wrote
+    (``VOLATILE_ATTRS``); written aside and renamed (consolidated again afterwards)."""
+    target = path / "zarr.json"
+    try:
+        document = json.loads(target.read_bytes())
+        kept = {k: v for k, v in document.get("attributes", {}).items() if k in VOLATILE_ATTRS}
+    except (OSError, ValueError, AttributeError):
+        kept = {}
+    wanted = {k: v for k, v in initial_attrs(job).items() if k not in VOLATILE_ATTRS}
+    document = {"zarr_format": 3, "node_type": "group", "attributes": {**wanted, **kept}}
+    aside = path / f"zarr.json.{uuid.uuid4().hex}.partial"
+    aside.write_text(json.dumps(document))
+    os.replace(aside, target)
 
 
 def _codecs(name: str) -> list:
@@ -291,20 +327,31 @@ def clean_leftovers(path: Path, job: Job) -> list[Path]:
 
 
 def repair(path: Path, job: Job, report: Verification) -> None:
-    """Rewrite the damaged variables from the job (and record the checksums of a store
-    without them); then make the damaged tiles pending: unset the flag, then delete the
-    checksum's and the arrays' chunks (read as the fill from then on)."""
-    if report.variables or not report.metadata_checksums:
-        repair_variables(path, job, report.variables)
+    """Rewrite the damaged variables from the job (every one's metadata, and the group's,
+    for a store being adopted); make the damaged tiles and the flags set on pending tiles
+    pending: unset the flag, then delete the checksum's and the arrays' chunks (read as the
+    fill from then on); then write the root record of what verified."""
+    names = set(report.variables) | ({GLOBAL} if report.adopting else set())
+    variables = repair_variables(path, job, names)
     group = zarr.open_group(path, mode="r+")
     tiles = plan_tiles(job)
-    for index in sorted(report.damaged):
+    for index in sorted(set(report.damaged) | set(report.stray)):
         for name in TILE_ARRAYS[::-1]:  # the flag first
             key = group[name].metadata.encode_chunk_key((index,))
             group.store.delete_sync(f"{name}/{key}")
         for a in cell_arrays(job):
             key = group[a.name].metadata.encode_chunk_key(chunk_coords(job, tiles[index], a))
             group.store.delete_sync(f"{a.name}/{key}")
+    attrs = {"campar_store": report_format(group), "job_hash": job.digest()}
+    if report.tiles_checked:
+        sums = np.where(report.verified, report.sums, 0).astype(np.uint64)
+    else:  # the tiles are checked next, against the record as it stands
+        sums = report.root.checksums if report.root is not None else np.zeros(len(tiles), "u8")
+    write_zarr_root(path, new_root(attrs, variables, len(tiles)).with_sums(sums))
+
+
+def report_format(group) -> int:
+    return int(group.attrs["campar_store"])
 
 
 class ZarrTileArrays:
@@ -361,6 +408,7 @@ class ZarrStore(Store):
             for a in (self._checksums, self._flags)
         }
         self._done = np.array(done, bool)
+        self._root = RootLog(real, read_zarr_root(real))  # sound: ``open_store`` checked it
         self._clear(np.flatnonzero(~self._done))
 
     def _clear(self, tiles) -> None:
@@ -388,6 +436,7 @@ class ZarrStore(Store):
         try:
             self._set_each(self._checksums, [(t.index, np.uint64(v)) for t, v in written])
             self._set_each(self._flags, [(t.index, np.int8(1)) for t, _ in written])
+            self._root.commit(written)  # the commit: readers see the tiles from now on
         except OSError:
             clean_leftovers(self.real, self.job)
             raise
@@ -407,7 +456,7 @@ class ZarrStore(Store):
             raise
 
     def _close(self) -> None:
-        pass  # every write is already a whole file on disk
+        self._root.fold()  # every other write is already a whole file on disk
 
 
 def write_chunks(chunks) -> None:
@@ -434,17 +483,40 @@ async def _all_at_once(writes) -> None:
 
 
 class ZarrReader(StoreReader):
-    def __init__(self, path: Path, attrs: dict, real: Path):
-        self._group = zarr.open_group(real, mode="r")
-        super().__init__(path, attrs, real)
+    rewrites_variables_in_place = True
+
+    def __init__(self, path: Path, attrs: dict, real: Path, *, adopting: bool = False):
+        # The root record first: everything it holds committed was written before it (the
+        # reader's snapshot); tiles committed after it read as pending.
+        try:
+            root, damaged = read_zarr_root(real), None
+        except ValueError as exc:  # RootDamaged
+            root, damaged = None, exc
+        self._group = _open_group(path, real)
+        super().__init__(path, attrs, real, adopting=adopting)
         self._check_layout()
+        self._take_root(lambda: _given(root, damaged))
 
     def _shapes(self) -> dict[str, tuple]:
-        return {name: tuple(array.shape) for name, array in self._group.arrays()}
+        """Each array's shape as its own zarr.json says (read as JSON: an array whose
+        metadata zarr cannot parse still has a shape, and ``variable_damage`` says what)."""
+        shapes = {}
+        for a in store_arrays(self.job):
+            try:
+                shape = json.loads((self.real / a.name / "zarr.json").read_bytes())["shape"]
+                shapes[a.name] = tuple(int(n) for n in shape)
+            except (OSError, ValueError, KeyError, TypeError):
+                continue  # missing, or damaged: ``variable_damage`` names it
+        return shapes
 
     def _tile_values(self, name: str) -> tuple[np.ndarray, dict[int, str]]:
-        array = self._group[name]
-        return tile_values(array.__getitem__, len(plan_tiles(self.job)), array.dtype, name)
+        n_tiles = len(plan_tiles(self.job))
+        try:
+            array = self._group[name]
+        except Exception as exc:  # zarr raises many kinds on damaged metadata
+            why = f"{name} unreadable ({describe_exception(exc)})"
+            return np.zeros(n_tiles, np.uint64), dict.fromkeys(range(n_tiles), why)
+        return tile_values(array.__getitem__, n_tiles, array.dtype, name)
 
     def _read_rows(self, name: str, rows: slice, layer: int | None) -> np.ndarray:
         return self._group[name][self.selection(rows, layer)]
@@ -457,3 +529,23 @@ class ZarrReader(StoreReader):
 
     def close(self) -> None:
         pass  # zarr holds no open files between reads
+
+
+def _open_group(path: Path, real: Path):
+    """The store's group through its consolidated metadata, or through each array's own
+    if that copy is damaged (``variable_damage`` then says how); StoreDamaged if neither."""
+    for consolidated in (None, False):
+        try:
+            return zarr.open_group(real, mode="r", use_consolidated=consolidated)
+        except Exception as exc:  # zarr raises many kinds on damaged metadata
+            failure = exc
+    raise StoreDamaged(
+        f"{path}: its group metadata cannot be read ({describe_exception(failure)}); move it "
+        "away and run again"
+    )
+
+
+def _given(root: Root | None, damaged: Exception | None) -> Root | None:
+    if damaged is not None:
+        raise damaged
+    return root

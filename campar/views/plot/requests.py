@@ -2,6 +2,7 @@
 cannot be drawn as asked. Cheap to import (no matplotlib): the CLI names the views with it."""
 
 import argparse
+import math
 
 from ...errors import CamparError
 
@@ -36,6 +37,11 @@ def parse_range(text: str) -> tuple[float, float]:
     try:
         if len(parts) != 2:
             raise ValueError
-        return float(parts[0]), float(parts[1])
+        low, high = float(parts[0]), float(parts[1])
+        if not (math.isfinite(low) and math.isfinite(high)):
+            raise ValueError
+        return low, high
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected A:B with two numbers, got {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"expected A:B with two finite numbers, got {text!r}"
+        ) from None
