@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 
 from campar.core import analysis as A
 from campar.core.codes import CHAOTIC, QUASIPERIODIC, UNCONVERGED
+from campar.core.hermite import quintic_extremum
 from campar.core.jit import through_numba
 
 
@@ -133,7 +134,7 @@ def test_quintic_extremum_matches_a_sampled_quintic():
         dq, ddq = q.deriv(), q.deriv(2)
         ends = (q(0), dq(0), ddq(0), q(1), dq(1), ddq(1))
         for want_min in (True, False):
-            t, value = through_numba(A.quintic_extremum)(*ends, want_min)
+            t, value = through_numba(quintic_extremum)(*ends, want_min)
             if t <= 0.0:
                 continue  # no interior extremum of that kind in the cubic through the ends
             # a true local extremum of the quintic (not just a value of it), located to 1e-9
@@ -166,17 +167,6 @@ def test_eig2_matches_numpy(entries):
         tol += 4 * np.sqrt(np.finfo(float).eps) * scale
     np.testing.assert_allclose(ours, ref, atol=tol)
     assert abs(complex(re0, im0)) >= abs(complex(re1, im1)) - 1e-12
-
-
-def test_cubic_extremes_bracket_a_sampled_cubic():
-    g0, d0, g1, d1 = 0.1, -1.0, 0.3, 0.5
-    th = np.linspace(0, 1, 10001)
-    h00, h10 = 2 * th**3 - 3 * th**2 + 1, th**3 - 2 * th**2 + th
-    h01, h11 = -2 * th**3 + 3 * th**2, th**3 - th**2
-    g = h00 * g0 + h10 * d0 + h01 * g1 + h11 * d1
-    lo, hi = through_numba(A.cubic_extremes)(g0, d0, g1, d1)
-    assert lo == pytest.approx(g.min(), abs=1e-7)
-    assert hi == pytest.approx(g.max(), abs=1e-7)
 
 
 def test_nonperiodic_kind_thresholds():

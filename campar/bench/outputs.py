@@ -175,8 +175,8 @@ def run(args) -> int:
         f"\nvariational equations (6 instead of 2): {DEFAULT_TRANSIENT.max_revolutions} fixed "
         f"revolutions per cell, all plain "
         f"{plain:.2f} CPU s, all variational {variational:.2f} CPU s (× {variational / plain:.2f})"
-        "; converged mode integrates them in every revolution, for labels only too (kernel."
-        "transient_converged), fixed mode in its read window only (kernel.transient_fixed)"
+        "; converged mode integrates them in every revolution, for labels only too (transient."
+        "transient_converged), fixed mode in its read window only (transient.transient_fixed)"
     )
     print(f"load average at the end: {machine_line().rsplit('load average ', 1)[1]}")
     return 0

@@ -267,6 +267,8 @@ def integrate(
     with_divergence=False,
     max_step=np.inf,
     mode_time=None,
+    pieces=None,
+    impact=None,
 ):
     """Integrate from (y, y') at θ = 0 over whole revolutions.
 
@@ -276,11 +278,14 @@ def integrate(
 
     Returns (final state, list of (t, kind) events with kind in {"impact",
     "detachment", "force zero", "force resumes"}, ∫ div f dt if asked). A list
-    ``mode_time`` of three numbers gets the time spent FREE, PUSH and SLACK added.
+    ``mode_time`` of three numbers gets the time spent FREE, PUSH and SLACK added; a list
+    ``pieces`` gets (dense solution, t from, t to, mode, θ of the phase, impact velocity)
+    of every piece integrated. ``impact``: a restitution law's impact velocity at the start
+    (default: the floor, as before any impact).
     """
     w = model.omega
     bounds = model.bounds
-    model.impact = model.floor  # no impact yet
+    model.impact = model.floor if impact is None else impact  # the floor: no impact yet
     x = np.array([x0[0], x0[1], 0.0] if with_divergence else list(x0[:2]), dtype=float)
     events = []
     t = 0.0
@@ -303,7 +308,13 @@ def integrate(
                     atol=atol,
                     max_step=max_step,
                     events=model.events_of(mode, theta_mid),
+                    dense_output=pieces is not None,
                 )
+                if pieces is not None:
+                    t_to = t_end
+                    if sol.status == 1:
+                        t_to = min(float(te[0]) for te in sol.t_events if len(te))
+                    pieces.append((sol.sol, t, t_to, mode, theta_mid, model.impact))
                 if sol.status == 1:
                     which = next(j for j, te in enumerate(sol.t_events) if len(te))
                     if mode_time is not None:
@@ -349,3 +360,47 @@ def duty_cycle(model, x0, revolutions, by="separation", **options):
     total = revolutions * 2 * math.pi / model.omega
     released = times[FREE] + (times[SLACK] if by == "force" else 0.0)
     return released / total
+
+
+def extremes(model, x0, revolutions, *, skip=0, samples=2001, **options):
+    """(min ε, max ε, max Pn) over ``revolutions`` revolutions from x0 (at θ = 0), after
+    ``skip`` more: every piece of the solution (``integrate``'s, ``options`` its own)
+    sampled on its dense output at ``samples`` points, and each piece's extreme sample
+    refined by a bounded scalar search on the dense output between its neighbours."""
+    from scipy.optimize import minimize_scalar
+
+    pieces = []
+    integrate(model, x0, skip + revolutions, pieces=pieces, **options)
+    start = skip * 2 * math.pi / model.omega
+    pieces = [piece for piece in pieces if piece[1] >= start * (1 - 1e-12)]
+    found = [math.inf, -math.inf, 0.0]
+
+    def values(piece, t):
+        sol, _, _, mode, theta_mid, impact = piece
+        model.impact = impact
+        x = sol(t)
+        eps, deps = model.gap(t, x, theta_mid)
+        return eps, (model.force(eps, deps) if mode == PUSH else 0.0)
+
+    for piece in pieces:
+        ts = np.linspace(piece[1], piece[2], samples)
+        table = np.array([values(piece, t) for t in ts])
+        for column, sign in ((0, 1.0), (0, -1.0), (1, -1.0)):
+            i = int(np.argmin(sign * table[:, column]))
+            best = sign * table[i, column]
+            lo, hi = ts[max(i - 1, 0)], ts[min(i + 1, samples - 1)]
+            if hi > lo:
+                res = minimize_scalar(
+                    lambda t, q=piece, c=column, s=sign: s * values(q, t)[c],
+                    bounds=(lo, hi),
+                    method="bounded",
+                    options={"xatol": 1e-13 * max(1.0, hi)},
+                )
+                best = min(best, res.fun)
+            if column == 0 and sign > 0:
+                found[0] = min(found[0], best)
+            elif column == 0:
+                found[1] = max(found[1], -best)
+            else:
+                found[2] = max(found[2], -best)
+    return tuple(found)

@@ -27,7 +27,6 @@ test afterwards.
 import math
 
 from .codes import CHAOTIC, QUASIPERIODIC, UNCONVERGED
-from .hermite import MAXIMUM, MINIMUM, hermite_extremum, quintic_extremum
 from .jit import hot
 
 # Columns of the per-revolution statistics.
@@ -325,42 +324,23 @@ def reset_revolution_stats(row):
 
 
 @hot
-def cubic_extremes(g0, d0, g1, d1):
-    """Min and max over [0, 1] of the cubic Hermite model (slopes per unit θ)."""
-    lo = min(g0, g1)
-    hi = max(g0, g1)
-    th, val = hermite_extremum(g0, d0, g1, d1, MINIMUM)
-    if th > 0.0:
-        lo = min(lo, val)
-    th, val = hermite_extremum(g0, d0, g1, d1, MAXIMUM)
-    if th > 0.0:
-        hi = max(hi, val)
-    return lo, hi
-
-
-@hot
-def add_step_stats(row, h, free, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1):
-    """Fold one step into a revolution's statistics (ε with its first two rates, Pn with
-    its rate, at both ends); ``free``: the step's time counts towards the duty cycle
-    (model.released).
-
-    Extremes inside the step come from Hermite models: quintic for ε (O(h⁶)), cubic
-    for Pn (O(h⁴); contact steps are short).
+def add_step_stats(row, h, free, e0, e1, dip, peak, pn_hi):
+    """Fold one step into a revolution's statistics: ε at both ends, ``dip`` and ``peak``
+    its interior local minimum and maximum (NaN: none), ``pn_hi`` the step's largest Pn
+    (campar.core.extrema.step_extremes); ``free``: the step's time counts towards the
+    duty cycle (model.released).
     """
     if free:
         row[REV_T_FREE] += h
-    h2 = h * h
     lo = min(e0, e1)
     hi = max(e0, e1)
-    th, dip = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MINIMUM)
-    if th > 0.0:
+    if dip == dip:  # not NaN
         lo = min(lo, dip)
         # a local minimum of ε near 0 is where a detachment can appear or vanish
         row[REV_GRAZE] = min(row[REV_GRAZE], abs(dip))
         if abs(dip) < abs(row[REV_TOUCH]):
             row[REV_TOUCH] = dip
-    th, peak = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MAXIMUM)
-    if th > 0.0:
+    if peak == peak:
         hi = max(hi, peak)
         # … and a local maximum near 0, where an impact can appear or vanish
         if abs(peak) < abs(row[REV_TOUCH]):
@@ -368,7 +348,6 @@ def add_step_stats(row, h, free, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, d
     row[REV_EPS_MIN] = min(row[REV_EPS_MIN], lo)
     row[REV_EPS_MAX] = max(row[REV_EPS_MAX], hi)
     if not free:
-        _, pn_hi = cubic_extremes(pn0, dpn0 * h, pn1, dpn1 * h)
         row[REV_PN_MAX] = max(row[REV_PN_MAX], pn_hi)
 
 

@@ -1,10 +1,9 @@
 """Hermite models of a scalar over one step, from its values and derivatives at both ends.
 
-Cubic (values and slopes): shared by the integrator (roots of event functions
-between step ends) and the analysis (extremes of Pn inside a step). Quintic
-(with second derivatives too): the analysis's extremes of ε, accurate to O(h⁶)
-where the cubic's O(h⁴) let DOP853's long free-flight steps misplace ε's
-minimum by 1 % (reference cell 7, benchmarks/RESULTS.md).
+Cubic (values and slopes): the integrator's roots of event functions between step ends,
+and where Pn may peak inside a step. Quintic (with second derivatives too): where ε
+may have an interior extremum, accurate to O(h⁶). campar.core.extrema locates the
+extremum itself on the dense output, from the place these models give.
 """
 
 import numpy as np

@@ -28,6 +28,7 @@ import numpy as np
 
 from . import dop853, entry_steps
 from .codes import NONFINITE, OK, STEP_UNDERFLOW
+from .dopri5 import N_STAGES, A, B, C, E, P, dopri5_dense_eval, error_norm  # noqa: F401 (B, E, P: tests)
 from .hermite import MAXIMUM, MINIMUM, hermite_extremum
 from .jit import entry, hot
 
@@ -45,35 +46,6 @@ def method_tag(code: int) -> tuple:
     return (0,) * code
 
 
-# Dormand–Prince 5(4) tableau (Butcher notation: nodes C, matrix A, weights B).
-C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
-A = np.array(
-    [
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-        [1 / 5, 0.0, 0.0, 0.0, 0.0, 0.0],
-        [3 / 40, 9 / 40, 0.0, 0.0, 0.0, 0.0],
-        [44 / 45, -56 / 15, 32 / 9, 0.0, 0.0, 0.0],
-        [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0.0, 0.0],
-        [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0.0],
-        [35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84],
-    ]
-)
-B = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0.0])
-# Error weights: 5th-order minus embedded 4th-order solution (7 stages, FSAL).
-E = np.array([-71 / 57600, 0.0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525, 1 / 40])
-# Dense output: y(t + θh) = y + h Σ_j (K^T P)_j θ^{j+1} (Shampine 1986, as in SciPy).
-P = np.array(
-    [
-        [1.0, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
-        [0.0, 0.0, 0.0, 0.0],
-        [0.0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799],
-        [0.0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072],
-        [0.0, 127303824393 / 49829197408, -318862633887 / 49829197408, 701980252875 / 199316789632],
-        [0.0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
-        [0.0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
-    ]
-)
-N_STAGES = 7
 K_ROWS = dop853.N_STAGES_EXTENDED  # rows of StepWork.K: enough for every method
 
 # Step-size control (Hairer, Nørsett & Wanner, DOPRI5): PI controller.
@@ -125,6 +97,7 @@ class StepWork(NamedTuple):
 
     K: np.ndarray  # (K_ROWS, n) stage derivatives; K[end_row(method)] = f at the step end
     y_new: np.ndarray  # (n,) state at the step end
+    y_old: np.ndarray  # (n,) state at the start of the last accepted step (its dense output's)
     y_stage: np.ndarray  # (n,) stage argument, dense value
     g0: np.ndarray  # event values and rates at the step start
     dg0: np.ndarray
@@ -144,6 +117,7 @@ def make_work(n, max_events, h0) -> StepWork:
     w = StepWork(
         K=np.zeros((K_ROWS, n)),
         y_new=np.zeros(n),
+        y_old=np.zeros(n),
         y_stage=np.zeros(n),
         g0=np.zeros(max_events),
         dg0=np.zeros(max_events),
@@ -248,20 +222,6 @@ def rk4_step(rhs, t, y, f, h, p, mode, w):
 
 
 @hot
-def error_norm(K, h, y, y_new, rtol, atol, n_err):
-    """RMS of the DP54 error estimate scaled by atol + rtol·max(|y|, |y_new|)."""
-    acc = 0.0
-    for i in range(n_err):
-        e = 0.0
-        for s in range(N_STAGES):
-            e += E[s] * K[s, i]
-        scale = atol + rtol * max(abs(y[i]), abs(y_new[i]))
-        r = h * e / scale
-        acc += r * r
-    return np.sqrt(acc / n_err)
-
-
-@hot
 def step_error(method, K, h, y, y_new, rtol, atol, n_err):
     """Scaled error norm of the step in K by the method's embedded estimate (≤ 1: accept)."""
     if len(method) == DOP853:
@@ -294,18 +254,7 @@ def dense_eval(method, w, y, y_new, h, theta, n, out):
     if len(method) == DOP853:
         dop853.dop853_dense_eval(w.F, y, theta, n, out)
     elif len(method) == DP54:
-        for i in range(n):
-            q1 = 0.0
-            q2 = 0.0
-            q3 = 0.0
-            q4 = 0.0
-            for s in range(N_STAGES):
-                k = K[s, i]
-                q1 += k * P[s, 0]
-                q2 += k * P[s, 1]
-                q3 += k * P[s, 2]
-                q4 += k * P[s, 3]
-            out[i] = y[i] + h * theta * (q1 + theta * (q2 + theta * (q3 + theta * q4)))
+        dopri5_dense_eval(K, y, h, theta, n, out)
     else:
         # cubic Hermite through (y, f) at both ends
         t2 = theta * theta
@@ -393,8 +342,9 @@ def first_crossing(rhs, events, step, m):
 
     Reads the first m event functions' values and rates at the start (w.g0,
     w.dg0) and at the end (w.g1, w.dg1). Returns (event index or -1, θ of the
-    root). A g that is ≤ 0 at the start by rounding just after a mode switch
-    counts as positive when its rate points into the mode.
+    root). A g on its surface at the start (≤ 0, or rising from within one event
+    tolerance of 0, as just after a mode switch) has its root bracketed from its
+    peak inside the step, not from the start.
     """
     w = step.w
     h = step.h
@@ -409,11 +359,19 @@ def first_crossing(rhs, events, step, m):
         fa = g0
         b = -1.0
         fb = 0.0
+        # on the surface: g is ≤ 0, or rises from within one event tolerance of 0 (the
+        # mode was just entered across it). There g's rounding (~1e-16 for ε = yc − y)
+        # can exceed g itself, and a root found between the start and the first
+        # dense-output points is noise: it ends the step at once, the mode switches
+        # back, and the two modes swap at one instant for ever (a detachment where
+        # 1 + c ε' ≈ 0 did). The step's next crossing lies beyond g's peak.
+        surface = g0 <= 0.0 or (d0 > 0.0 and g0 <= d0 * step.theta_tol)
         if g1 <= 0.0:
             b = 1.0
             fb = g1
-            if g0 <= 0.0:
+            if surface:
                 # the mode holds only inside the step, if at all: bracket from its peak
+                fa = 0.0
                 th, _ = hermite_extremum(g0, d0, g1, d1, MAXIMUM)
                 if th > 0.0:
                     gm = event_value(rhs, events, step, i, th)
@@ -440,7 +398,7 @@ def first_crossing(rhs, events, step, m):
                 continue
             b = th
             fb = gm
-            if g0 <= 0.0:
+            if surface:
                 continue
         if a >= first_theta:
             continue
@@ -582,6 +540,7 @@ def advance(rhs, events, t, t_end, y, f, p, mode, opt, w):
                 ctrl[CTRL_G1_MODE1] = mode[1]
                 ctrl[CTRL_G1_M] = m
         for i in range(n):
+            w.y_old[i] = y[i]
             y[i] = w.y_new[i]
             f[i] = w.K[end, i]
         w.counts[0] += 1

@@ -24,19 +24,14 @@ from numba import njit, typeof
 from . import model
 from .analysis import (
     N_REV_STATS,
-    REV_LOG_STRETCH,
-    assess_revolution,
     cycle_jacobian,
     distinct_period,
     multipliers_of,
     near_unit_circle,
     nonperiodic_kind,
-    repeat_period,
     slow_cycle_period,
     spectral_radius,
     stable_subperiod,
-    stretch_tangent,
-    unstable_cycle_nearby,
     window_stats,
 )
 from .codes import (
@@ -47,11 +42,10 @@ from .codes import (
     FLAG_RESTARTED,
     FLAG_SLOW,
     FLAG_WARM_EXTRAPOLATED,
-    NONFINITE,
     OK,
     PERIODIC,
 )
-from .integrator import CTRL_ERR, CTRL_H, StepWork, initial_step, make_work, restart_control
+from .integrator import StepWork, initial_step, make_work, restart_control
 from .jit import hot, inlined
 from .model import (
     MAX_EVENTS,
@@ -66,11 +60,8 @@ from .model import (
     start_chain,
 )
 from .revolution import scale_solver_options
-from .revolution_call import call_revolution, revolution_link
-
-# Transient policies.
-CONVERGED = 0  # stop once the section has converged to a cycle (Newton-accelerated)
-FIXED = 1  # a fixed number of revolutions, then a read window (the paper's recipe)
+from .revolution_call import revolution_link
+from .transient import CONVERGED, FIXED, spend, transient_converged, transient_fixed  # noqa: F401 (FIXED: tile)
 
 # Output selection bits: a label-only map computes none of these.
 OUT_STATS = 1  # duty cycle, ε extremes, Pn max
@@ -177,149 +168,6 @@ def make_chain_work(cs) -> ChainWork:
         prev=np.empty((3, 2)),
         revolution=np.zeros(2, dtype=np.int64),  # linked by run_chain
     )
-
-
-@inlined
-def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
-    """Revolution k+1 from xs[k]: fills xs[k+1], jac[k] (if variational), revs[k]."""
-    if variational:
-        x, f, w = cw.x6, cw.f6, cw.w6
-    else:
-        x, f, w = cw.x2, cw.f2, cw.w2
-    x[0] = cw.xs[k, 0]
-    x[1] = cw.xs[k, 1]
-    limit = w.counts[0] + w.counts[1] + (step_budget - spend(cw))
-    status = call_revolution(
-        cw.revolution, x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit, None
-    )
-    if status != OK:
-        return status
-    if not (math.isfinite(x[0]) and math.isfinite(x[1])):
-        return NONFINITE
-    cw.xs[k + 1, 0] = x[0]
-    cw.xs[k + 1, 1] = x[1]
-    if variational:
-        for j in range(4):
-            cw.jac[k, j] = x[2 + j]
-        cw.revs[k, REV_LOG_STRETCH] = stretch_tangent(cw.jac[k], cw.u)
-    return OK
-
-
-@inlined
-def spend(cw):
-    return cw.w2.counts[0] + cw.w2.counts[1] + cw.w6.counts[0] + cw.w6.counts[1]
-
-
-@inlined
-def share_step_size(src, dst):
-    dst.ctrl[CTRL_H] = src.ctrl[CTRL_H]
-    dst.ctrl[CTRL_ERR] = src.ctrl[CTRL_ERR]
-
-
-@inlined
-def transient_converged(cw, p, opt, cs, want_stats, step_budget):
-    """Revolutions until assess_revolution accepts a cycle or the budget ends.
-
-    From revolution cs.chaos_after on (0: never), a motion whose largest
-    Lyapunov exponent over the last window exceeds cs.chaos_lyapunov per
-    revolution is declared chaotic at once: a clearly positive exponent does not
-    turn into a cycle within the rest of the budget. From revolution
-    cs.quasiperiodic_after on (0: never), a motion whose exponent lies within
-    ±lyap_tol, as on an invariant circle, is declared quasi-periodic. Both
-    verdicts trade a few cells on long transients for revolutions (measured
-    by `campar bench map`).
-
-    A motion that lingers at an unstable cycle (analysis.unstable_cycle_nearby: next to
-    a period doubling its multiplier is near −1 and the escape takes hundreds of
-    revolutions, which the window reads as a torus or as chaos) is moved off it along
-    its unstable direction by cs.jump_cap, on the side it was drifting to; Newton jumps
-    back to that cycle are refused from then on. Returns (status, k, period, base,
-    jumps, escapes).
-    """
-    k = 0
-    base = np.int64(0)  # not a literal: numba would compile assess_revolution twice
-    jumps = 0
-    escapes = 0
-    avoid0 = math.nan  # the cycle the motion escaped from (jumps to it are refused)
-    avoid1 = math.nan
-    for a in range(cw.est.shape[0]):  # no estimates of this cell yet
-        for b in range(cw.est.shape[1]):
-            cw.est[a, b, 0] = -1.0
-    while k < cs.max_revolutions:
-        status = step_revolution(cw, k, True, p, opt, cs, want_stats, step_budget)
-        if status != OK:
-            return status, k, 0, base, jumps, escapes
-        k += 1
-        period, jump_n, z0, z1 = assess_revolution(
-            cw.xs,
-            cw.jac,
-            cw.est,
-            k,
-            base,
-            cs.n_max,
-            cs.conv_tol,
-            cs.window_tol,
-            cs.jump_residual,
-            cs.jump_cap,
-            cs.jump_agree,
-        )
-        if period > 0:
-            return OK, k, period, base, jumps, escapes
-        if k - base >= cs.window_revolutions and nonperiodic_verdict(cw, k, cs):
-            return OK, k, 0, base, jumps, escapes
-        if not cs.newton or jumps >= cs.max_jumps:
-            continue
-        if jump_n > 0 and not max(abs(z0 - avoid0), abs(z1 - avoid1)) <= cs.jump_residual:
-            cw.xs[k, 0] = z0
-            cw.xs[k, 1] = z1
-            base = k
-            jumps += 1
-            continue
-        esc_n, z0, z1, v0, v1 = unstable_cycle_nearby(
-            cw.xs, cw.jac, k, base, cs.n_max, cs.jump_residual
-        )
-        if esc_n > 0:
-            side = (cw.xs[k, 0] - z0) * v0 + (cw.xs[k, 1] - z1) * v1
-            sign = 1.0 if side >= 0.0 else -1.0
-            cw.xs[k, 0] = z0 + sign * cs.jump_cap * v0
-            cw.xs[k, 1] = z1 + sign * cs.jump_cap * v1
-            avoid0 = z0
-            avoid1 = z1
-            base = k
-            jumps += 1
-            escapes += 1
-    return OK, k, 0, base, jumps, escapes
-
-
-@inlined
-def nonperiodic_verdict(cw, k, cs):
-    """True when the last window's Lyapunov exponent settles a non-periodic verdict."""
-    chaos_due = 0 < cs.chaos_after <= k
-    qp_due = 0 < cs.quasiperiodic_after <= k
-    if not (chaos_due or qp_due):
-        return False
-    stretch = window_stats(cw.revs, k - cs.window_revolutions, cs.window_revolutions)[5]
-    return (chaos_due and stretch > cs.chaos_lyapunov) or (qp_due and abs(stretch) <= cs.lyap_tol)
-
-
-@inlined
-def transient_fixed(cw, p, opt, cs, want_stats, step_budget):
-    """cs.max_revolutions plain revolutions, then a window with variational equations.
-
-    Returns (status, k, period) with the period from the plain repeat test.
-    """
-    k = 0
-    total = cs.max_revolutions + cs.window_revolutions
-    while k < total:
-        variational = k >= cs.max_revolutions
-        if k == cs.max_revolutions:
-            share_step_size(cw.w2, cw.w6)
-        status = step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget)
-        if status != OK:
-            return status, k, 0
-        k += 1
-    period = repeat_period(cw.xs, cs.max_revolutions, k, cs.n_max, cs.period_tol)
-    return OK, k, period
 
 
 @inlined

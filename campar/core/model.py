@@ -240,6 +240,23 @@ def contact_mode(eps, deps, p):
 
 
 @hot
+def acceleration(t, y, v, p, mode):
+    """y'' of the current mode at (y, y') and its partial derivatives ∂y''/∂y, ∂y''/∂y'."""
+    acc = -2.0 * p.zeta * v - y - p.f0
+    dfdy = 0.0
+    dfdv = 0.0
+    if mode[1] == PUSH:  # only a pushing contact needs the cam
+        yc, dyc, _ = cam(p.omega * t, mode[0], p.cam)
+        eps = yc - y
+        deps = p.vcam * dyc - v
+        if eps < 0.0:  # a stage point just past an event: extend by zero force
+            eps = 0.0
+        force, dfdy, dfdv = pushing(p.contact, p.k, damping(p.contact, p.c), eps, deps)
+        acc += force
+    return acc, dfdy, dfdv
+
+
+@hot
 def rhs(t, y, p, mode, dy):
     """Vector field of the current mode into ``dy``; variational part if len(y) == 6."""
     v = y[1]
@@ -338,5 +355,20 @@ def contact_kinematics(t, y, f, p, mode):
         return eps, rate, accel, 0.0, 0.0
     deps = p.vcam * dyc - y[1]  # the force law's ε'
     d2eps = p.vcam * p.omega * d2yc - f[1]
+    pn, dpn = force_and_rate(p.contact, p.k, damping(p.contact, p.c), eps, deps, rate, d2eps)
+    return eps, rate, accel, pn, dpn
+
+
+@hot
+def kinematics(t, y, v, acc, p, mode):
+    """contact_kinematics of the state (y, y') with y'' = acc."""
+    yc, dyc, d2yc = cam(p.omega * t, mode[0], p.cam)
+    eps = yc - y
+    rate = p.omega * dyc - v
+    accel = p.omega * p.omega * d2yc - acc
+    if mode[1] != PUSH or eps <= 0.0:
+        return eps, rate, accel, 0.0, 0.0
+    deps = p.vcam * dyc - v  # the force law's ε'
+    d2eps = p.vcam * p.omega * d2yc - acc
     pn, dpn = force_and_rate(p.contact, p.k, damping(p.contact, p.c), eps, deps, rate, d2eps)
     return eps, rate, accel, pn, dpn

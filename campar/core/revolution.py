@@ -14,6 +14,7 @@ from . import model
 from .analysis import REV_DETACH, add_step_stats, reset_revolution_stats
 from .codes import EVENT_LOOP, OK, STEP_LIMIT
 from .contact import note_impact
+from .extrema import step_extremes
 from .integrator import SolverOptions, advance, dense_eval, prepare_dense
 from .jit import hot
 from .model import (
@@ -156,10 +157,27 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                     record_step(rec, opt.method, w, t_prev, t, x, p, mode)
                 if want_stats:
                     e1, de1, dde1, pn1, dpn1 = contact_kinematics(t, x, f, p, mode)
-                    dc_time = released(contact, p)
-                    add_step_stats(
-                        row, t - t_prev, dc_time, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1
+                    dip, peak, pn_hi = step_extremes(
+                        model.rhs,
+                        opt.method,
+                        w,
+                        t_prev,
+                        t - t_prev,
+                        p,
+                        mode,
+                        e0,
+                        de0,
+                        dde0,
+                        e1,
+                        de1,
+                        dde1,
+                        pn0,
+                        dpn0,
+                        pn1,
+                        dpn1,
                     )
+                    free = released(contact, p)
+                    add_step_stats(row, t - t_prev, free, e0, e1, dip, peak, pn_hi)
                     e0, de0, dde0, pn0, dpn0 = e1, de1, dde1, pn1, dpn1
                     fresh = True
             elif which >= 0:

@@ -41,7 +41,7 @@ def fingerprint(args) -> int:
 
 
 def revolution_args(solver, cs, work, recorder=types.none, law=PAPER_LAW) -> tuple:
-    """run_revolution's argument types as the chain (kernel.step_revolution) and the orbit
+    """run_revolution's argument types as the chain (transient.step_revolution) and the orbit
     tracer call it, with the step buffers ``work``, a recorder of type ``recorder`` (the
     chain's: none) and the job's ``law`` (model.kernel_law): the cell's parameters and
     options are the types make_params and scale_solver_options return for float64
