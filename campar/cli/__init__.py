@@ -34,7 +34,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from .. import __version__  # noqa: E402
 from ..errors import CamparError, Interrupted, JobError  # noqa: E402
-from . import continuation, line, maps, paper, plot, point, tools  # noqa: E402
+from . import continuation, explore, line, maps, paper, plot, point, tools  # noqa: E402
 from .options import launched_rank  # noqa: E402
 
 # The subcommands, in the order ``campar --help`` lists them.
@@ -52,6 +52,7 @@ SUBCOMMANDS = [
     continuation.add_curves,
     paper.add_gallery,
     paper.add_report,
+    explore.add_explore,
 ]
 
 
