@@ -20,6 +20,7 @@ from campar.core.codes import FAILED as KIND_FAILED
 from campar.sweep.job import Job
 from campar.sweep.plan import plan_tiles
 from campar.views.plot import MAP_VIEWS, PlotError, parse_range, plot_store
+from campar.views.plot.cells import cell_runs
 from campar.views.plot.colour import srgb_to_lab
 from campar.views.plot.labels import (
     DESIGNED,
@@ -40,7 +41,6 @@ from campar.views.plot.maps import (
     QUANTITIES,
     MapGrid,
     cell_edges,
-    cell_runs,
     computed_mask,
     plot_map,
     quantity_scale,
