@@ -105,7 +105,8 @@ def continue_from_cell(
         PD, SN, NS, G: continue the curve of every special point of these types found on
         the branches in the plane (parameter, ``second``) over (span, ``second_window``).
     second : str, optional
-        The second parameter of those curves.
+        The second parameter of those curves: omega, f0, mu_kn, mu_cn, zeta, or a law
+        parameter when ``parameter`` is not one (a plane holds one law parameter).
     second_window : (float, float), optional
         The window of ``second`` the curves stay in.
     section_map : SectionMap, optional
@@ -139,9 +140,10 @@ def continue_from_cell(
     began = time.perf_counter()
     given = {**(fixed or {}), parameter: span[0]}
     base = start_model(model, given)
-    law = parameter if parameter in LAW_PARAMETERS else None
+    # the law parameter the section map takes as its own: the branch's, or the curves'
+    law = next((name for name in (parameter, second) if name in LAW_PARAMETERS), None)
     # every parameter of the model continued: its own where neither fixed nor span says
-    values = {**base.parameters, **({law: span[0]} if law else {})}
+    values = {**base.parameters, **({law: span[0]} if law == parameter else {})}
     smap = section_map or SectionMap(base, law_parameter=law)
     shots0 = smap.shots
     y0, v0 = (base.initial.y if y0 is None else y0), (base.initial.v if v0 is None else v0)
@@ -215,10 +217,14 @@ def check_request(
             raise JobError("curves need a second parameter and its window (--second NAME:A:B)")
         return
     where = f"--second {second}:{second_window[0]:g}:{second_window[1]:g}"
-    if second not in PARAMETER_ORDER:
+    if second not in (*PARAMETER_ORDER, *LAW_PARAMETERS):
         raise JobError(
             f"{where}: {second!r} is not a parameter of the model; one of "
-            f"{', '.join(PARAMETER_ORDER)}"
+            f"{', '.join((*PARAMETER_ORDER, *LAW_PARAMETERS))}"
+        )
+    if second in LAW_PARAMETERS and parameter in LAW_PARAMETERS:
+        raise JobError(
+            f"{where}: a curve's plane holds one law parameter; the branch's is {parameter}"
         )
     if second == parameter:
         raise JobError(f"{where}: the second parameter must differ from the branch's, {parameter}")
