@@ -98,10 +98,16 @@ def run(
     from .sweep.runner import run_job
 
     job = job_of(job, settings)  # before anything touches the disk
-    if job.kind == "curves":
-        from .continuation import tasks  # noqa: F401 (registers a curves job's tile function)
     path = job.store if store is None else store  # an empty --store is refused, not ignored
-    run_job(job, path, overwrite=overwrite, grace=grace, max_store=max_store, max_memory=max_memory)
+    run_job(
+        job,
+        path,
+        overwrite=overwrite,
+        grace=grace,
+        max_store=max_store,
+        max_memory=max_memory,
+        tile_work=work_of(job),
+    )
     return Path(path)
 
 
@@ -151,14 +157,25 @@ def forecast(
 
     if ranks < 1:
         raise JobError(f"ranks must be ≥ 1, got {ranks}")
+    job = job_of(job, settings)
     return plan(
-        job_of(job, settings),
+        job,
         store,
         ranks=ranks,
         overwrite=overwrite,
         max_store=max_store,
         max_memory=max_memory,
+        tile_work=work_of(job),
     )
+
+
+def work_of(job):
+    """What computes the job's tiles where the kernel does not: a curves job's tasks."""
+    if job.kind != "curves":
+        return None
+    from .continuation.tasks import CURVES_WORK  # the shooting loads only for curves
+
+    return CURVES_WORK
 
 
 def line(

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
-from conftest import short_curves
+from support.jobs import short_curves
 
 from campar.core.codes import Kind, Status
 from campar.paper import setups as paper
@@ -42,6 +42,7 @@ def structure_gallery(tmp_path_factory):
     return g
 
 
+@pytest.mark.slow  # a tiny gallery's structure figures: minutes
 def test_the_structure_figures_are_written_with_sidecars_and_index_entries(structure_gallery):
     g = structure_gallery
     index = (g.outdir / "index.md").read_text()
@@ -67,6 +68,7 @@ def test_the_structure_figures_are_written_with_sidecars_and_index_entries(struc
                 assert job["chains"]["start"] == "continue" and job["sweep"]["omega"]["from"] == 6.0
 
 
+@pytest.mark.slow  # a tiny gallery's structure figures: minutes
 def test_the_basin_figure_shows_the_bistable_cells_two_attractors(structure_gallery):
     g = structure_gallery
     png = g.outdir / "bistable_basin.png"

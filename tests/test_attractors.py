@@ -159,6 +159,7 @@ def test_starts_that_settle_on_nothing_are_no_attractor():
     assert "8 start(s) settled on no attractor" in describe_attractors(census)
 
 
+@pytest.mark.process
 def test_point_attractors_json_lists_each_attractor_with_its_fraction():
     out = subprocess.run(
         [
@@ -194,6 +195,7 @@ def test_point_attractors_json_lists_each_attractor_with_its_fraction():
     assert list(START_3_2) in next(a for a in attractors if a["label"] == "3-2")["starts"]
 
 
+@pytest.mark.process
 def test_point_attractors_refuses_too_few_starts():
     out = subprocess.run(
         [

@@ -11,15 +11,10 @@ store; bad jobs are refused with a message naming the key.
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import (
-    assert_mpirun_store_equals,
-    assert_same_store,
-    computed_store,
-    merge,
-    resume_after_interrupt,
-    run_campar,
-    stored,
-)
+from support.cli import call_campar
+from support.jobs import computed_store, merge, resume_after_interrupt
+from support.processes import assert_mpirun_store_equals
+from support.stores import assert_same_store, stored
 
 import campar
 import campar.sweep.runner as runner
@@ -176,6 +171,8 @@ def test_an_interrupted_basin_resumes_bitwise_and_both_backends_open_alike(
 
 
 @pytest.mark.slow  # the quick tier's MPI run is tests/test_mpi.py's
+@pytest.mark.process
+@pytest.mark.mpi
 def test_a_basin_under_mpirun_equals_the_serial_one(basin, tmp_path):
     whole, _ = basin
     assert_mpirun_store_equals(BASIN, tmp_path, whole)
@@ -199,13 +196,13 @@ def test_a_bad_basin_job_is_refused_naming_the_key(change, message):
         Job.from_dict(data)
 
 
-def test_the_basin_figure_and_its_refusals(basin, tmp_path):
+def test_the_basin_figure_and_its_refusals(capsys, basin, tmp_path):
     path, _ = basin
     out = plot_store(path, output=tmp_path / "basin.png")
     assert out.stat().st_size > 10_000
     with pytest.raises(PlotError, match="basin store: it draws --what basin"):
         plot_store(path, "dc", output=tmp_path / "dc.png")
-    result = run_campar("plot", path, "--bifurcations", "-o", tmp_path / "b.png")
+    result = call_campar(capsys, "plot", path, "--bifurcations", "-o", tmp_path / "b.png")
     assert result.returncode != 0 and "basin store" in result.stderr
-    status = run_campar("status", path)
+    status = call_campar(capsys, "status", path)
     assert "6 ydot0 × 7 y0" in status.stdout

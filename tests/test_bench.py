@@ -41,15 +41,21 @@ def test_every_benchmark_is_registered_and_listed(capsys):
         assert name in listing
 
 
-# The tiny runs of these take 5–30 s each (SciPy references, whole sub-planes, a pool of
-# child processes); their modules have quick tests of their own below and in test_stress.py.
-SLOW_BENCHMARKS = {"precision", "outputs", "stress", "map"}
+# The tiny runs of some take 5–30 s each (SciPy references, whole sub-planes): slow; some
+# start campar or mpirun (a pool of child processes, the ranks of a scaling run). Their
+# modules have quick tests of their own below and in test_stress.py.
+MARKS = {
+    "precision": [pytest.mark.slow],
+    "peers": [pytest.mark.slow],
+    "outputs": [pytest.mark.slow],
+    "stress": [pytest.mark.slow, pytest.mark.process],
+    "map": [pytest.mark.slow, pytest.mark.process],
+    "scaling": [pytest.mark.mpi],
+    "master": [pytest.mark.mpi],
+}
 
 
-@pytest.mark.parametrize(
-    "name",
-    [pytest.param(n, marks=pytest.mark.slow) if n in SLOW_BENCHMARKS else n for n in HEADERS],
-)
+@pytest.mark.parametrize("name", [pytest.param(n, marks=MARKS.get(n, [])) for n in HEADERS])
 def test_benchmark_runs_tiny_and_prints_its_table(name, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(REPO)  # map and scaling read the planes from jobs/
     extra = {"precision": ["--plot", str(tmp_path / "precision.png")], "map": ["--audit"]}

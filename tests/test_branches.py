@@ -186,6 +186,7 @@ def test_a_curve_has_at_most_max_points_in_both_directions_together(smap, period
     assert "max_points" in curve.end
 
 
+@pytest.mark.process
 def test_campar_continue_prints_the_branch_as_json():
     out = subprocess.run(
         [
@@ -209,6 +210,7 @@ def test_campar_continue_prints_the_branch_as_json():
     assert data["special"][1]["labels"] == ["3-2", "3-2"]
 
 
+@pytest.mark.process
 def test_campar_point_cycle_finds_the_unstable_cycle():
     out = subprocess.run(
         [
@@ -233,6 +235,7 @@ def test_campar_point_cycle_finds_the_unstable_cycle():
     assert orbit["multipliers"][0][0] < -1.0 and orbit["residual"] <= 1e-10
 
 
+@pytest.mark.process
 def test_bad_continuation_requests_are_one_line():
     for argv, message in (
         (["--omega", "6", "--mu-kn", "0.91"], "exactly one parameter a range"),

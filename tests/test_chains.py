@@ -14,7 +14,8 @@ import textwrap
 
 import numpy as np
 import pytest
-from conftest import MPIRUN, SMALL_JOB, assert_same_map, merge, reference_arrays
+from support.jobs import SMALL_JOB, assert_same_map, merge, reference_arrays
+from support.processes import MPIRUN
 
 from campar.bench.scipy_model import Model
 from campar.bench.scipy_peer import scipy_cell
@@ -65,6 +66,7 @@ def test_continue_starts_each_row_on_a_cycle_of_its_first_cell_by_scipy():
     assert not np.allclose(starts, starts[0])  # the rows do not all start alike
 
 
+@pytest.mark.process
 def test_continue_gives_the_same_tile_in_a_process_that_computed_no_other():
     job = job_of(CONTINUE)
     last = plan_tiles(job)[-1]
@@ -87,8 +89,9 @@ def test_continue_gives_the_same_tile_in_a_process_that_computed_no_other():
 
 @pytest.mark.mpi
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
+@pytest.mark.process
 def test_a_continued_map_under_mpirun_equals_the_serial_one(write_job):
-    from conftest import CAMPAR, subprocess_env
+    from support.processes import CAMPAR, subprocess_env
 
     path, job = write_job(name="cont", chains={"start": "continue"})
     result = subprocess.run(

@@ -8,19 +8,16 @@ import subprocess
 import sys
 
 import pytest
-from conftest import case_arguments, reference_case
-
-CAMPAR = [sys.executable, "-m", "campar.cli"]
-
-
-def campar(*args):
-    return subprocess.run([*CAMPAR, *args], capture_output=True, text=True, timeout=300)
+from support.cli import call_campar
+from support.jobs import case_arguments, reference_case
 
 
-def test_point_json_has_the_documented_keys_and_the_reference_cells_values():
+def test_point_json_has_the_documented_keys_and_the_reference_cells_values(capsys):
     case = reference_case(112)  # ω = 3.15, μkn = 0.91: a 2-2 with the clamp active
     expected = case["expected"]
-    out = campar("point", *case_arguments(case), "--json", "--multipliers", "--lyapunov")
+    out = call_campar(
+        capsys, "point", *case_arguments(case), "--json", "--multipliers", "--lyapunov"
+    )
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     for key in (
@@ -53,9 +50,9 @@ def test_point_json_has_the_documented_keys_and_the_reference_cells_values():
     assert 0 < abs(complex(re1, im1) * complex(re2, im2)) <= bound
 
 
-def test_point_summary_is_human_readable():
+def test_point_summary_is_human_readable(capsys):
     case = reference_case(102)  # ω = 1, the paper's base values: 1-1
-    out = campar("point", *case_arguments(case))
+    out = call_campar(capsys, "point", *case_arguments(case))
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith(case["expected"]["label"] + " ")
     dc = re.search(r"duty cycle (\S+)", out.stdout)
@@ -77,14 +74,15 @@ def test_point_summary_is_human_readable():
         ),
     ],
 )
-def test_bad_input_exits_2_naming_the_parameter(args, needle):
-    out = campar("point", *args)
+def test_bad_input_exits_2_naming_the_parameter(capsys, args, needle):
+    out = call_campar(capsys, "point", *args)
     assert out.returncode == 2
     assert needle in out.stderr
     assert out.stdout == ""
 
 
 @pytest.mark.parametrize("preset", [None, "3"])
+@pytest.mark.process
 def test_the_campar_process_runs_one_blas_thread_unless_told_otherwise(preset):
     """OpenBLAS's idle pools spin beside the kernel's threads (campar.cli): the command's
     process starts one BLAS thread, or what the caller's OPENBLAS_NUM_THREADS says."""
@@ -113,7 +111,7 @@ def test_the_campar_process_runs_one_blas_thread_unless_told_otherwise(preset):
     assert (int(threads) == 1) == (preset is None)
 
 
-def test_the_readme_tour_shows_what_campar_point_prints():
+def test_the_readme_tour_shows_what_campar_point_prints(capsys):
     """The README's first example is this kernel's output, character for character (it
     went stale once: 209 steps in the README where the DOP853 kernel takes 233)."""
     from pathlib import Path
@@ -125,11 +123,12 @@ def test_the_readme_tour_shows_what_campar_point_prints():
         if line.startswith(("$ ", "```")):
             break
         shown.append(line)
-    out = campar("point", "--omega", "3")
+    out = call_campar(capsys, "point", "--omega", "3")
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines() == shown
 
 
+@pytest.mark.process
 def test_the_program_spares_its_exit_the_collector_but_a_call_from_python_does_not():
     """`campar …` freezes the garbage collector once its work is over (its exit would
     otherwise walk everything numba built: ~0.5 s after a cold compile, ~0.1 s warm);

@@ -9,7 +9,7 @@ agreeing estimates must be one SciPy confirms.
 
 import numpy as np
 import pytest
-from conftest import reference_case
+from support.jobs import reference_case
 
 from campar import simulate_point
 from campar.bench import scipy_shooting
@@ -100,6 +100,7 @@ ESCAPE = Cell("escape", 3.3472180451127818, mu_cn=0.831578947368421)
 NEXT_TO_THE_1_CYCLE = {"y0": 0.3480952510082911, "v0": -0.6486579563160504}
 
 
+@pytest.mark.slow  # a long transient near an unstable cycle
 def test_the_slow_escape_from_an_unstable_cycle_is_not_read_as_a_torus():
     """The escape from a 1-cycle with multiplier μ ≈ −1.003 grows like |μ|^k: over a
     500-revolution window it looks like a torus (Lyapunov exponent ~0). The transient

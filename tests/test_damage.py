@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import zarr
-from damage import assert_synthetic, finish, synthetic_store
+from support.damage import assert_synthetic, finish, synthetic_store
 from test_store import fake_tile, make_job
 
 import campar

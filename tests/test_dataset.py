@@ -15,7 +15,7 @@ import h5py
 import numpy as np
 import pytest
 import zarr
-from conftest import reference_arrays
+from support.jobs import reference_arrays
 from test_store import fake_tile, make_job, snapshot
 from zarr.errors import ZarrUserWarning
 
@@ -198,6 +198,7 @@ def netcdf_dump() -> str | None:
     return shutil.which("ncdump")
 
 
+@pytest.mark.process
 def test_netcdf_tools_read_the_hdf5_store(stores):
     ncdump = netcdf_dump()
     if ncdump is None:

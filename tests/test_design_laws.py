@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import reference_arrays
+from support.jobs import reference_arrays
 
 from campar.bench.scipy_model import PIECES, Composite, Model, integrate
 from campar.core import cam as C

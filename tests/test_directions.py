@@ -14,15 +14,10 @@ import signal
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import (
-    MPIRUN,
-    SMALL_JOB,
-    assert_mpirun_store_equals,
-    assert_same_store,
-    merge,
-    run_campar,
-    stored,
-)
+from support.cli import call_campar
+from support.jobs import SMALL_JOB, merge
+from support.processes import MPIRUN, assert_mpirun_store_equals
+from support.stores import assert_same_store, stored
 
 import campar
 import campar.sweep.runner as runner
@@ -92,8 +87,8 @@ def test_tiles_of_a_both_job_run_every_row_range_down_then_up():
 # -- the store: bitwise the two one-direction jobs, on both backends ----------------------
 
 
-@pytest.mark.parametrize("suffix", [".zarr", ".h5"])
-def test_a_both_store_is_the_down_and_the_up_store_bit_for_bit(tmp_path, suffix):
+@pytest.mark.parametrize("suffix", [".zarr", pytest.param(".h5", marks=pytest.mark.slow)])
+def test_a_both_store_is_the_down_and_the_up_store_bit_for_bit(capsys, tmp_path, suffix):
     paths = {d: tmp_path / f"{d}{suffix}" for d in ("both", "down", "up")}
     for direction, path in paths.items():
         assert runner.run_job(job_of(direction), path).outcome == "complete"
@@ -141,7 +136,7 @@ def test_a_both_store_is_the_down_and_the_up_store_bit_for_bit(tmp_path, suffix)
     with read_store(paths["both"]) as reader:
         status = summarize(reader)
     assert status["tiles"] == (6, 6) and status["cells"] == (288, 288)
-    result = run_campar("status", paths["both"])
+    result = call_campar(capsys, "status", paths["both"])
     assert "tiles   6/6 done" in result.stdout and "each chain down and up" in result.stdout
     # labels per direction, each counting its own cells (from the down and up stores)
     assert list(status["labels"]) == ["down", "up"]
@@ -149,7 +144,7 @@ def test_a_both_store_is_the_down_and_the_up_store_bit_for_bit(tmp_path, suffix)
         with read_store(paths[way]) as reader:
             assert status["labels"][way] == summarize(reader)["labels"][None]
         assert f"labels  ({way}) " in result.stdout
-    assert run_campar("verify", paths["both"]).returncode == 0
+    assert call_campar(capsys, "verify", paths["both"]).returncode == 0
 
 
 def test_a_both_store_refuses_the_one_direction_job_and_the_other_way(tmp_path):
@@ -214,15 +209,16 @@ def damage_chunk(path, tile) -> None:
         fh.write(bytes([byte[0] ^ 0xFF]))
 
 
-@pytest.mark.parametrize("suffix", [".zarr", ".h5"])
-def test_a_damaged_up_tile_is_found_and_recomputed_alone(tmp_path, suffix):
+# a damaged HDF5 file is read through campar's guard, a child process (_h5guard)
+@pytest.mark.parametrize("suffix", [".zarr", pytest.param(".h5", marks=pytest.mark.process)])
+def test_a_damaged_up_tile_is_found_and_recomputed_alone(capsys, tmp_path, suffix):
     job = job_of("both")
     path = tmp_path / f"both{suffix}"
     runner.run_job(job, path)
     before = stored(path)
     tile = plan_tiles(job)[4]  # rows 2–3, up
     damage_chunk(path, tile)
-    result = run_campar("verify", path)
+    result = call_campar(capsys, "verify", path)
     assert result.returncode == 65 and "tile 4:" in result.stdout, result.stdout
     assert "tile 1:" not in result.stdout  # the same rows down are intact
     summary = runner.run_job(job, path)
@@ -256,6 +252,7 @@ def test_journaled_tiles_of_both_directions_read_in_place_before_a_checkpoint(tm
 @pytest.mark.slow
 @pytest.mark.mpi
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
+@pytest.mark.process
 def test_a_both_map_under_mpirun_equals_the_serial_one(tmp_path):
     data = merge(GRID, {"name": "mpi", "chains": {"direction": "both", "start": "continue"}})
     for suffix in (".zarr", ".h5"):
@@ -330,7 +327,7 @@ def test_the_tolerance_is_the_cycles_own_accuracy():
 # -- figures -------------------------------------------------------------------------------
 
 
-def test_plot_draws_hysteresis_and_either_direction(tmp_path):
+def test_plot_draws_hysteresis_and_either_direction(capsys, tmp_path):
     both, down = tmp_path / "both.zarr", tmp_path / "down.zarr"
     runner.run_job(job_of("both"), both)
     runner.run_job(job_of("down"), down)
@@ -341,7 +338,7 @@ def test_plot_draws_hysteresis_and_either_direction(tmp_path):
         plot_store(down, "hysteresis", tmp_path / "x.png")
     with pytest.raises(PlotError, match="ran down only; it has no up map"):
         plot_store(down, "labels", tmp_path / "x.png", direction="up")
-    result = run_campar("plot", both, "--what", "hysteresis", "-o", tmp_path / "h.png")
+    result = call_campar(capsys, "plot", both, "--what", "hysteresis", "-o", tmp_path / "h.png")
     assert result.returncode == 0 and (tmp_path / "h.png").exists(), result.stderr
 
 

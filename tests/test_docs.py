@@ -2,6 +2,7 @@
 of the API reference runs and prints what it shows, every `campar` command in README.md
 and docs/ is one the CLI accepts, and the commands shown with their output print it."""
 
+import contextlib
 import doctest
 import importlib
 import os
@@ -13,7 +14,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from conftest import CAMPAR
+from support.cli import call_campar
 
 from campar.cli import build_parser
 
@@ -44,9 +45,8 @@ def example_dir(tmp_path_factory):
     """A working directory as the examples assume: the jobs, and the smoke map computed."""
     where = tmp_path_factory.mktemp("examples")
     (where / "jobs").symlink_to(ROOT / "jobs")
-    run = subprocess.run(
-        [*CAMPAR, "run", "jobs/smoke.yaml"], cwd=where, text=True, capture_output=True, timeout=600
-    )
+    with contextlib.chdir(where):
+        run = call_campar(None, "run", "jobs/smoke.yaml")
     assert run.returncode == 0, run.stderr
     return where
 
@@ -147,10 +147,8 @@ def shown_outputs():
 
 
 @pytest.mark.parametrize(("page", "command", "shown"), shown_outputs(), ids=str)
-def test_a_command_shown_with_its_output_prints_it(page, command, shown):
-    out = subprocess.run(
-        [*CAMPAR, *shlex.split(command)[1:]], text=True, capture_output=True, timeout=300
-    )
+def test_a_command_shown_with_its_output_prints_it(capsys, page, command, shown):
+    out = call_campar(capsys, *shlex.split(command)[1:])
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines() == shown, page
 
@@ -185,6 +183,8 @@ def test_the_version_follows_the_changelog():
 
 
 @pytest.mark.slow
+@pytest.mark.process
+@pytest.mark.timeout(900)  # sphinx builds the whole site, every API page
 def test_the_site_builds_without_a_warning(tmp_path):
     sphinx = Path(sys.executable).parent / "sphinx-build"
     run = subprocess.run(
@@ -197,6 +197,7 @@ def test_the_site_builds_without_a_warning(tmp_path):
     assert run.returncode == 0, run.stderr[-5000:]
 
 
+@pytest.mark.process
 def test_the_readme_tour_runs_as_shown(example_dir):
     """The tour after its first command (shown with its output above): the map exists (the
     fixture ran `campar run jobs/smoke.yaml` there), its plot is drawn, and the Python line

@@ -12,8 +12,7 @@ import time
 
 import numpy as np
 import pytest
-from conftest import CAMPAR, MPIRUN, start_campar
-from damage import (
+from support.damage import (
     assert_synthetic,
     finish,
     leftovers,
@@ -22,6 +21,7 @@ from damage import (
     small_disk,
     synthetic_store,
 )
+from support.processes import CAMPAR, MPIRUN, start_campar, wait_until_guarded
 from test_store import fake_tile, make_job
 
 from campar.cli import main
@@ -85,6 +85,7 @@ def test_overwrite_through_a_link_replaces_the_target_and_keeps_the_link(tmp_pat
 
 
 @pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+@pytest.mark.process
 def test_a_full_disk_is_one_error_74_then_a_resume_completes_the_same_store(tmp_path, suffix):
     disk = tmp_path / "disk"
     job = make_job(sweep__omega__points=200, tiles__rows=1)  # tiles of ~60 kB
@@ -104,6 +105,7 @@ def test_a_full_disk_is_one_error_74_then_a_resume_completes_the_same_store(tmp_
         assert_synthetic(path, job)
 
 
+@pytest.mark.process
 def test_hdf5_never_meets_a_full_disk_inside_the_library(tmp_path):
     """Even if the free-space check is fooled, HDF5 does not write into a full disk: the
     blocks are reserved first (measured before: thousands of HDF5 errors, then a crash)."""
@@ -113,7 +115,7 @@ def test_hdf5_never_meets_a_full_disk_inside_the_library(tmp_path):
         import campar.sweep.store._hdf5 as h5
         Usage = collections.namedtuple("Usage", "total used free")
         h5.shutil.disk_usage = lambda path: Usage(1 << 40, 0, 1 << 40)
-        from damage import synthetic_store
+        from support.damage import synthetic_store
         from test_store import make_job
         synthetic_store({str(disk / "s.h5")!r}, make_job(sweep__omega__points=200))
     """)
@@ -128,6 +130,7 @@ def test_hdf5_never_meets_a_full_disk_inside_the_library(tmp_path):
         assert leftovers(disk) == []
 
 
+@pytest.mark.process
 def test_a_read_only_store_path_is_one_line_74_before_any_computation(tmp_path):
     folder = tmp_path / "ro"
     with small_disk(folder, 64):
@@ -169,7 +172,7 @@ def test_outputs_are_checked_before_anything_is_computed(tmp_path):
 def test_an_output_in_a_missing_folder_is_one_line_and_creates_no_folder(
     tmp_path, monkeypatch, capsys, args
 ):
-    from damage import synthetic_store
+    from support.damage import synthetic_store
 
     from campar.cli import main
 
@@ -223,6 +226,7 @@ def test_an_empty_lock_file_is_refused_naming_the_file_not_pid_none(tmp_path):
     assert "None" not in str(err.value)
 
 
+@pytest.mark.process
 def test_lock_files_a_killed_run_was_writing_are_removed(tmp_path):
     path = tmp_path / "s.zarr"
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
@@ -255,9 +259,13 @@ def test_a_signal_before_the_start_is_one_interrupted_and_after_the_end_nothing(
 
 
 @pytest.mark.parametrize("delay", [0.15, pytest.param(0.6, marks=pytest.mark.slow)])
+@pytest.mark.process
 def test_campar_run_interrupted_early_says_so_in_one_line(write_job, delay):
+    # from campar's first line on (before it, Python's own start-up, which takes longer
+    # than a fixed delay on a loaded machine, handles a SIGINT with its own traceback)
     path, job = write_job()
     proc = start_campar("run", path)
+    wait_until_guarded(proc, ranks=1)
     time.sleep(delay)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
@@ -376,6 +384,8 @@ def test_a_store_of_synthetic_tiles_resumes_after_a_kill_inside_a_write(tmp_path
 
 @pytest.mark.slow  # mpirun: ~3 s
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
+@pytest.mark.process
+@pytest.mark.mpi
 def test_under_mpirun_a_bad_job_or_store_is_reported_once(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text(
@@ -399,6 +409,7 @@ def test_under_mpirun_a_bad_job_or_store_is_reported_once(tmp_path):
 
 
 @pytest.mark.slow  # builds stores of 2.25 and 9 million cells, ~20 s
+@pytest.mark.process
 def test_status_and_verify_memory_does_not_grow_with_the_grid(tmp_path):
     """Both read the store tile by tile: 4× the cells (some 500 MB more of arrays), about the
     same memory. Measured here (peak RSS, MB): 500² 87, 1500² 136, 3000² 148, 4000² 167 —
@@ -414,7 +425,7 @@ def test_status_and_verify_memory_does_not_grow_with_the_grid(tmp_path):
 def test_an_hdf5_store_with_a_second_name_is_refused_untouched(tmp_path):
     """A hard link is another name the lock does not know: a second run through it would
     write the same file. Refused, the store left as it was."""
-    from damage import synthetic_store
+    from support.damage import synthetic_store
     from test_store import snapshot
 
     from campar.errors import StoreError

@@ -23,7 +23,7 @@ import warnings
 
 import numpy as np
 import pytest
-from damage import DAMAGE, assert_synthetic, damage_file, finish, synthetic_store
+from support.damage import DAMAGE, assert_synthetic, damage_file, finish, synthetic_store
 from test_damage import HDF5_DAMAGE, ZARR_DAMAGE
 from test_faults import short_watchdog  # noqa: F401 (fixture: rescues give up after 3 s)
 from test_store import make_job

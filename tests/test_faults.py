@@ -22,8 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import MPIRUN, assert_same_map, kill_tree, subprocess_env, wait_until_guarded
-from damage import (
+from support.damage import (
     DAMAGE,
     assert_synthetic,
     damage_file,
@@ -33,6 +32,8 @@ from damage import (
     synthetic_store,
     zarr_chunks,
 )
+from support.jobs import assert_same_map
+from support.processes import MPIRUN, kill_tree, subprocess_env, wait_until_guarded
 from test_store import make_job
 
 from campar.errors import StoreDamaged
@@ -62,7 +63,7 @@ WRITER = """
 import os, signal, sys, threading, time
 import campar.sweep.store._hdf5 as h5
 h5.CHECKPOINT_TILES = 1  # every tile goes through a checkpoint: kills land inside them too
-from damage import finish
+from support.damage import finish
 from test_store import make_job
 job = make_job(**{JOB!r})
 threading.Timer(float(sys.argv[2]), os.kill, (os.getpid(), signal.SIGKILL)).start()
@@ -91,6 +92,7 @@ def kill_writers(path: Path, kills: int, seed: int, span: float = 0.6) -> int:
 
 
 @pytest.mark.parametrize("suffix", BACKENDS)
+@pytest.mark.process
 def test_writers_killed_at_random_moments_lose_no_committed_tile(tmp_path, suffix):
     path = tmp_path / f"k{suffix}"
     kill_writers(path, 1, seed=len(suffix))
@@ -155,7 +157,8 @@ def damage_and_repair(path: Path, rounds: int, seed: int) -> dict:
     return counts
 
 
-@pytest.mark.parametrize("suffix", BACKENDS)
+# a damaged HDF5 file is read through campar's guard, a child process (_h5guard)
+@pytest.mark.parametrize("suffix", [".zarr", pytest.param(".h5", marks=pytest.mark.process)])
 def test_random_damage_is_detected_and_repaired(tmp_path, suffix):
     rounds = 4 if suffix == ".zarr" else 2  # an HDF5 rescue starts child processes
     counts = damage_and_repair(tmp_path / f"d{suffix}", rounds, seed=7 + len(suffix))
@@ -265,6 +268,9 @@ def interrupt_until_complete(job_file, job, mpi: bool, rng, how: str, timing) ->
 @pytest.mark.parametrize("mpi", [False, True], ids=["serial", "mpi"])
 @pytest.mark.parametrize("suffix", BACKENDS)
 @pytest.mark.parametrize("how", ["kill", "signal"])
+@pytest.mark.process
+@pytest.mark.mpi
+@pytest.mark.timeout(1200)  # runs again and again until one completes (up to 60)
 def test_runs_interrupted_at_random_moments_resume_bitwise_identical(
     write_job, tmp_path, suffix, mpi, how
 ):
@@ -292,6 +298,8 @@ def test_runs_interrupted_at_random_moments_resume_bitwise_identical(
     # under mpirun a Zarr store's worker writes its own tiles: its full disk ends the run too
     [*((suffix, False) for suffix in BACKENDS), (".zarr", True)],
 )
+@pytest.mark.process
+@pytest.mark.mpi
 def test_runs_on_a_full_disk_fail_in_one_line_and_resume_identical(
     write_job, tmp_path, suffix, mpi
 ):

@@ -187,6 +187,7 @@ def test_line_command_draws_and_saves(tmp_path, capsys):
     assert "80 cells in" in capsys.readouterr().out
 
 
+@pytest.mark.process
 def test_point_command_writes_a_png(tmp_path):
     out = tmp_path / "orbit.png"
     done = subprocess.run(
@@ -211,6 +212,7 @@ def test_point_command_writes_a_png(tmp_path):
     assert out.read_bytes().startswith(PNG)
 
 
+@pytest.mark.process
 def test_importing_the_views_stays_light():
     code = (
         "import sys, campar.views.plot, campar.views.plot.orbit; "
@@ -265,6 +267,7 @@ def gallery(tmp_path_factory):
     return out / "g", pngs, titles
 
 
+@pytest.mark.slow  # a tiny gallery under both force laws: minutes
 def test_gallery_writes_every_figure_under_both_force_laws_with_its_job_file(gallery):
     from campar.sweep.job import load_job
 
@@ -288,6 +291,7 @@ def test_gallery_writes_every_figure_under_both_force_laws_with_its_job_file(gal
 UNITS = re.compile(r"\([^()]*(units of|dimensionless)")
 
 
+@pytest.mark.slow  # a tiny gallery under both force laws: minutes
 def test_every_figure_states_force_law_start_direction_and_units(gallery):
     from campar.paper.gallery import DIRECTION_TEXT, LAW_TEXT, START_TEXT
 
@@ -318,6 +322,7 @@ def test_every_figure_states_force_law_start_direction_and_units(gallery):
         assert yaml.safe_load((outdir / f"{stem}.yaml").read_text())["direction"] == "none"
 
 
+@pytest.mark.slow  # a tiny gallery under both force laws: minutes
 def test_label_maps_palettes_are_pairwise_distinct(gallery):
     from campar.views.plot.colour import pairwise_delta_e00
     from campar.views.plot.labels import GAP_STYLE, MIN_DELTA_E00
@@ -334,6 +339,7 @@ def test_label_maps_palettes_are_pairwise_distinct(gallery):
         assert d.min() >= MIN_DELTA_E00, (path.name, palette)
 
 
+@pytest.mark.slow  # a tiny gallery under both force laws: minutes
 def test_fig6_follows_the_planes_path_and_fig9_shades_the_clamp(gallery):
     outdir, _, _ = gallery
     for law, suffix in (("clamp", ""), ("allow", "-allow")):

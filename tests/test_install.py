@@ -5,6 +5,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 REPOSITORY = Path(__file__).resolve().parents[1]
 
 SCRIPT = """
@@ -14,6 +16,7 @@ print(callable(campar.simulate_point), callable(campar.run))
 """
 
 
+@pytest.mark.process
 def test_a_script_beside_the_clone_folder_imports_the_package(tmp_path):
     (tmp_path / "campar").symlink_to(REPOSITORY, target_is_directory=True)  # ~/campar: a clone
     script = tmp_path / "script.py"

@@ -91,6 +91,7 @@ def test_tableau_invariants():
 
 
 @pytest.mark.parametrize("rtol", [1e-6, 1e-8, 1e-10])
+@pytest.mark.slow  # compiles the integrator for a field and a method of its own
 def test_dp54_error_tracks_rtol_on_an_oscillator(rtol):
     p = Omega(2.0)
     # to t = 1 the solution crosses y = 0 once (t = π/4): an event on the way
@@ -110,6 +111,7 @@ def test_events_are_located_on_exact_roots():
     np.testing.assert_allclose(times, roots, atol=1e-9)
 
 
+@pytest.mark.slow  # compiles the integrator for a field and a method of its own
 def test_rk4_fixed_step_error_is_fourth_order():
     p = Omega(1.0)
     errs = []

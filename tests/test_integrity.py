@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import zarr
-from conftest import assert_same_map, run_campar
-from damage import assert_synthetic, damage_file, finish, synthetic_store, zarr_chunks
+from support.cli import call_campar
+from support.damage import assert_synthetic, damage_file, finish, synthetic_store, zarr_chunks
+from support.jobs import assert_same_map
 from test_store import fake_tile, make_job
 
 import campar
@@ -108,6 +109,7 @@ def test_a_pending_tile_with_stray_chunks_is_not_damage(tmp_path):
         assert (reader.read_rows("n", plan_tiles(job)[1].rows) == -1).all()
 
 
+@pytest.mark.process  # campar's HDF5 guard reads a damaged file in a child
 def test_hdf5_damage_anywhere_in_the_file_is_seen_before_hdf5_reads_it(tmp_path):
     path = tmp_path / "s.h5"
     job = synthetic_store(path)
@@ -148,6 +150,7 @@ def test_hdf5_zeroed_user_block_and_zeroed_start_are_named(tmp_path):
     assert path.exists()  # never deleted
 
 
+@pytest.mark.process  # campar's HDF5 guard reads a damaged file in a child
 def test_a_truncated_hdf5_store_is_called_damaged_not_foreign(tmp_path):
     path = tmp_path / "s.h5"
     synthetic_store(path)
@@ -183,7 +186,7 @@ def test_a_damaged_journal_entry_is_set_aside_and_its_tile_recomputed(tmp_path, 
     assert_synthetic(path, job)
 
 
-def test_metadata_that_disagrees_with_the_arrays_is_reported_not_an_index_error(tmp_path):
+def test_metadata_that_disagrees_with_the_arrays_is_reported_not_an_index_error(capsys, tmp_path):
     path = tmp_path / "s.zarr"
     synthetic_store(path)
     group = zarr.open_group(path, mode="r+")
@@ -192,22 +195,22 @@ def test_metadata_that_disagrees_with_the_arrays_is_reported_not_an_index_error(
     group.attrs["job"] = json.dumps(stored)
     with pytest.raises(StoreDamaged, match="disagrees with itself.*hash.*array n has shape"):
         read_store(path)
-    status = run_campar("status", path)
+    status = call_campar(capsys, "status", path)
     assert status.returncode == StoreDamaged.exit_code, status.stderr
     assert "Traceback" not in status.stderr and len(status.stderr.splitlines()) == 1
 
 
-def test_status_reports_damage_and_verify_lists_it_then_run_repairs(write_job, caplog):
+def test_status_reports_damage_and_verify_lists_it_then_run_repairs(capsys, write_job, caplog):
     """The issue's recipe: chunks deleted from a finished store (the CLI reads it)."""
     _, job = write_job(tiles={"rows": 2})
     runner.run_job(job)
     path = Path(job.store)
     for name, index in (("n", 1), ("dc", 2)):
         (path / name / f"c.{index}.0").unlink()  # rm S.zarr/n/c.1.0 …
-    status = run_campar("status", path)
+    status = call_campar(capsys, "status", path)
     assert status.returncode == 0, status.stderr
     assert "tiles   1/3 done, 2 damaged (tiles 1, 2" in status.stdout
-    verify = run_campar("verify", path)
+    verify = call_campar(capsys, "verify", path)
     assert verify.returncode == StoreDamaged.exit_code
     assert "tile 1: checksum mismatch" in verify.stdout and "tile 2: checksum" in verify.stdout
     assert runner.run_job(job).outcome == "complete"

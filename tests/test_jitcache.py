@@ -5,6 +5,8 @@ import subprocess
 import sys
 import textwrap
 
+import pytest
+
 CHECK = textwrap.dedent("""
     import os, sys
     from pathlib import Path
@@ -29,6 +31,7 @@ CHECK = textwrap.dedent("""
 """)
 
 
+@pytest.mark.process
 def test_stale_entries_are_cleared_under_numba_cache_dir(tmp_path):
     # numba keeps entries in NUMBA_CACHE_DIR/<source dir>_<hash>/, not at its top
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}

@@ -157,7 +157,7 @@ def bad_job_files(draw) -> bytes:
 
 @settings(
     max_examples=320,
-    deadline=5000,  # ms per variant: a refusal takes milliseconds
+    deadline=None,  # wall time depends on the machine's load: the CPU time is checked below
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
     database=None,
 )
@@ -170,9 +170,9 @@ def test_every_generated_bad_job_file_is_one_line_and_exit_2(data, capsys):
         cwd = os.getcwd()
         os.chdir(folder)  # store paths are relative: whatever a run wrote would land here
         try:
-            start = time.monotonic()
+            start = time.process_time()  # CPU: a refusal computes nothing, however busy the machine
             code = main(["run", str(job)])
-            seconds = time.monotonic() - start
+            seconds = time.process_time() - start
         finally:
             os.chdir(cwd)
         err = capsys.readouterr().err

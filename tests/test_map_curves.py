@@ -7,7 +7,9 @@ import subprocess
 
 import numpy as np
 import pytest
-from conftest import CAMPAR, MPIRUN, run_campar, stored, subprocess_env
+from support.cli import call_campar
+from support.processes import CAMPAR, MPIRUN, subprocess_env
+from support.stores import stored
 
 from campar.continuation.orbit import find_cycle
 from campar.errors import JobError
@@ -38,7 +40,7 @@ def tongue(tmp_path_factory):
     where = tmp_path_factory.mktemp("tongue")
     path = where / "tongue.zarr"
     run_job(Job.from_dict(TONGUE), path)
-    out = run_campar("curves", path, "--types", "PD", "--points", "200", timeout=900)
+    out = call_campar(None, "curves", path, "--types", "PD", "--points", "200")
     assert out.returncode == 0, out.stderr
     return path
 
@@ -87,25 +89,29 @@ def test_the_maps_pd_edges_lie_on_the_curve(tongue):
     assert a.length_near >= 0.75, a
 
 
-def test_the_curves_store_is_verified_and_resumes_to_the_same_bytes(tongue):
+def test_the_curves_store_is_verified_and_resumes_to_the_same_bytes(capsys, tongue):
     curves = tongue.with_name("tongue-curves.zarr")
-    assert run_campar("verify", curves).returncode == 0
-    status = run_campar("status", curves)
+    assert call_campar(capsys, "verify", curves).returncode == 0
+    status = call_campar(capsys, "status", curves)
     assert "PD of 1-cycles" in status.stdout
     before = stored(curves)
-    again = run_campar("curves", tongue, "--types", "PD", "--points", "200", "--json")
+    again = call_campar(capsys, "curves", tongue, "--types", "PD", "--points", "200", "--json")
     assert again.returncode == 0, again.stderr
     assert json.loads(again.stdout)["curves"][0]["type"] == "PD"
     after = stored(curves)
     assert all(np.array_equal(before[k], after[k], equal_nan=True) for k in before)
     # another map's seeds make another job: its store is refused, nothing overwritten
-    other = run_campar("curves", tongue, "--types", "PD", "--points", "100", "--store", curves)
+    other = call_campar(
+        capsys, "curves", tongue, "--types", "PD", "--points", "100", "--store", curves
+    )
     assert other.returncode == 3 and "different job" in other.stderr, other.stderr
     assert all(np.array_equal(before[k], stored(curves)[k], equal_nan=True) for k in before)
 
 
 @pytest.mark.mpi
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
+@pytest.mark.process
+@pytest.mark.timeout(900)  # 200-point curves on two ranks, each started cold
 def test_curves_under_mpirun_equal_the_serial_ones(tongue, tmp_path):
     out = subprocess.run(
         [
@@ -134,7 +140,7 @@ def test_curves_under_mpirun_equal_the_serial_ones(tongue, tmp_path):
         assert np.array_equal(serial[name], parallel[name], equal_nan=True), name
 
 
-def test_bad_curves_requests_are_one_line(tongue, tmp_path):
+def test_bad_curves_requests_are_one_line(capsys, tongue, tmp_path):
     data = curves_job(tongue, ("PD",), points=50, store=tmp_path / "c.zarr").to_dict()
     data.pop("curves")
     with pytest.raises(JobError, match="is a curves job"):
@@ -143,7 +149,7 @@ def test_bad_curves_requests_are_one_line(tongue, tmp_path):
         (["--types", "XX"], "--types"),
         (["--points", "1"], "--points"),
     ):
-        out = run_campar("curves", tongue, *argv)
+        out = call_campar(capsys, "curves", tongue, *argv)
         assert out.returncode == 2 and message in out.stderr, out.stderr
         assert len(out.stderr.strip().splitlines()) == 1
     basin = {
@@ -155,5 +161,5 @@ def test_bad_curves_requests_are_one_line(tongue, tmp_path):
         "fixed": {"omega": 3.0},
     }
     run_job(Job.from_dict(basin), tmp_path / "basin.zarr")
-    out = run_campar("curves", tmp_path / "basin.zarr")
+    out = call_campar(capsys, "curves", tmp_path / "basin.zarr")
     assert out.returncode == 2 and "basin store" in out.stderr

@@ -13,10 +13,10 @@ import textwrap
 import time
 
 import pytest
-from conftest import (
+from support.jobs import assert_same_map
+from support.processes import (
     CAMPAR,
     MPIRUN,
-    assert_same_map,
     kill_tree,
     run_campar,
     start_campar,
@@ -57,6 +57,8 @@ def last_run(store) -> dict:
 
 
 @pytest.mark.parametrize("ranks", [2, pytest.param(3, marks=slow)])
+@pytest.mark.process
+@pytest.mark.mpi
 def test_mpi_map_equals_the_serial_one_and_every_rank_computes(write_job, ranks):
     path, job = write_job(slow=True)
     result = run_mpi(ranks, "run", path)
@@ -74,6 +76,8 @@ def test_mpi_map_equals_the_serial_one_and_every_rank_computes(write_job, ranks)
 
 @slow
 @pytest.mark.parametrize(("suffix", "env"), [(".zarr", {"CAMPAR_WRITER": "master"}), (".h5", {})])
+@pytest.mark.process
+@pytest.mark.mpi
 def test_where_the_master_writes_every_tile_the_map_is_the_same(write_job, tmp_path, suffix, env):
     path, job = write_job(slow=True, store=str(tmp_path / f"m{suffix}"))
     result = subprocess.run(
@@ -91,6 +95,8 @@ def test_where_the_master_writes_every_tile_the_map_is_the_same(write_job, tmp_p
 
 
 @slow
+@pytest.mark.process
+@pytest.mark.mpi
 def test_mpi_run_killed_with_sigkill_resumes_to_the_same_map(write_job):
     path, job = write_job(slow=True)
     proc = start_campar("run", path, launcher=mpirun(2))
@@ -110,6 +116,8 @@ def test_mpi_run_killed_with_sigkill_resumes_to_the_same_map(write_job):
 
 @slow
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGUSR1])
+@pytest.mark.process
+@pytest.mark.mpi
 def test_a_signal_to_mpirun_exits_75_and_a_serial_run_resumes(write_job, signum):
     path, job = write_job(slow=True)
     proc = start_campar("run", path, launcher=mpirun(2))
@@ -128,6 +136,8 @@ def test_a_signal_to_mpirun_exits_75_and_a_serial_run_resumes(write_job, signum)
 
 
 @slow
+@pytest.mark.process
+@pytest.mark.mpi
 def test_a_stop_takes_back_the_tiles_queued_on_lanes(write_job, tmp_path):
     """Lanes hold their next tile (TILES_HELD): on a signal the master takes the queued
     ones back (WITHDRAW), so no tile starts after it and every started one is collected."""
@@ -173,6 +183,8 @@ def test_a_stop_takes_back_the_tiles_queued_on_lanes(write_job, tmp_path):
 
 
 @slow
+@pytest.mark.process
+@pytest.mark.mpi
 def test_one_probe_loop_takes_in_every_waiting_message():
     """mpich's Iprobe can bring a message in and still answer no: the master's loop must
     not stop at the first no, or a backlog of messages drains one per poll."""
@@ -221,6 +233,8 @@ def run_with_faults(ranks, job_path, fault) -> subprocess.CompletedProcess:
 
 
 @slow
+@pytest.mark.process
+@pytest.mark.mpi
 def test_a_worker_that_fails_every_tile_does_not_stop_the_run(write_job):
     path, job = write_job(slow=True)  # rank 0 cannot finish alone before rank 1 asks
     result = run_with_faults(2, path, "rank == 1")
@@ -232,6 +246,8 @@ def test_a_worker_that_fails_every_tile_does_not_stop_the_run(write_job):
 
 
 @slow
+@pytest.mark.process
+@pytest.mark.mpi
 def test_a_tile_that_fails_on_two_ranks_ends_the_run_with_where(write_job):
     path, job = write_job()
     result = run_with_faults(3, path, "tile.index == 4")
@@ -263,6 +279,9 @@ COLD_RUN = textwrap.dedent("""
 
 
 @slow
+@pytest.mark.process
+@pytest.mark.mpi
+@pytest.mark.timeout(600)  # a cold compile on two ranks: minutes on a loaded machine
 def test_ranks_of_a_node_split_a_cold_compile_and_load_each_others_half(write_job, tmp_path):
     path, job = write_job()
     env = {**subprocess_env(), "NUMBA_CACHE_DIR": str(tmp_path / "empty cache")}
@@ -285,6 +304,8 @@ def test_ranks_of_a_node_split_a_cold_compile_and_load_each_others_half(write_jo
 
 
 @slow
+@pytest.mark.process
+@pytest.mark.mpi
 def test_refusals_under_mpi_end_every_rank(write_job):
     path, job = write_job()
     assert run_campar("run", path).returncode == 0
@@ -296,6 +317,8 @@ def test_refusals_under_mpi_end_every_rank(write_job):
 
 
 @slow
+@pytest.mark.process
+@pytest.mark.mpi
 def test_every_rank_of_an_spmd_caller_sees_the_masters_error(write_job):
     """Library callers run the same code on every rank: a refusal must reach them all."""
     path, job = write_job()
@@ -330,6 +353,8 @@ def test_every_rank_of_an_spmd_caller_sees_the_masters_error(write_job):
 
 
 @slow
+@pytest.mark.process
+@pytest.mark.mpi
 def test_no_rank_spins_while_waiting(write_job):
     """Tiles that sleep (no CPU) on both ranks: CPU time stays far below wall time on each."""
     path, job = write_job()
@@ -360,6 +385,8 @@ def test_no_rank_spins_while_waiting(write_job):
 
 
 @slow
+@pytest.mark.process
+@pytest.mark.mpi
 def test_auto_tile_rows_are_chosen_for_the_ranks_and_kept_by_a_resume(write_job):
     grid = {
         "omega": {"from": 6.0, "to": 1.0, "points": 12},

@@ -13,16 +13,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
-    MPIRUN,
-    assert_mpirun_store_equals,
-    assert_same_store,
-    computed_store,
-    merge,
-    resume_after_interrupt,
-    run_campar,
-    stored,
-)
+from support.cli import call_campar
+from support.jobs import computed_store, merge, resume_after_interrupt
+from support.processes import MPIRUN, assert_mpirun_store_equals
+from support.stores import assert_same_store, stored
 
 import campar
 import campar.sweep.runner as runner
@@ -201,7 +195,7 @@ def test_campar_open_offers_the_census_with_cf_attributes(census, tmp_path):
         assert (has.sum(axis=-1) == stored_count).all()
 
 
-def test_plot_multistability_draws_the_counts_and_refuses_a_store_without(census, tmp_path):
+def test_plot_multistability_draws_the_counts_and_refuses_a_store_without(capsys, census, tmp_path):
     path, _ = census
     out = plot_store(path, "multistability", tmp_path / "m.png")
     assert out.stat().st_size > 0
@@ -209,7 +203,7 @@ def test_plot_multistability_draws_the_counts_and_refuses_a_store_without(census
     runner.run_job(plain, tmp_path / "plain.zarr")
     with pytest.raises(PlotError, match="holds no n_attractors.*attractors key"):
         plot_store(tmp_path / "plain.zarr", "multistability", tmp_path / "p.png")
-    result = run_campar("plot", path, "--what", "multistability", "-o", tmp_path / "c.png")
+    result = call_campar(capsys, "plot", path, "--what", "multistability", "-o", tmp_path / "c.png")
     assert result.returncode == 0, result.stderr
 
 
@@ -312,6 +306,7 @@ def test_a_both_direction_map_has_a_census_per_direction_equal_to_each_one(tmp_p
 @pytest.mark.slow
 @pytest.mark.mpi
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
+@pytest.mark.process
 def test_a_census_map_under_mpirun_equals_the_serial_one(census, tmp_path):
     serial, _ = census
     assert_mpirun_store_equals(GRID, tmp_path, serial)

@@ -2,16 +2,10 @@
 the tests run with, and where a numba lacks them campar compiles normally, with the same
 results."""
 
-import json
-import os
-import subprocess
-import sys
-import textwrap
 import tomllib
 from pathlib import Path
 
 import numba
-import pytest
 from packaging.specifiers import SpecifierSet
 
 from campar.core import jitcache, numba_internals, split_compile
@@ -61,40 +55,3 @@ def test_without_the_internals_nothing_is_split_and_nothing_waits(monkeypatch):
 
     never = (types.Array(types.float64, 3, "C"),) * 2
     split_compile.until_cached(run_revolution, never)  # returns at once, no 60 s wait
-
-
-COLD_POINT = textwrap.dedent("""
-    import json, sys
-    from campar.core import numba_internals, split_compile
-    from campar.views.point import simulate_point
-
-    numba_internals.CACHE_ATTRIBUTE = sys.argv[1]
-    forked = []
-    start = split_compile.start_helper
-    def start_helper(*args):
-        forked.append(start(*args))
-        return forked[-1]
-    split_compile.start_helper = start_helper
-    result = simulate_point(3.0, mu_cn=0.75, multipliers=True)
-    print(json.dumps({"forked": [pid is not None for pid in forked], "result": result.to_dict()}))
-""")
-
-
-@pytest.mark.slow
-def test_a_cold_compile_without_the_internals_gives_the_same_cell(tmp_path):
-    """A numba whose cache campar cannot ask: a cold ``simulate_point`` forks no helper,
-    compiles everything itself, and gives the cell this process gives."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
-    run = subprocess.run(
-        [sys.executable, "-c", COLD_POINT, ANOTHER_NUMBA],
-        env=env,
-        text=True,
-        capture_output=True,
-        timeout=600,
-    )
-    assert run.returncode == 0, run.stderr
-    without = json.loads(run.stdout)
-    assert without["forked"] == [False]
-    here = simulate_point(3.0, mu_cn=0.75, multipliers=True).to_dict()
-    assert json.loads(json.dumps(here)) == without["result"]
-    assert here["label"] == "1-1"

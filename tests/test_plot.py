@@ -20,6 +20,7 @@ from campar.core.codes import FAILED as KIND_FAILED
 from campar.sweep.job import Job
 from campar.sweep.plan import plan_tiles
 from campar.views.plot import MAP_VIEWS, PlotError, parse_range, plot_store
+from campar.views.plot.cells import cell_runs
 from campar.views.plot.colour import srgb_to_lab
 from campar.views.plot.labels import (
     DESIGNED,
@@ -40,7 +41,6 @@ from campar.views.plot.maps import (
     QUANTITIES,
     MapGrid,
     cell_edges,
-    cell_runs,
     computed_mask,
     plot_map,
     quantity_scale,
@@ -216,6 +216,7 @@ def test_designed_colours_are_pairwise_distinguishable():
     assert GAP_STYLE[FAILED]["hatch"] != GAP_STYLE[NOT_COMPUTED]["hatch"]
 
 
+@pytest.mark.process
 def test_rare_labels_get_deterministic_colours_away_from_the_designed_ones():
     rare = [(n, p) for n in range(5, 33) for p in [*range(7), None]]
     colours = [fallback_colour(n, p) for n, p in rare]
@@ -395,6 +396,7 @@ def test_views_and_quantities_agree():
         plot_map(grid_of(2, 2), {"kind": np.zeros((2, 2))}, "labels")
 
 
+@pytest.mark.process
 def test_importing_the_views_loads_neither_pyplot_nor_the_kernel():
     code = (
         "import sys, campar.views.plot.maps\n"

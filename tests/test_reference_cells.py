@@ -1,20 +1,17 @@
-"""Every cell of ../shared/reference_cases.json (SciPy DOP853 at rtol 1e-10).
+"""Every cell of tests/data/reference_cases.json (SciPy DOP853 at rtol 1e-10).
 
 n-p exact, duty cycle and ε extremes within 0.0025, Pn max within 1 %, from
 both the stated and the alternative initial state.
 """
 
 import json
-from pathlib import Path
 
 import pytest
+from support.jobs import REFERENCE_CASES
 
 from campar import simulate_point
 
-REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference_cases.json"
-if not REFERENCE.exists():  # a checkout outside the workplace: the copy in tests/data
-    REFERENCE = Path(__file__).resolve().parent / "data" / "reference_cases.json"
-CASES = json.loads(REFERENCE.read_text())["cases"]
+CASES = json.loads(REFERENCE_CASES.read_text())["cases"]
 
 
 def runs():

@@ -10,14 +10,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
-    assert_same_map,
-    kill_tree,
-    reference_arrays,
-    run_campar,
-    start_campar,
-    wait_for_tiles,
-)
+from support.cli import call_campar
+from support.jobs import assert_same_map, reference_arrays
+from support.processes import kill_tree, run_campar, start_campar, wait_for_tiles
 
 import campar.sweep.runner as runner
 import campar.sweep.wire as wire
@@ -240,11 +235,11 @@ def test_progress_line_counts_rate_and_eta():
 # -- the command line, in subprocesses --------------------------------------------------
 
 
-def test_run_then_status_reports_tiles_cells_and_runs(write_job):
+def test_run_then_status_reports_tiles_cells_and_runs(capsys, write_job):
     path, job = write_job()
-    done = run_campar("run", path)
+    done = call_campar(capsys, "run", path)
     assert done.returncode == 0, done.stderr
-    status = run_campar("status", job.store)
+    status = call_campar(capsys, "status", job.store)
     assert status.returncode == 0, status.stderr
     assert "tiles   6/6 done" in status.stdout
     assert "cells   72/72 done, 0 failed" in status.stdout
@@ -254,13 +249,14 @@ def test_run_then_status_reports_tiles_cells_and_runs(write_job):
     assert f"periodic {periodic}" in status.stdout
 
 
-def test_status_of_a_missing_store_exits_3(tmp_path):
-    result = run_campar("status", tmp_path / "none.zarr")
+def test_status_of_a_missing_store_exits_3(capsys, tmp_path):
+    result = call_campar(capsys, "status", tmp_path / "none.zarr")
     assert result.returncode == 3 and "no store" in result.stderr
 
 
 @pytest.mark.slow  # ~4 s each; the store suite kills writers quickly, per backend
 @pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+@pytest.mark.process
 def test_sigkill_mid_run_then_resume_gives_the_same_map(write_job, tmp_path, suffix):
     path, job = write_job(slow=True, store=str(tmp_path / f"slow{suffix}"))
     proc = start_campar("run", path)
@@ -277,6 +273,7 @@ def test_sigkill_mid_run_then_resume_gives_the_same_map(write_job, tmp_path, suf
         assert reader.attrs["runs"][-1]["tiles"] == 6 - sum(done)
 
 
+@pytest.mark.process
 def test_sigterm_exits_75_and_the_same_command_resumes(write_job):
     path, job = write_job(slow=True)
     proc = start_campar("run", path)
@@ -294,6 +291,7 @@ def test_sigterm_exits_75_and_the_same_command_resumes(write_job):
 
 
 @pytest.mark.slow  # ~4 s; the store suite checks the lock of another process in 0.5 s
+@pytest.mark.process
 def test_a_concurrent_run_is_refused_with_host_and_pid(write_job):
     # 24 tiles: the first run is still busy when the second has started (with 6 it once
     # finished them all first, on a loaded machine); SIGTERM ends it either way
@@ -309,19 +307,19 @@ def test_a_concurrent_run_is_refused_with_host_and_pid(write_job):
         first.communicate(timeout=60)
 
 
-def test_a_store_of_another_job_is_refused_untouched_unless_overwrite(write_job):
+def test_a_store_of_another_job_is_refused_untouched_unless_overwrite(capsys, write_job):
     path, job = write_job()
-    assert run_campar("run", path).returncode == 0
+    assert call_campar(capsys, "run", path).returncode == 0
     with read_store(job.store) as reader:
         before = reader.read("n").copy()
     changed, _ = write_job(integrator={"rtol": 1e-9}, store=job.store)
-    refused = run_campar("run", changed)
+    refused = call_campar(capsys, "run", changed)
     assert refused.returncode == 3
     assert "integrator.rtol: 1e-07 in the store, 1e-09 in the job" in refused.stderr
     with read_store(job.store) as reader:
         np.testing.assert_array_equal(reader.read("n"), before)
         assert reader.attrs["job"]["integrator"]["rtol"] == 1e-7
-    replaced = run_campar("run", changed, "--overwrite")
+    replaced = call_campar(capsys, "run", changed, "--overwrite")
     assert replaced.returncode == 0, replaced.stderr
     with read_store(job.store) as reader:
         assert reader.attrs["job"]["integrator"]["rtol"] == 1e-9
@@ -329,6 +327,7 @@ def test_a_store_of_another_job_is_refused_untouched_unless_overwrite(write_job)
 
 @pytest.mark.slow  # six runs killed at random moments, ~5 s per backend
 @pytest.mark.parametrize("suffix", [".zarr", ".h5"])
+@pytest.mark.process
 def test_repeated_sigkills_at_random_moments_then_resume_give_the_same_map(
     write_job, tmp_path, suffix
 ):

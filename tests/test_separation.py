@@ -1,12 +1,10 @@
 """The separation speed of a map row (campar.sweep.separation): located by bisection on the
 chain's states, checked against cells on either side and against the SciPy peer."""
 
-import subprocess
-
 import numpy as np
 import pytest
 import yaml
-from conftest import CAMPAR
+from support.cli import call_campar
 
 import campar
 from campar.bench.scipy_model import Model, integrate
@@ -103,7 +101,7 @@ def test_a_row_detaching_everywhere_has_no_separation_speed_on_its_grid():
     assert np.isnan(cells["separation_omega"][0]).all()
 
 
-def test_campar_open_gives_one_separation_speed_a_row(tmp_path):
+def test_campar_open_gives_one_separation_speed_a_row(capsys, tmp_path):
     data = {
         **ROW,
         "sweep": {
@@ -114,19 +112,14 @@ def test_campar_open_gives_one_separation_speed_a_row(tmp_path):
     }
     path = tmp_path / "s.yaml"
     path.write_text(yaml.safe_dump(data))
-    run = subprocess.run([*CAMPAR, "run", str(path)], capture_output=True, text=True, timeout=600)
+    run = call_campar(capsys, "run", path)
     assert run.returncode == 0, run.stderr
     with campar.open(tmp_path / "s.zarr") as ds:
         assert ds["separation_speed"].dims == ("phi1",)
         assert ds["phi1"].attrs["long_name"] == "cam rise angle"
         speeds = ds["separation_speed"].values
         assert np.all(np.isfinite(speeds)) and np.all((speeds > 0.3) & (speeds < 1.2))
-    shown = subprocess.run(
-        [*CAMPAR, "separation", str(tmp_path / "s.zarr")],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    shown = call_campar(capsys, "separation", tmp_path / "s.zarr")
     assert shown.returncode == 0 and "separation speed" in shown.stdout
 
 

@@ -25,8 +25,9 @@ import numpy as np
 import pytest
 import yaml
 
-# Installs and starts SLURM (apt-get, as root) and runs the smoke job through it: ~70 s.
-pytestmark = [pytest.mark.slurm, pytest.mark.slow]
+# Installs and starts SLURM (apt-get, as root) and runs the smoke job through it: ~70 s,
+# and the install alone may take minutes.
+pytestmark = [pytest.mark.slurm, pytest.mark.slow, pytest.mark.timeout(1200)]
 
 REPO = Path(__file__).resolve().parents[1]
 CLUSTER = REPO / "slurm" / "local-cluster.sh"

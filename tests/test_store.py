@@ -202,6 +202,7 @@ class StoreSuite:
         assert f"pid {os.getpid()}" in str(err.value)
         assert socket.gethostname() in str(err.value)
 
+    @pytest.mark.process
     def test_a_run_in_another_process_holds_the_lock(self, path, job, tmp_path):
         script = textwrap.dedent(f"""
             import sys, time
@@ -224,6 +225,7 @@ class StoreSuite:
         with open_store(path, job):  # released when the holder closed the store
             pass
 
+    @pytest.mark.process
     def test_a_stale_lock_is_taken_over_with_a_warning(self, path, job, caplog):
         with open_store(path, job):
             pass
@@ -299,6 +301,7 @@ class StoreSuite:
             assert ds.attrs["job_hash"] == job.digest()
             assert ds.attrs["Conventions"] == "CF-1.10"
 
+    @pytest.mark.process
     def test_sigkill_after_commits_loses_no_committed_tile(self, path, job):
         """A writer killed (SIGKILL) after committing tiles 0 and 2: both survive, resume works."""
         script = textwrap.dedent(f"""
@@ -500,6 +503,7 @@ class TestHdf5Store(StoreSuite):
 
 
 @pytest.mark.parametrize("when", ["before the rename", "after the rename"])
+@pytest.mark.process
 def test_hdf5_sigkill_inside_a_checkpoint_loses_nothing(tmp_path, when):
     """Kill the writer at the two delicate points of a checkpoint; the journal makes up."""
     path = tmp_path / "results.h5"
@@ -542,6 +546,7 @@ def test_hdf5_sigkill_inside_a_checkpoint_loses_nothing(tmp_path, when):
     assert not (tmp_path / "results.h5.journal").exists()  # emptied and removed
 
 
+@pytest.mark.process
 def test_a_lock_held_by_a_killed_unreaped_process_is_stale(tmp_path):
     """A rank killed with its launcher lingers as a zombie until init reaps it."""
     path, job = tmp_path / "zombie.zarr", make_job()

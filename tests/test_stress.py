@@ -19,17 +19,20 @@ def rows():
     )
 
 
+@pytest.mark.process  # stress.measure runs cells in a pool of processes
 def test_no_hang_no_crash_no_invalid_result(rows):
     for row in rows:
         for r in row.results:
             assert r.outcome not in stress.BAD, (row.cell, row.start, r.outcome, r.detail)
 
 
+@pytest.mark.process  # stress.measure runs cells in a pool of processes
 def test_work_per_cell_is_bounded(rows):
     assert max(r.wall for row in rows for r in row.results) < 20.0
     assert max(int(r.arrays["steps"]) for row in rows for r in row.results) <= 200_000 + 100
 
 
+@pytest.mark.process  # stress.measure runs cells in a pool of processes
 def test_labels_disagree_with_scipy_only_where_flagged_grazing(rows):
     compared = [row for row in rows if "SciPy agrees" in row.scipy or "DISAGREES" in row.scipy]
     # not vacuous: the quick cells include periodic ones SciPy can afford (q5 agrees; the

@@ -6,7 +6,7 @@ import os
 import subprocess
 
 import pytest
-from conftest import CAMPAR
+from support.processes import CAMPAR
 
 
 def cached_functions(cache) -> set[str]:
@@ -15,6 +15,8 @@ def cached_functions(cache) -> set[str]:
 
 
 @pytest.mark.slow  # compiles the kernel into an empty cache: ~20 s
+@pytest.mark.process
+@pytest.mark.timeout(900)  # a cold compile, then a point and a map: minutes on a loaded machine
 def test_warm_up_leaves_nothing_for_a_point_or_a_map_to_compile(tmp_path):
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
 

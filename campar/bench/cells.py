@@ -4,7 +4,7 @@
   and revolutions of ``simulate_point`` from rest (cold) and from the steady
   state of the neighbouring cell at ω + Δω of a 400-point row (warm, as a
   continuation hands it over). Times are the fastest of repeated calls and
-  include the Python wrapper (~0.1 ms, shown as the ω = 6 warm 1-0 floor).
+  include the Python wrapper (the floor the ω = 6 warm 1-0 cell shows).
 - Along whole warm-started rows (400 ω values from 6 down to 0.02, the tile
   runner with its extrapolated warm start, as ``campar run`` computes them):
   mean revolutions and milliseconds per cell, for several μcn.

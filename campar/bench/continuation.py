@@ -3,7 +3,7 @@
 Four measurements, each printed with its command line's settings and the machine load:
 
 - **speed**: the 1-1 branch at μkn = 0.91 from ω = 6 down to 0.5 with steps chosen for
-  about ``--points`` points (the issue's 1,000), in one process, warm: its wall and CPU
+  about ``--points`` points, in one process, warm: its wall and CPU
   seconds, the integrations of the section map it took, and the time of one branch
   point against one brute-force map cell (a warm-started cell of the same branch's
   line, ``campar line``'s kernel, timed in the same run);

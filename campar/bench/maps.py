@@ -229,7 +229,7 @@ CANDIDATES = {
     "rtol 1e-7": {"integrator": {"rtol": 1e-7}},
     "rtol 1e-9": {"integrator": {"rtol": 1e-9}},
     "rtol 1e-10": {"integrator": {"rtol": 1e-10}},
-    # the defaults before DOP853 (benchmarks/RESULTS.md, issue 15), and the steps to the new
+    # the defaults before DOP853 (benchmarks/RESULTS.md), and the steps to the new
     # ones (integrator.method, integrator.rtol and transient.chaos_after, all three stated)
     "previous default": integration("dp54", 1e-8, 64),
     **{

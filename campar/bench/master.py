@@ -23,7 +23,7 @@ capacity test of the master, not of the kernel). Reported per R:
   (``CAMPAR_WRITER=master``, and always for HDF5); "write ms" is the master's share
   per tile (the write, or the commit);
 - peak RSS of rank 0 and of the largest worker (without numba: the stand-in
-  replaces the kernel's module, so add the kernel's ~70 MB for a real run).
+  replaces the kernel's module, so add the compiled kernel's memory for a real run).
 
 Memory of a 4000 × 4000 map: ``--rows 4000 --omegas 4000`` (the store size is
 printed; random data makes it an upper bound).
@@ -75,7 +75,7 @@ def stand_in_tile(seconds: float):
 def serve(job_path: str, store: str, seconds: float, report: str) -> None:
     """One rank of the capacity run (called under mpirun): the real runner, stand-in kernel."""
     # The stand-in takes the kernel's module's place before the runner imports it, so a
-    # rank loads neither numba nor LLVM: hundreds of ranks fit in this machine's memory.
+    # rank loads neither numba nor LLVM: hundreds of ranks fit in a small machine's memory.
     kernel_free = types.ModuleType("campar.sweep.tile")
     kernel_free.run_tile = stand_in_tile(seconds)
     kernel_free.load_kernel = lambda job, share: None  # a worker's lane preloads the kernel

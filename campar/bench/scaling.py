@@ -8,11 +8,11 @@ writes. Reported per configuration:
 - cells/s of the run (store open to last tile written; process start-up and
   numba cache loading are shown apart as "start s");
 - speed-up over one process: the fastest run of each launch against the fastest of the
-  first, and "paired": the median over rounds of each round's ratio. With ``--repeat``
-  the launches take turns (1, 2, 3, 1, 2, 3, …), so a VM whose speed drifts over minutes
-  (this one's one-process run: 13.7–16.8 s within an hour) moves both runs of a round
-  alike; the fastest-of-each figure mixes minutes. Each round's own speed-up is printed
-  below the table, so the spread behind the median shows;
+  first, and "paired": the median over rounds of each round's ratio. With ``--repeat`` the
+  launches take turns (1, 2, 3, 1, 2, 3, …), so a machine whose speed drifts over
+  minutes moves both runs of a round alike; the fastest-of-each figure mixes minutes.
+  Each round's own speed-up is printed below the table, so the spread behind the median
+  shows;
 - outside kernel: the share of (wall time × compute lanes) not spent inside
   ``run_tile`` — the runner's own cost plus lanes idle at the end of the run
   (target ≤ 3 %);
@@ -100,10 +100,9 @@ def run(args) -> int:
         (tmp / "warm").mkdir()
         warm = write_job(Path(args.job), tmp / "warm", 2, 1)
         launch(warm, tmp / "warm.zarr", 1)  # compiles if the cache is cold
-        # A fresh store each run, so that no run pays for deleting the last one's files: with
-        # a folder per chunk row (stores before 8e4b7cb) on a file system that discards freed
-        # blocks (ext4 -o discard, as here) an overwrite cost the next run +0.35–0.45 s of
-        # system time a rank; with flat chunk files no cost was measured (RESULTS.md).
+        # A fresh store each run, so that no run pays for deleting the last one's files: on a
+        # file system that discards freed blocks (ext4 -o discard) an overwrite costs the
+        # next run system time a rank (benchmarks/RESULTS.md).
         runs = {ranks: [] for ranks in args.ranks}  # ranks → [(entry, wall, store)] by round
         for round_ in range(args.repeat):
             for ranks in args.ranks:

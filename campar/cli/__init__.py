@@ -28,13 +28,13 @@ import re  # noqa: E402
 
 # Before numpy is imported: one OpenBLAS thread. campar's work runs on its own threads and
 # ranks, and BLAS only ever sees tiny matrices; numpy's and SciPy's OpenBLAS pools (SciPy
-# comes with numba's BLAS check) spin idle after their start, ~0.13 s of CPU a process
-# taken from the kernel's cores (benchmarks/RESULTS.md). The caller's setting wins.
+# comes with numba's BLAS check) spin idle after their start, CPU of every process taken
+# from the kernel's cores (benchmarks/RESULTS.md). The caller's setting wins.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from .. import __version__  # noqa: E402
 from ..errors import CamparError, Interrupted, JobError  # noqa: E402
-from . import continuation, line, maps, paper, plot, point, tools  # noqa: E402
+from . import continuation, explore, line, maps, paper, plot, point, tools  # noqa: E402
 from .options import launched_rank  # noqa: E402
 
 # The subcommands, in the order ``campar --help`` lists them.
@@ -52,6 +52,7 @@ SUBCOMMANDS = [
     continuation.add_curves,
     paper.add_gallery,
     paper.add_report,
+    explore.add_explore,
 ]
 
 
@@ -143,7 +144,7 @@ def main(argv=None) -> int:
         else:  # the program: its work is over, its exit code decided
             finished()
             # Nothing left to collect that matters: spare the exit the collector's passes
-            # over all the program built (after a cold compile numba's IR, ~0.5 s).
+            # over all the program built (after a cold compile, numba's IR).
             gc.freeze()
 
 

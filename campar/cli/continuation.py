@@ -1,6 +1,7 @@
 """``campar continue``: a branch of periodic orbits, its bifurcations, switching, curves."""
 
 import argparse
+import sys
 
 from ..errors import JobError
 from ..model.laws import LAW_PARAMETERS
@@ -71,7 +72,9 @@ def add_continue(sub):
         "--cycle",
         type=int,
         metavar="N",
-        help="the period to solve for (default: the simulated cell's)",
+        help="the start cycle's period: Newton's method solves for an N-cycle from the "
+        "simulated cell's state, stable or not (default: the period of the cycle the "
+        "simulation reaches; the start cycle's label is the output's first line)",
     )
     p.add_argument(
         "--switch",
@@ -91,7 +94,9 @@ def add_continue(sub):
         "--second",
         type=named_range,
         metavar="NAME:A:B",
-        help="the curves' second parameter and range, e.g. mu_kn:0.7:0.95",
+        help="the curves' second parameter and its window LOW:HIGH inside the model's "
+        "range, e.g. mu_kn:0.7:0.95 or phi1:1.0:1.1 (a law parameter, when the range is "
+        "not one's) (with --curves)",
     )
     p.add_argument(
         "--line",
@@ -134,6 +139,7 @@ def run_continue(args) -> int:
     import json
 
     from ..continuation.branch import BranchSettings
+    from ..model.settings import MAX_PERIOD, MAX_POINTS
     from ..views.continuation import continue_from_cell, describe_continuation
 
     parameter, span, fixed = split_parameters(args)
@@ -141,12 +147,12 @@ def run_continue(args) -> int:
     fixed = {k: v for k, v in model.parameters.items() if k != parameter}
     if args.switch < 0:
         raise JobError(f"--switch must be ≥ 0, got {args.switch}")
-    if args.cycle is not None and args.cycle < 1:
-        raise JobError(f"--cycle must be ≥ 1, got {args.cycle}")
+    if args.cycle is not None and not 1 <= args.cycle <= MAX_PERIOD:
+        raise JobError(f"--cycle must be from 1 to {MAX_PERIOD}, got {args.cycle}")
     if not 0.0 < args.max_step <= 1.0:
         raise JobError(f"--max-step must be in (0, 1], got {args.max_step}")
-    if args.max_points < 2:
-        raise JobError(f"--max-points must be ≥ 2, got {args.max_points}")
+    if not 2 <= args.max_points <= MAX_POINTS:
+        raise JobError(f"--max-points must be from 2 to {MAX_POINTS}, got {args.max_points}")
     if args.line is not None and (parameter != "omega" or not args.output):
         raise JobError(
             "--line draws campar line's diagram along omega: it needs a range of --omega and -o"
@@ -175,6 +181,8 @@ def run_continue(args) -> int:
         second_window=window,
     )
     print(json.dumps(result.to_dict()) if args.json else describe_continuation(result))
+    for line in result.missing:  # asked for, not found: said on stderr, and in the JSON
+        print(f"campar continue: {line}", file=sys.stderr)
     if args.output:
         draw(args, result, parameter, span, model)
     return 0
@@ -191,12 +199,14 @@ def draw(args, result, parameter, span, model) -> None:
 
         line = compute_line(line_spec(span, args.line, model), transitions=False)
     plot_branches(result.root, line=line).savefig(args.output, dpi=200)
-    if result.curves:
+    if args.curves:
         path = Path(args.output)
+        curves = path.with_name(f"{path.stem}-curves{path.suffix}")
+        if not result.curves:
+            print(f"campar continue: {curves} not written: no curve found", file=sys.stderr)
+            return
         window = (span, args.second[1])
-        plot_bifurcation_curves(result.curves, window=window).savefig(
-            path.with_name(f"{path.stem}-curves{path.suffix}"), dpi=200
-        )
+        plot_bifurcation_curves(result.curves, window=window).savefig(curves, dpi=200)
 
 
 def add_curves(sub):

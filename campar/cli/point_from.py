@@ -2,7 +2,7 @@
 
 from ..errors import JobError
 from .options import given_fields, parameter_values
-from .point import format_cycle, format_point, run_attractors, save_orbit, warn
+from .point_output import format_cycle, format_point, run_attractors, save_orbit, warn
 
 # Flags that name a basin's axes (its starts y0, ydot0 at θ = 0).
 BASIN_FLAGS = {"initial.y": "y0", "initial.v": "ydot0"}

@@ -8,6 +8,7 @@ A periodic orbit of period n revolutions is a fixed point of the stroboscopic ma
 - ``orbit``: a periodic orbit, stable or not, by Newton's method (``find_cycle``);
 - ``branch``: pseudo-arclength continuation of an orbit along one parameter, through
   folds, with its multipliers, stability and n-p label at every point;
+- ``branch_result``: a continued branch as a record (``Branch``) and its JSON;
 - ``special``: the test functions of period doubling (PD), fold (SN), branch point
   (BP), Neimark–Sacker (NS) and grazing (G), and their location on a branch;
 - ``switching``: branch switching at a PD onto the doubled branch, recursively;

@@ -18,7 +18,8 @@ import logging
 import numpy as np
 
 from ..errors import ContinuationError
-from .branch import Branch, BranchSettings, Continuation, assemble, continue_branch
+from .branch import BranchSettings, Continuation, continue_branch
+from .branch_result import Branch, assemble
 from .orbit import PeriodicOrbit, minimal_period, section_points
 from .section_map import SectionMap
 from .special import PD, SpecialPoint

@@ -6,15 +6,15 @@ points long, in ``CURVES_PER_TASK`` slots. A task continues the curve of its fir
 that yields one, then of the first of its seeds that curve does not pass within a cell
 of, and so on, so a group of seeds that stands for several curves yields all of them.
 The arrays are those of ``CURVE_ARRAYS``; empty points hold the fill values (−1, NaN).
-``run_curves_tile`` is the runner's tile function for such a job, registered with
-campar.sweep.curves_job when this module is imported: plain data in, arrays out, no MPI
-and no files.
+``CURVES_WORK`` is what the runner computes such a job's tiles with (``run_curves_tile``:
+plain data in, arrays out, no MPI and no files); the caller hands it to the runner
+(``campar.run`` does).
 """
 
 import numpy as np
 
 from ..errors import ContinuationError
-from ..sweep.curves_job import CURVE_ARRAYS, CURVES_PER_TASK, FOUND, NONE_FOUND, register
+from ..sweep.curves_job import CURVE_ARRAYS, CURVES_PER_TASK, FOUND, NONE_FOUND, CurvesWork
 from .curves import CURVE_TYPES, BifurcationCurve, CurveSettings
 from .mapscale import Seed, curve_from_seed, distances_to, in_plane
 from .section_map import SectionMap
@@ -120,8 +120,9 @@ def run_curves_tile(job, tile) -> dict[str, np.ndarray]:
     return curve_rows(tasks, job.curves.points, SectionMap(curve_model(job)))
 
 
-def compile_curves(job) -> None:
-    """Compile (or load) the shooting for the job's force law: what a lane does first."""
+def compile_curves(job, share=None) -> None:
+    """Compile (or load) the shooting for the job's force law: what a lane does first
+    (``share``, the runner's split of a cold compile between ranks, is the kernel's)."""
     SectionMap(curve_model(job))
 
 
@@ -130,4 +131,4 @@ def curve_model(job) -> dict:
     return job.model.model_dump(mode="json")
 
 
-register(run_curves_tile, compile_curves)
+CURVES_WORK = CurvesWork(tile=run_curves_tile, load=compile_curves)

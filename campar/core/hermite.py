@@ -12,7 +12,7 @@ from .jit import hot
 
 # ``want_min`` for the functions below: numpy bools, which numba types as a plain bool.
 # A literal True or False would be typed as itself and compile a variant of each function
-# per value (a cold compile ~0.25 s longer, measured with numba 0.68).
+# per value (a longer cold compile, with numba 0.68).
 MINIMUM = np.bool_(True)
 MAXIMUM = np.bool_(False)
 

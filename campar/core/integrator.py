@@ -42,7 +42,7 @@ def method_tag(code: int) -> tuple:
     length is the method's code. numba folds ``len()`` of a tuple argument to a constant
     before typing and prunes the branches it decides, so a job's kernel compiles its own
     stepper only (a literal integer is not pruned on); a DOP853 job compiles neither
-    DP5(4) nor RK4: a one-cell run with an empty cache ~0.8 s shorter (benchmarks/RESULTS.md)."""
+    DP5(4) nor RK4: a one-cell run with an empty cache compiles less (benchmarks/RESULTS.md)."""
     return (0,) * code
 
 

@@ -4,8 +4,8 @@ Three decorators. ``hot`` for the per-step path: numba's reference counting off.
 Each array passed down a call (and the stepper passes ~10 of them, in named
 tuples) otherwise costs an atomic increment and decrement that numba's pruning
 pass does not remove across calls: with reference counting on, a revolution
-takes ~2.8× as long (numba 0.68; perf puts 67 % of the time in
-NRT_incref/NRT_decref). ``hot`` functions must not allocate or return
+takes several times as long, most of it in NRT_incref/NRT_decref (numba 0.68).
+``hot`` functions must not allocate or return
 arrays; numba refuses to compile them if they do. Buffers are allocated in
 Python (``make_work``, ``make_chain_work``) and handed down.
 
@@ -14,14 +14,14 @@ revolution's bookkeeping): inlined into the chain at numba's IR level, so it is
 typed and compiled once, as part of the entry point. A separate function is
 compiled on its own and then again, LLVM-optimised and turned into machine code,
 inside every caller (numba links callees into the caller's module), and numba
-compiles literal-argument variants of some: inlining them saves ~20 % of a cold
-compile (numba 0.68). Only for functions with few call sites: inlining the
+compiles literal-argument variants of some: inlining them shortens a cold compile
+(numba 0.68). Only for functions with few call sites: inlining the
 integrator too makes the entry point's compilation slower.
 
 ``hot`` functions have no CPython wrapper and no C callback (numba's ``@overload``
 default, for functions only compiled code calls). A dispatcher otherwise compiles both,
 which unbox every argument (named tuples of ~10 arrays): more IR for LLVM to optimise
-and turn into machine code in every library; leaving them out saves ~20 % of a cold
+and turn into machine code in every library; leaving them out shortens a cold
 ``campar point``'s compile (numba 0.68). Without a wrapper numba's entry
 pointer is null and a call from Python would crash the interpreter, so a ``hot``
 function raises TypeError there: Python calls ``entry`` functions, and tests reach
@@ -77,7 +77,7 @@ def collector_paused():
     """Python's cyclic garbage collector off while numba compiles. A cold kernel compile
     builds millions of objects (types, IR, LLVM wrappers) that live until it ends, and the
     collector's full passes walk them again and again: with it paused a cold
-    ``campar point`` is ~14 % faster and peaks ~48 MB higher (numba 0.68). The cycles it
+    ``campar point`` is faster, at a higher memory peak (numba 0.68). The cycles it
     leaves are collected once it is back on."""
     enabled = gc.isenabled()
     gc.disable()

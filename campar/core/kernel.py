@@ -149,7 +149,7 @@ class ChainWork(NamedTuple):
 
 def make_chain_work(cs) -> ChainWork:
     """The buffers of a chain, allocated in Python: compiled allocation would cost
-    numba ~2 s of compile time per process with an empty cache (measured)."""
+    numba compile time in every process with an empty cache."""
     rows = cs.max_revolutions + cs.window_revolutions + 2
     return ChainWork(
         w2=make_work(N_STATE, MAX_EVENTS, 0.0),
@@ -430,7 +430,7 @@ def chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out, 
         streak = min(streak + 1, 3) if same_period else 1
         prev_n = out.n[i] if periodic else -1
         for c in range(2):  # element by element: a row assignment compiles numba's
-            prev[2, c] = prev[1, c]  # shape-checking error message (~1.5 s cold)
+            prev[2, c] = prev[1, c]  # shape-checking error message (in every cold compile)
             prev[1, c] = prev[0, c]
             prev[0, c] = cw.xs[final, c]
 

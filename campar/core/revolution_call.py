@@ -2,13 +2,13 @@
 
 numba compiles a callee while it types the caller, and links the callee's code into
 the caller's module, where LLVM optimises it and turns it into machine code again. For
-``run_revolution`` (the integrator, the field and the events under it: ~40 % of the
-kernel's compile) a direct call means a cold chain compile cannot type past the first
+``run_revolution`` (the integrator, the field and the events under it: a large part of
+the kernel's compile) a direct call means a cold chain compile cannot type past the first
 revolution before the revolution is compiled, and then compiles it twice.
 Called through an address (``call_revolution``), the chain types against the
 revolution's signature alone: it compiles while a forked helper compiles the
 revolution (campar.core.split_compile), and its module holds none of the revolution's
-code. One indirect call a revolution costs nothing measurable (~70 µs a revolution).
+code. One indirect call a revolution costs nothing measurable beside the revolution.
 
 The orbit tracer (``tracer.trace_compiled``) calls the revolution with a recorder, a
 variant of its own, the same way: a forked helper compiles that variant too.
@@ -85,8 +85,8 @@ def revolution_link(solver, cs, work, recorder=types.none, law=PAPER_LAW) -> np.
     """int64 [address, fingerprint] of run_revolution compiled (or loaded) for the call
     ``revolution_args`` describes: what ``call_revolution`` takes. Kept by the types of the
     solver options and the law, the argument types that differ between jobs
-    (kernel.chain_loaded): a chain looks its link up in tens of µs instead of typing every
-    argument (~160 µs), and the fingerprint every call checks would catch any other
+    (kernel.chain_loaded): a chain looks its link up by those types instead of typing every
+    argument, and the fingerprint every call checks would catch any other
     argument type changing."""
     key = (typeof(solver), recorder, typeof(kernel_law(law)))
     if key not in _LINKS:

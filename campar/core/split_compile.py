@@ -8,8 +8,8 @@ integrator, the field and the events under it) into numba's on-disk cache while 
 process compiles the chain (the cell's transient and classification); then this
 process waits for the helper's cache entry (``CompiledCallersOnly.awaiting``) and loads
 it. Where the command will trace an orbit, the helper compiles the revolution with a
-recorder next, for the tracer. The halves take ~4 and ~5 s here; a cold ``campar point``
-takes ~6 s in all (benchmarks/RESULTS.md).
+recorder next, for the tracer. The halves take about as long as each other (benchmarks/
+RESULTS.md has a cold ``campar point``'s time).
 
 The helper compiles the signatures ``revolution_args`` computes, those the chain and the
 tracer are linked with, so what it caches is what this process loads
@@ -39,7 +39,7 @@ from .model import PAPER_LAW
 from .revolution import make_trace, run_revolution
 from .revolution_call import revolution_args
 
-HELPER_SECONDS = 300.0  # a helper takes ~5 s here; one still running after this is stuck
+HELPER_SECONDS = 300.0  # far beyond a compile on a loaded machine: a helper still running is stuck
 POLL_SECONDS = 0.05  # between looks into the cache for another rank's half
 
 

@@ -35,22 +35,25 @@ def structure_command(ev: Evidence, law: str) -> str:
 
 def structure(ev: Evidence):
     """The branch structure at the paper's μkn over STRUCTURE_WINDOW (kept per evidence)."""
+    model = {"tensile": ev.tensile, **ev.options}
+    return ev._keep(("structure", setups.FIG6_MU_KN), lambda: compute_structure(model))
 
-    def compute():
-        from ..views.continuation import line_structure
 
-        model = {"tensile": ev.tensile, **ev.options}
-        return line_structure(
-            STRUCTURE_WINDOW,
-            STRUCTURE_POINTS,
-            {"mu_kn": setups.FIG6_MU_KN},
-            switch=SWITCH_DEPTH,
-            census=CENSUS_STARTS,
-            max_period=MAX_PERIOD,
-            model=model,
-        )
+def compute_structure(model: dict | None = None):
+    """The LineStructure at the paper's μkn over STRUCTURE_WINDOW: every periodic attractor
+    of the path from ω = 6 down and of a census, continued both ways with switching (its
+    account, campar.views.branch_account, is docs/continuation.md's at μkn = 0.91)."""
+    from ..views.continuation import line_structure
 
-    return ev._keep(("structure", setups.FIG6_MU_KN), compute)
+    return line_structure(
+        STRUCTURE_WINDOW,
+        STRUCTURE_POINTS,
+        {"mu_kn": setups.FIG6_MU_KN},
+        switch=SWITCH_DEPTH,
+        census=CENSUS_STARTS,
+        max_period=MAX_PERIOD,
+        model=model or {},
+    )
 
 
 def ns_claim(ev: Evidence) -> Verdict:
@@ -107,7 +110,7 @@ def cascade_claim(ev: Evidence) -> Verdict:
     return Verdict(text, depth >= 2)
 
 
-TONGUES = ("2-2", "2-1")  # the subharmonic domains the issue and the paper's Figs 4c–e name
+TONGUES = ("2-2", "2-1")  # the subharmonic domains the paper's Figs 4c–e name
 TONGUE_PLANES = ("mu_kn", "mu_cn")
 BOUNDED_SHARE = 0.8  # of a tongue's boundary on PD and G curves for N2 to hold
 

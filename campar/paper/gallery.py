@@ -32,14 +32,12 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import yaml
-
 from ..model import Model
 from ..sweep.job import PAPER_VALUES
 from . import setups
+from .figure_files import MAP_FIGURES, PLANE_SYMBOLS, write_yaml
 from .structure_figures import draw_structure
 
-MAP_FIGURES = {"omega_f0": "fig2", "mu_kn": "fig4", "mu_cn": "fig7"}
 # Views drawn per plane, with their captions.
 PLANE_MAPS = {
     "labels": "n-p labels",
@@ -48,7 +46,6 @@ PLANE_MAPS = {
     "cycles, ≈ 0 quasi-periodic, > 0 chaos)",
 }
 PNG_DPI = 200
-PLANE_SYMBOLS = {"omega": "ω", "f0": "f0", "mu_kn": "μkn", "mu_cn": "μcn", "zeta": "ζ"}
 BOTH = "both"
 LAW_TEXT = {
     "clamp": "force law clamp (Pn = max(0, …), no tensile force)",
@@ -125,10 +122,6 @@ def axes_labels(figure) -> list[dict]:
         if labels:
             found.append(labels)
     return found
-
-
-def write_yaml(path: Path, data: dict) -> None:
-    path.write_text(yaml.safe_dump(data, sort_keys=False, allow_unicode=True, width=100))
 
 
 def default_stores(size: str) -> Path:

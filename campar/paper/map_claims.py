@@ -2,7 +2,7 @@
 
 Each function evaluates one claim on ``Evidence.plane(...)`` and returns a
 ``Verdict``; the thresholds are spelled out in the claim table
-(``campar.paper.report.CLAIMS``). Cells are those of the plane's job at the report's
+(``campar.paper.claim_list.CLAIMS``). Cells are those of the plane's job at the report's
 size, ω decreasing by continuation as in the paper.
 """
 

@@ -20,6 +20,7 @@ import time
 
 from ..views.cycles import settled_cycles
 from . import setups, structure
+from .figure_files import MAP_FIGURES, PLANE_SYMBOLS, write_yaml
 from .structure_stats import jump_summary, load_both, load_census
 
 PAIRS_SHOWN = 4  # label pairs a caption names
@@ -70,16 +71,12 @@ def draw_basin(g) -> None:
 
 
 def axes_text(job) -> str:
-    from .gallery import PLANE_SYMBOLS
-
     return ", ".join(PLANE_SYMBOLS[name] for name in job.sweep)
 
 
 def compute(g, job):
     """Run (or reuse) ``job`` into the gallery's stores, write its job file beside the
     figures, and count the seconds as plane time."""
-    from .gallery import write_yaml
-
     clock = time.perf_counter()
     store = structure.run(job, g.stores)
     g.plane_seconds += time.perf_counter() - clock
@@ -197,7 +194,6 @@ def draw_zooms(g, plane: str) -> None:
     from ..views.map_curves import curves_beside, describe_curves
     from ..views.plot.maps import MapGrid
     from ..views.plot.zooms import Panel, plot_zoom_set
-    from .gallery import MAP_FIGURES, PLANE_SYMBOLS
 
     job = setups.plane_job(plane, g.size, g.tensile)
     clock = time.perf_counter()

@@ -22,7 +22,7 @@ from .job import Job
 GiB = 2**30
 DEFAULT_MAX_STORE = 64 * GiB  # uncompressed; a 4000 × 4000 map of the default outputs is ~1 GiB
 DEFAULT_MAX_MEMORY = 4 * GiB  # per rank
-BASE_MEMORY = 256 * 2**20  # a rank's peak RSS on the smoke job: 194 MiB measured, with margin
+BASE_MEMORY = 256 * 2**20  # a rank's fixed peak (the base above) with a quarter to spare
 TILE_COPIES = 4  # kernel outputs, packed buffer, received buffer, unpacked arrays
 BYTES_PER_TILE = 512  # the plan's Tile, flags and queue entries, per tile
 UNITS = {"": 1, "k": 2**10, "m": 2**20, "g": GiB, "t": 2**40}

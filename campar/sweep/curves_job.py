@@ -8,13 +8,14 @@ a map. Row t holds the curves task t found, ``CURVES_PER_TASK`` slots of ``point
 each (``CURVE_ARRAYS``). The seeds are part of the job (its ``curves.tasks``), so a store
 is resumed only by the job that made it, and a map changed since is a different job.
 
-The task's computation belongs to campar.continuation (a layer above this one), which
-registers it here as the runner's tile function of this kind (``register``); the
-commands that run a curves job import it first.
+The task's computation belongs to campar.continuation (a layer above this one): its
+caller hands it to the runner as a ``CurvesWork`` (campar.continuation.tasks.CURVES_WORK;
+``campar.run`` does), so this layer imports nothing above it and holds no table that an
+import must fill first.
 """
 
 from collections.abc import Callable
-from typing import Annotated, Literal
+from typing import Annotated, Literal, NamedTuple
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -183,20 +184,16 @@ def curves_job_data(
     }
 
 
-# The runner's functions of this kind, registered by campar.continuation.tasks:
-# "tile": (job, Tile) -> arrays of the tile's rows; "compile": (job) -> None.
-RUNNERS: dict[str, Callable] = {}
+class CurvesWork(NamedTuple):
+    """What computes a curves job's tiles, handed to the runner by its caller (the
+    kernel computes every other kind's): ``tile(job, Tile)`` → the arrays of the tile's
+    rows; ``load(job, share)`` → None, the compile a lane does ahead of its first tile."""
+
+    tile: Callable
+    load: Callable
 
 
-def register(tile: Callable, compile: Callable) -> None:
-    RUNNERS["tile"] = tile
-    RUNNERS["compile"] = compile
-
-
-def runner(what: str) -> Callable:
-    if what not in RUNNERS:
-        raise RuntimeError(
-            "a curves job runs with campar.continuation.tasks imported "
-            "(campar curves, campar run and campar.run import it)"
-        )
-    return RUNNERS[what]
+NOT_THE_KERNELS = (
+    "a curves job's tiles are computed by campar.continuation.tasks.CURVES_WORK, "
+    "not the kernel: run it with campar.run (or run_job(..., tile_work=CURVES_WORK))"
+)

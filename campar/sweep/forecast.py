@@ -90,9 +90,10 @@ def forecast(
     overwrite: bool = False,
     max_store: int | None = None,
     max_memory: int | None = None,
+    tile_work=None,
 ) -> Forecast:
     """The plan and cost of ``campar run`` of ``job`` into ``store`` (default: the job's)
-    on ``ranks`` ranks, computing nothing and writing nothing."""
+    on ``ranks`` ranks, computing nothing and writing nothing; ``tile_work`` as run_job's."""
     path = store or job.store
     stored, done = stored_state(job, path) if path and not overwrite else (None, None)
     if job.tiles.rows == "auto":
@@ -118,7 +119,7 @@ def forecast(
     pending = [i for i, d in enumerate(done) if not d]
     pending_cells = sum(cells_of[i] for i in pending)
     cost = estimate(job)
-    per_cell, sampled = sample_cost(job) if pending_cells else (0.0, 0)
+    per_cell, sampled = sample_cost(job, tile_work) if pending_cells else (0.0, 0)
     refused = None
     try:
         check_budget(job, max_store=max_store, max_memory=max_memory)
@@ -143,13 +144,14 @@ def forecast(
     )
 
 
-def sample_cost(job: Job) -> tuple[float, int]:
+def sample_cost(job: Job, tile_work=None) -> tuple[float, int]:
     """(CPU seconds a cell, rows timed): up to SAMPLE_ROWS of the job's chains, spread
     over its second axis, computed and timed (the kernel loaded, and a ``continue`` job's
     first column computed, before the clock starts)."""
     from .tile import load_kernel, run_tile
 
-    load_kernel(job)
+    load, compute = (tile_work.load, tile_work.tile) if tile_work else (load_kernel, run_tile)
+    load(job, None)
     n_rows, n_cells = job.shape
     rows = sorted({round(i * (n_rows - 1) / max(SAMPLE_ROWS - 1, 1)) for i in range(SAMPLE_ROWS)})
     rows = [rows[len(rows) // 2], *(r for i, r in enumerate(rows) if i != len(rows) // 2)]
@@ -157,7 +159,7 @@ def sample_cost(job: Job) -> tuple[float, int]:
     start = time.process_time()
     timed = 0
     for row in rows:  # the middle row first: the one a short sample keeps
-        run_tile(job, Tile(-1, row, row + 1, direction))
+        compute(job, Tile(-1, row, row + 1, direction))
         timed += 1
         if time.process_time() - start > SAMPLE_SECONDS:
             break

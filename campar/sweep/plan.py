@@ -54,13 +54,13 @@ class Tile:
         return self.row_stop - self.row_start
 
 
-# ``tiles.rows: auto`` (``auto_tile_rows``): estimates measured on this project's 2-core VM
-# (benchmarks/RESULTS.md): a revolution costs ~17.5 µs of a core and a converged map cell
-# takes ~8 (the (ω, μcn) plane: 22 CPU s, 160,000 cells, 7.9 revolutions a cell), a fixed
-# transient its revolutions and window; a census cell K + 1 cells, a basin cell (a cold
-# start) ~4; the master commits ~550 tiles/s when workers write their own tiles (Zarr,
-# its chunks written directly: 559–1,018 measured), ~60 when it writes every tile (HDF5;
-# Zarr with CAMPAR_WRITER=master: 166–253): ``campar bench master``.
+# ``tiles.rows: auto`` (``auto_tile_rows``) weighs a tile's compute against the rate the
+# master commits tiles, with rough costs whose order of magnitude is all the choice needs
+# (rounded down from ``campar bench master`` and the (ω, μcn) plane, benchmarks/RESULTS.md,
+# so a faster machine still gets tiles long enough): a revolution of a core, the
+# revolutions of a converged map cell (a fixed transient: its revolutions and window), a
+# census cell K + 1 cells, a basin cell (a cold start) four; the commits a second when the
+# workers write their own tiles (Zarr) and when the master writes every tile (HDF5).
 REVOLUTION_SECONDS = 1.75e-5
 CONVERGED_REVOLUTIONS = 8
 BASIN_CELL_FACTOR = 4.0

@@ -6,7 +6,7 @@ rank — commits each finished tile to the store, and stops on a signal. Who
 writes a tile's arrays depends on the backend (``Store.direct_writes``): into a
 Zarr store every worker writes its own tiles' chunks (on a thread of its own,
 while its lane computes the next tile) and the master only commits them
-(checksum, then ``done``: ~0.6 ms a tile instead of ~5 to write it, docs/scaling.md); into
+(checksum, then ``done``: a fraction of writing it, docs/scaling.md); into
 HDF5 (serial h5py) the master writes every tile. ``CAMPAR_WRITER=master``
 makes the master write Zarr tiles too (the single-writer path, for comparison).
 The kernel's ``run_chain`` releases the GIL, so the master's compute thread
@@ -15,7 +15,7 @@ signal check: with two ranks on two cores both cores compute.
 
 Every lane holds its next tile as well (``TILES_HELD``, while the queue has one for
 every lane): it starts it the moment the last one is done, whatever the master is
-doing, instead of waiting 3–6 ms a tile for the master's answer and the GIL. The master
+doing, instead of waiting for the master's answer and the GIL. The master
 probes every ≤ 1 ms, except while every lane is provided for — holds its next tile, and
 no worker is writing one (``provided_for``) —: then it waits on its own lane for up to a
 quarter of the shortest tile, which on the 2-rank plane wakes it a quarter as often
@@ -50,6 +50,7 @@ import numpy as np
 
 from ..errors import CamparError, Interrupted, JobError, StoreIOError
 from .budget import check_budget
+from .curves_job import NOT_THE_KERNELS, CurvesWork
 from .job import Job, check_store_path
 from .plan import Tile, auto_tile_rows, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
@@ -89,13 +90,19 @@ class ThreadLane:
     says a stop signal came: then the next waits for the master to take it back."""
 
     def __init__(
-        self, job: Job, where: str, preload: bool = False, halted=lambda: False, share=None
+        self,
+        job: Job,
+        where: str,
+        preload: bool = False,
+        halted=lambda: False,
+        share=None,
+        tile_work: CurvesWork | None = None,
     ):
         """With ``preload`` the thread first loads the kernel (``load_kernel``, a cold
         compile split as ``share`` says) while the caller waits for the master; tiles
-        queue behind it."""
+        queue behind it. ``tile_work``: what computes the tiles where the kernel does not."""
         self.job, self.where, self.preload, self.halted = job, where, preload, halted
-        self.share = share
+        self.share, self.tile_work = share, tile_work
         self.held: list[int] = []  # tiles started or queued, not yet reported, in order
         self.seconds = 0.0
         self.shortest_tile = float("inf")  # seconds, of the tiles it reported
@@ -153,13 +160,14 @@ class ThreadLane:
     def _loop(self):
         try:
             if self.preload:
-                load_kernel(self.job, self.share)
+                (self.tile_work.load if self.tile_work else load_kernel)(self.job, self.share)
         except Exception:  # the first tile meets the same error and reports it
             log.debug("loading the kernel ahead failed", exc_info=True)
         while (tile := self._next()) is not None:
             start = time.perf_counter()
             try:
-                arrays, error = run_tile(self.job, tile), None
+                compute = self.tile_work.tile if self.tile_work else run_tile
+                arrays, error = compute(self.job, tile), None
             except Exception:
                 arrays, error = None, f"{self.where}: {traceback.format_exc()}"
             self._outbox.put(Outcome(tile.index, arrays, error, time.perf_counter() - start))
@@ -364,8 +372,12 @@ def run_job(
     grace=30.0,
     max_store: int | None = None,
     max_memory: int | None = None,
+    tile_work: CurvesWork | None = None,
 ):
     """Compute every pending tile of ``job`` into its store; serial, or MPI under mpirun.
+
+    ``tile_work`` computes a curves job's tiles (campar.continuation.tasks.CURVES_WORK); the
+    kernel computes every other kind's.
 
     Returns a RunSummary on completion; raises Interrupted (exit 75) after a
     signal and CamparError when a tile fails twice; JobError, before anything
@@ -373,6 +385,10 @@ def run_job(
     or ``max_memory`` bytes (``budget``'s defaults if None). Under MPI every rank
     returns or raises alike (workers' errors carry ``rank``; the master reports them).
     """
+    if (job.kind == "curves") != (tile_work is not None):
+        raise ValueError(
+            NOT_THE_KERNELS if tile_work is None else "tile_work is a curves job's alone"
+        )
     path = job.store if store_path is None else store_path
     if path is None:
         raise JobError(f"job {job.name} names no store: add 'store: PATH' or pass --store PATH")
@@ -394,9 +410,11 @@ def run_job(
             return signals.count > 0
 
         if comm is not None and comm.Get_rank() > 0:
-            # The worker's lane loads the kernel while rank 0 opens the store (~0.3 s each:
-            # in rank 0's own process the two would take turns on the GIL).
-            lane = ThreadLane(job, f"rank {comm.Get_rank()} {where}", True, halted, share)
+            # The worker's lane loads the kernel while rank 0 opens the store (in rank 0's
+            # own process the two would take turns on the GIL).
+            lane = ThreadLane(
+                job, f"rank {comm.Get_rank()} {where}", True, halted, share, tile_work
+            )
             direct = receive_outcome(comm)  # of opening the store: where to write, if at all
             work(comm, job, signals, lane, direct)
             receive_outcome(comm)  # of the run
@@ -405,20 +423,20 @@ def run_job(
         # starts: the process then has one thread (zarr starts one of its own when the
         # store opens), so a cold compile may fork a helper (campar.core.split_compile),
         # and the first tile runs at full speed. A store with nothing pending then has
-        # loaded the kernel for nothing (~0.2 s; a compile if the cache is cold).
+        # loaded the kernel for nothing (a compile if the cache is cold).
         # Under MPI every worker waits for the store: rank 0 opens it first, and its lane
         # loads the kernel as a worker's does (a cold compile split between the ranks of a
         # node, ``share``) while the master hands out tiles, so the workers start one
         # kernel load sooner (benchmarks/RESULTS.md, "Start-up").
         if comm is None:
-            compile_kernel(job, share)
-            lane = ThreadLane(job, f"rank 0 {where}", halted=halted)
+            (tile_work.load if tile_work else compile_kernel)(job, share)
+            lane = ThreadLane(job, f"rank 0 {where}", halted=halted, tile_work=tile_work)
         opened = {}
         with share_outcome(comm, opened):
             store = open_store(path, job, overwrite=overwrite)
             opened["text"] = direct_path(store)
         if comm is not None:
-            lane = ThreadLane(job, f"rank 0 {where}", True, halted, share)
+            lane = ThreadLane(job, f"rank 0 {where}", True, halted, share, tile_work)
         with store, share_outcome(comm):
             return run_master(job, store, signals, comm, grace, lane, bool(opened["text"]))
 

@@ -22,7 +22,7 @@ Only the main thread receives Python signal handlers, and only there are they
 installed (a library caller's threads are left alone). Before Python has run
 campar's first line the interpreter's own handling applies: its start-up and
 its ``site`` module (with an editable install, setuptools' finder) take
-0.05–0.15 s (docs/stores.md, measured), and a SIGINT there ends Python with its
+a fraction of a second (docs/stores.md), and a SIGINT there ends Python with its
 own KeyboardInterrupt message; nothing of campar is running then.
 """
 

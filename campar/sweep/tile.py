@@ -18,7 +18,7 @@ from ..model.compute import allocate_outputs, output_bits  # noqa: F401 (the swe
 from ..model.laws import LAW_PARAMETERS
 from .arrays import array_names, array_spec
 from .basin import run_basin_tile
-from .curves_job import runner as curves_runner
+from .curves_job import NOT_THE_KERNELS
 from .job import Job
 from .multistable import census_row
 from .plan import Tile, chain_order, chain_parameters, first_column_parameters
@@ -39,13 +39,13 @@ def run_tile(job: Job, tile: Tile) -> dict[str, np.ndarray]:
     """Compute every chain of a tile; arrays shaped (tile rows, ω points, …) in the job's
     ω order, whichever way the chains ran. A ``both`` job's tile is computed as its
     direction's one-direction job computes it (same starts, settings and outputs); a
-    basin's tile by ``basin.run_basin_tile``; a curves job's by the function
-    campar.continuation.tasks registers (``curves_job.register``)."""
+    basin's tile by ``basin.run_basin_tile``; a curves job's tiles are not the kernel's
+    (``curves_job.CurvesWork``)."""
     ensure_fresh_cache()
     if job.kind == "basin":
         return run_basin_tile(job, tile, array_names(job))
-    if job.kind == "curves":  # campar.continuation.tasks, registered
-        return curves_runner("tile")(job, tile)
+    if job.kind == "curves":
+        raise ValueError(NOT_THE_KERNELS)
     if tile.direction is not None:
         job = job.one_direction(tile.direction)
     elif job.chains.direction == "both":
@@ -96,11 +96,8 @@ def load_kernel(job: Job, share=None) -> None:
     """Bring the job's compiled kernel into this process (numba's on-disk cache, or a
     compile) and compute its chains' starts, as a first tile would: a runner calls it on
     a lane's thread while the store opens, so the first tile starts at full speed
-    (~0.3 s a process, benchmarks/RESULTS.md). A chain of no cells: nothing is computed.
+    (benchmarks/RESULTS.md). A chain of no cells: nothing is computed.
     ``share``: as compile_kernel's."""
-    if job.kind == "curves":
-        curves_runner("compile")(job)
-        return
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
     compile_kernel(job, share)
@@ -116,8 +113,7 @@ def compile_kernel(job: Job, share=None, trace: bool = False) -> None:
     at once if this process holds the chain already (a point called again and again)."""
     ensure_fresh_cache()
     if job.kind == "curves":
-        curves_runner("compile")(job)
-        return
+        raise ValueError(NOT_THE_KERNELS)
     if job.chains.direction == "both":
         job = job.one_direction(job.directions[0])
     # every row's law has one type: one kernel serves the job
@@ -206,8 +202,8 @@ def chain_starts(job: Job) -> np.ndarray:
 def warm_up() -> float:
     """Compile the kernel into numba's on-disk cache, as the first map or point of a fresh
     install would (one cell of the paper's set-up), and the orbit tracer a plotted point
-    uses; returns the seconds it took. Every later process loads the cache in about a
-    second (benchmarks/RESULTS.md)."""
+    uses; returns the seconds it took. Every later process loads the cache instead
+    (benchmarks/RESULTS.md)."""
     import time
 
     start = time.perf_counter()

@@ -367,11 +367,11 @@ def store_boundaries(
 
     Tiles not committed (or failing their checksum) count as not computed. ``trace``:
     grazing from orbits traced from the stored states with the store's job (loads the
-    kernel; a few ms per periodic cell on an edge where the detachments change).
+    kernel; an orbit per periodic cell on an edge where the detachments change).
     direction: of a ``chains.direction: both`` store, the sweep whose map is typed
     ("down", the default, or "up"); else None or the store's own direction. ``shoot``:
     the edges still unknown between periodic cells typed by shooting
-    (``campar.views.shot_edges``; a few ms an edge).
+    (``campar.views.shot_edges``; two cycles continued an edge).
 
     Parameters
     ----------

@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..continuation.branch import Branch, BranchSettings
+from ..continuation.branch import BranchSettings
+from ..continuation.branch_result import Branch
 from ..continuation.curves import CURVE_TYPES, BifurcationCurve, continue_curve
 from ..continuation.orbit import PeriodicOrbit, find_cycle, solve_cycle
 from ..continuation.section_map import PARAMETER_ORDER, SectionMap
@@ -34,6 +35,9 @@ class ContinuationResult:
     curve_failures: list[str] = field(default_factory=list)
     seconds: float = 0.0
     shots: int = 0
+    reached: str = ""  # the label of the simulated start cell
+    chosen: str = ""  # how the start cycle was chosen
+    missing: list[str] = field(default_factory=list)  # what was asked for and not found, why
 
     def special_points(self):
         """(branch, special point) of every branch, in tree order."""
@@ -44,6 +48,9 @@ class ContinuationResult:
     def to_dict(self) -> dict:
         return {
             "start": self.start.to_dict(),
+            "start_cell": self.reached,
+            "start_chosen": self.chosen,
+            "missing": self.missing,
             "branch": self.root.to_dict(),
             "special": [{"branch_period": b.n, **sp.to_dict()} for b, sp in self.special_points()],
             "curves": [curve.to_dict() for curve in self.curves],
@@ -56,13 +63,13 @@ class ContinuationResult:
 def continue_from_cell(
     parameter: str,
     span: tuple[float, float],
-    fixed: dict,
+    fixed: dict | None = None,
     *,
-    y0: float = 0.0,
-    v0: float = 0.0,
+    y0: float | None = None,
+    v0: float | None = None,
     cycle: int | None = None,
     switch: int = 0,
-    model: dict | None = None,
+    model: Model | dict | None = None,
     settings: BranchSettings | None = None,
     curve_types=(),
     second: str | None = None,
@@ -78,10 +85,11 @@ def continue_from_cell(
         the model (phi1 … phi4, n, restitution; campar.model.laws.LAW_PARAMETERS).
     span : (float, float)
         Where the branch starts and the far end of its window.
-    fixed : dict
-        The other parameters (the paper's base values for those not given).
-    y0, v0 : float
-        The simulation's start at θ = 0 (rest by default).
+    fixed : dict, optional
+        The other parameters: the ``model``'s values for those not given (the paper's
+        base values without a Model).
+    y0, v0 : float, optional
+        The simulation's start at θ = 0 (default the model's ``initial``: rest).
     cycle : int, optional
         The period solved for; by default the simulated cell's period.
     switch : int
@@ -97,7 +105,8 @@ def continue_from_cell(
         PD, SN, NS, G: continue the curve of every special point of these types found on
         the branches in the plane (parameter, ``second``) over (span, ``second_window``).
     second : str, optional
-        The second parameter of those curves.
+        The second parameter of those curves: omega, f0, mu_kn, mu_cn, zeta, or a law
+        parameter when ``parameter`` is not one (a plane holds one law parameter).
     second_window : (float, float), optional
         The window of ``second`` the curves stay in.
     section_map : SectionMap, optional
@@ -106,6 +115,10 @@ def continue_from_cell(
     Returns
     -------
     ContinuationResult
+        Its ``start`` cycle, ``reached`` (the simulated cell's label) and ``chosen`` (how
+        the start was chosen), the branch tree, the curves (each once: a special point on
+        a curve already continued starts none) and ``missing``: a line for each thing
+        asked for and not found, saying why.
 
     Examples
     --------
@@ -119,27 +132,22 @@ def continue_from_cell(
     ContinuationError
         The start cell is not periodic and no ``cycle`` is given, or Newton fails there.
     JobError
-        A parameter or option out of range.
+        Before any work (``check_request``): a parameter the model does not have, a range
+        that is empty, not finite or outside the model's range, a second window that is
+        not low:high inside its range, curves without a second parameter.
     """
-    if parameter not in (*PARAMETER_ORDER, *LAW_PARAMETERS):
-        allowed = ", ".join((*PARAMETER_ORDER, *LAW_PARAMETERS))
-        raise JobError(f"cannot continue along {parameter!r}; one of {allowed}")
-    if span[0] == span[1]:
-        raise JobError(f"the range of {parameter} is empty: {span[0]}:{span[1]}")
-    unknown = sorted(set(curve_types) - set(CURVE_TYPES))
-    if unknown:
-        raise JobError(f"no curves of {unknown[0]}; one of {', '.join(CURVE_TYPES)}")
-    if curve_types and (second is None or second_window is None or second == parameter):
-        raise JobError("curves need a second parameter and its range (--second NAME:A:B)")
+    check_request(parameter, span, fixed or {}, curve_types, second, second_window, model)
     began = time.perf_counter()
-    values = {**fixed, parameter: span[0]}
-    base = model if isinstance(model, Model) else Model.build({"omega": values["omega"]})
-    if isinstance(model, dict):  # the force law's options (the model section's keys)
-        base = base.replace(**model)
-    law = parameter if parameter in LAW_PARAMETERS else None
+    given = {**(fixed or {}), parameter: span[0]}
+    base = start_model(model, given)
+    # the law parameter the section map takes as its own: the branch's, or the curves'
+    law = next((name for name in (parameter, second) if name in LAW_PARAMETERS), None)
+    # every parameter of the model continued: its own where neither fixed nor span says
+    values = {**base.parameters, **({law: span[0]} if law == parameter else {})}
     smap = section_map or SectionMap(base, law_parameter=law)
     shots0 = smap.shots
-    cell = simulate_point(base, y0=y0, v0=v0, **values)
+    y0, v0 = (base.initial.y if y0 is None else y0), (base.initial.v if v0 is None else v0)
+    cell = simulate_point(base, state=(y0, v0))
     period = cycle or cell.n
     if not period:
         raise ContinuationError(
@@ -148,33 +156,151 @@ def continue_from_cell(
         )
     if not all(map(math.isfinite, cell.state)):
         raise ContinuationError(f"the cell at {parameter}={span[0]} failed: {cell.status}")
-    start = solve_cycle(period, cell.state, {**fixed, parameter: span[0]}, section_map=smap)
+    start = solve_cycle(period, cell.state, values, section_map=smap)
     direction = 1.0 if span[1] > span[0] else -1.0
     root = continue_with_switching(
         start, parameter, span, switch, direction=direction, section_map=smap, settings=settings
     )
-    result = ContinuationResult(start=start, root=root)
+    result = ContinuationResult(start=start, root=root, reached=cell.label)
+    result.chosen = (
+        f"--cycle {cycle}, from the simulated cell ({cell.label})"
+        if cycle
+        else f"the cycle the simulation from ({y0:g}, {v0:g}) reaches (--cycle N: another)"
+    )
+    window = (span, second_window)
     for _, sp in list(result.special_points()):
-        if sp.type not in curve_types:
+        if sp.type not in curve_types or on_a_curve(sp, result.curves, window):
             continue
         try:
-            result.curves.append(
-                continue_curve(sp, second, (span, second_window), section_map=smap)
-            )
+            result.curves.append(continue_curve(sp, second, window, section_map=smap))
         except ContinuationError as exc:
             result.curve_failures.append(f"{sp.type} at {parameter}={sp.value:.10g}: {exc}")
+    result.missing = missing(result, parameter, span, switch, curve_types)
     result.seconds = time.perf_counter() - began
     result.shots = smap.shots - shots0
     return result
 
 
+def start_model(model, given: dict) -> Model:
+    """The model at the branch's start: ``model`` (a Model, the force law's options or
+    None: the paper's) with the ``given`` parameters set."""
+    if isinstance(model, Model):
+        return model.replace(**given)
+    if model is not None and not isinstance(model, dict):
+        raise JobError(f"a model is a Model or the force law's options, got {type(model).__name__}")
+    # the model section's keys, then the parameters (a law parameter after the law it sets)
+    return Model.build(None, **{**(model or {}), **given})
+
+
+def check_request(
+    parameter, span, fixed, curve_types=(), second=None, second_window=None, model=None
+):
+    """Refuse, before any work, a request that cannot be computed as asked (JobError, one
+    line): a parameter the model does not have, a range that is empty, not finite or
+    leaves the model's range of its parameter, a fixed value out of range, curves of an
+    unknown type, or curves without a second parameter and window (low:high) of their own.
+    The ranges are those of ``model`` (a Model, the force law's options or None: the
+    paper's; ``Model.build`` checks each value): a contact's restitution, say, is a
+    parameter of the laws that have one."""
+    if parameter not in (*PARAMETER_ORDER, *LAW_PARAMETERS):
+        allowed = ", ".join((*PARAMETER_ORDER, *LAW_PARAMETERS))
+        raise JobError(f"cannot continue along {parameter!r}; one of {allowed}")
+    at = start_model(model, {"omega": 1.0}).replace(**fixed)  # each fixed value in its range
+    check_range(at, parameter, span, f"the range {span[0]:g}:{span[1]:g} of {parameter}")
+    if span[0] == span[1]:
+        raise JobError(f"the range of {parameter} is empty: {span[0]:g}:{span[1]:g}")
+    unknown = sorted(set(curve_types) - set(CURVE_TYPES))
+    if unknown:
+        raise JobError(f"no curves of {unknown[0]}; one of {', '.join(CURVE_TYPES)}")
+    if second is None and second_window is None:
+        if curve_types:
+            raise JobError("curves need a second parameter and its window (--second NAME:A:B)")
+        return
+    where = f"--second {second}:{second_window[0]:g}:{second_window[1]:g}"
+    if second not in (*PARAMETER_ORDER, *LAW_PARAMETERS):
+        raise JobError(
+            f"{where}: {second!r} is not a parameter of the model; one of "
+            f"{', '.join((*PARAMETER_ORDER, *LAW_PARAMETERS))}"
+        )
+    if second in LAW_PARAMETERS and parameter in LAW_PARAMETERS:
+        raise JobError(
+            f"{where}: a curve's plane holds one law parameter; the branch's is {parameter}"
+        )
+    if second == parameter:
+        raise JobError(f"{where}: the second parameter must differ from the branch's, {parameter}")
+    check_range(at, second, second_window, where)
+    low, high = second_window
+    if low == high:
+        raise JobError(f"{where}: the window is empty; give two values, low:high")
+    if low > high:
+        raise JobError(f"{where}: a window runs from low to high: {second}:{high:g}:{low:g}")
+    if not curve_types:
+        raise JobError(f"{where} is the plane of the curves: give their types (--curves PD,G)")
+
+
+def check_range(model: Model, name: str, span, where: str) -> None:
+    """Both ends of ``span`` finite and inside ``model``'s range of ``name`` (JobError
+    naming ``where``)."""
+    for value in span:
+        try:
+            model.replace(**{name: value})
+        except JobError as exc:
+            raise JobError(f"{where}: {exc}") from None
+
+
+def on_a_curve(sp, curves: list[BifurcationCurve], window) -> bool:
+    """True when the special point ``sp`` lies on one of ``curves`` of its type and period:
+    within a step of the curve's nearest vertex in the plane (scaled to the window) and in
+    the cycle's state (a closed curve passes through several points of one branch)."""
+    scale = np.array([abs(w[1] - w[0]) for w in window], dtype=float)
+    for curve in curves:
+        if (curve.type, curve.n) != (sp.type, sp.n) or not len(curve.values):
+            continue
+        point = np.array([sp.value, sp.parameters[curve.second]]) / scale
+        values = curve.values / scale
+        i = int(np.argmin(np.linalg.norm(values - point, axis=1)))
+        near = [j for j in (i - 1, i + 1) if 0 <= j < len(values)]
+        reach = max((np.linalg.norm(values[j] - values[i]) for j in near), default=0.0)
+        state_reach = max(
+            (np.linalg.norm(curve.states[j] - curve.states[i]) for j in near), default=0.0
+        )
+        if (
+            np.linalg.norm(values[i] - point) <= reach + 1e-9
+            and np.linalg.norm(curve.states[i] - np.asarray(sp.state)) <= state_reach + 1e-6
+        ):
+            return True
+    return False
+
+
+def missing(result: ContinuationResult, parameter, span, switch, curve_types) -> list[str]:
+    """One line for each thing asked for and not found, saying why."""
+    found = [sp for _, sp in result.special_points()]
+    over = f"{parameter} {span[0]:g} → {span[1]:g}"
+    start = f"the {result.start.label} cycle's branch over {over}"
+    lines = []
+    if switch and not any(sp.type == "PD" for sp in found):
+        lines.append(f"no switch: no PD point on {start} (--cycle N starts another cycle)")
+    for branch in result.root.walk():
+        lines.extend(f"no switch: {failure}" for failure in branch.switch_failures)
+    for kind in curve_types:
+        if not any(sp.type == kind for sp in found):
+            lines.append(
+                f"no {kind} curve: no {kind} point on the branches ({start}); "
+                "--cycle N starts another cycle"
+            )
+    lines.extend(f"no curve: {failure}" for failure in result.curve_failures)
+    return lines
+
+
 def describe_continuation(result: ContinuationResult) -> str:
-    """A few lines: the start, every branch with its end, every special point."""
+    """A few lines: the start cycle and how it was chosen, every branch with its end, every
+    special point, every curve; what was asked for and not found is ``result.missing``."""
     start = result.start
     state = "stable" if start.stable else "unstable"
     lines = [
-        f"start: {start.label} ({state}) at "
+        f"start: {start.label} cycle ({state}) at "
         + ", ".join(f"{k}={v:g}" for k, v in start.parameters.items())
+        + f"; {result.chosen}"
     ]
     for branch in result.root.walk():
         where = (
@@ -197,14 +323,11 @@ def describe_continuation(result: ContinuationResult) -> str:
                 f"  {sp.type:2s} at {sp.parameter}={sp.value:.10f} (±{sp.accuracy:.1e})"
                 f"  {sides}  multipliers {mult}"
             )
-        for failure in branch.switch_failures:
-            lines.append(f"  no switch: {failure}")
     for curve in result.curves:
         lines.append(
             f"{curve.type} curve of {curve.n}-cycles in ({curve.first}, {curve.second}):"
             f" {len(curve.values)} points; {curve.end}"
         )
-    lines.extend(f"no curve: {failure}" for failure in result.curve_failures)
     lines.append(f"{result.shots} integrations of the section map, {result.seconds:.2f} s")
     return "\n".join(lines)
 
@@ -215,12 +338,14 @@ class LineStructure:
     (the seeds), each continued across the window both ways with switching, and the
     branches found twice dropped.
 
-    branches: the root branches (each with its switched children); seeds: (ω, label) of
-    the cells the branches were started from; line: the simulated line.
+    branches: the root branches (each with its switched children), those of a seed one
+    after the other (down then up, or one where the branch is a closed loop); seeds: (ω,
+    label, "path" or "census") of the cells the branches were started from; line: the
+    simulated line.
     """
 
     branches: list[Branch]
-    seeds: list[tuple[float, str]]
+    seeds: list[tuple[float, str, str]]
     line: object
     seconds: float = 0.0
     shots: int = 0
@@ -233,7 +358,7 @@ class LineStructure:
 
     def to_dict(self) -> dict:
         return {
-            "seeds": [{"omega": w, "label": label} for w, label in self.seeds],
+            "seeds": [{"omega": w, "label": lab, "source": src} for w, lab, src in self.seeds],
             "branches": [root.to_dict() for root in self.branches],
             "special": [{"branch_period": b.n, **sp.to_dict()} for b, sp in self.special_points()],
             "seconds": self.seconds,
@@ -281,11 +406,12 @@ def line_structure(
             if line.kind[start] == 0:
                 runs.append((start, i))
             start = i
-    candidates = []  # (ω, n, label, state, section points)
+    candidates = []  # (ω, n, label, state, section points, source)
     for a, b in runs:
         k = (a + b) // 2
         n = int(line.n[k])
-        candidates.append((float(line.omega[k]), n, labels[k], line.state[k], line.sections[k, :n]))
+        omega = float(line.omega[k])
+        candidates.append((omega, n, labels[k], line.state[k], line.sections[k, :n], "path"))
     if census:
         from .attractors import find_attractors
 
@@ -301,11 +427,12 @@ def line_structure(
                             r.label,
                             np.array(r.state),
                             np.asarray(r.sections)[: r.n],
+                            "census",
                         )
                     )
     settings = settings or BranchSettings()
     roots, seeds, switched = [], [], []
-    for omega, n, label, state, points in candidates:
+    for omega, n, label, state, points, source in candidates:
         if on_a_branch(roots, omega, points):
             continue
         try:
@@ -314,7 +441,7 @@ def line_structure(
             continue
         if on_a_branch(roots, omega, orbit.sections):
             continue
-        seeds.append((omega, label))
+        seeds.append((omega, label, source))
         for direction in (-1.0, 1.0):
             root = continue_with_switching(
                 orbit,

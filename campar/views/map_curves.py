@@ -263,7 +263,7 @@ def curves_beside(map_path, types=SEED_TYPES) -> list:
     """The map's curves of ``types``: computed into the store beside it where not there
     yet (``campar curves``, serial or under mpirun as the caller runs), then read back
     (``read_curves``); [] where the map has no typed edge to seed from."""
-    from ..continuation import tasks  # noqa: F401 (registers a curves job's tile function)
+    from ..continuation.tasks import CURVES_WORK
     from ..errors import JobError
     from ..sweep.runner import run_job
 
@@ -271,7 +271,7 @@ def curves_beside(map_path, types=SEED_TYPES) -> list:
         job = curves_job(map_path, types)
     except JobError:
         return []
-    run_job(job)
+    run_job(job, tile_work=CURVES_WORK)
     return read_curves(map_path)
 
 

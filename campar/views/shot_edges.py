@@ -15,7 +15,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from .boundaries import MapBoundaries, Segment
 from .transitions import PERIODIC_NAME, Approach, Transition
 
 # The critical value each located change reaches (transitions.CRITICAL's keys).
@@ -23,8 +22,9 @@ CRITICAL_OF = {"PD": "-1", "SN": "+1", "NS": "circle", "G": "graze"}
 SHOT_NOTE = "unknown edges between periodic cells typed by shooting (Newton on Pⁿ, continued)"
 
 
-def shoot_unknown(found: MapBoundaries, job, state, omega, second) -> MapBoundaries:
-    """``found`` with every unknown edge between two periodic cells typed by shooting.
+def shoot_unknown(found, job, state, omega, second):
+    """``found`` (a ``boundaries.MapBoundaries``, which calls this module) with every
+    unknown edge between two periodic cells typed by shooting.
 
     job: the store's Job (the model and the fixed parameters); state: (rows, cols, 2) the
     cells' stored final states; omega, second: the cell centres of ``found``'s grid.
@@ -60,8 +60,9 @@ def shoot_unknown(found: MapBoundaries, job, state, omega, second) -> MapBoundar
     return replace(found, segments=tuple(segments), notes=notes)
 
 
-def retyped(segment: Segment, change) -> Segment:
-    """The segment with the type, reason and evidence of a shooting's ``change``."""
+def retyped(segment, change):
+    """The ``boundaries.Segment`` with the type, reason and evidence of a shooting's
+    ``change``."""
     t = segment.transition
     where = "" if math.isnan(change.at) else f" at {change.at:.3f} of the edge"
     reason = f"by shooting{where}: {change.reason}"

@@ -1,16 +1,16 @@
 """Writing a tile's chunk of a Zarr array as zarr itself would, without its event loop.
 
 A tile's write is ~13 chunk files. Through zarr (``AsyncArray.setitem``: its codec
-pipeline, event loop and thread pool) a tile cost ~13 ms of CPU here, ~1 ms a chunk, of
-which the file system takes ~0.15 ms; on a rank that computes while it writes, that CPU
-is the kernel's. ``DirectChunk`` encodes the chunk with the codec chain campar's arrays
-have (bytes, little-endian; zstd or nothing; CRC32C: ``_zarr._codecs``) and writes it as
-zarr's ``LocalStore`` does — aside as ``<key>.<32 hex>.partial``, then renamed into
-place — and leaves out a chunk that holds only the fill, as zarr does
-(``write_empty_chunks`` false): the files are byte for byte zarr's (tests/test_store.py),
-~2.3 ms of CPU a tile in a 2-rank run (since chunks are files c.<i>.<j> with no folder to
-make: ``_zarr.CHUNK_KEYS``). An array with any other codec chain (a store made by a later
-campar, say) is written through zarr.
+pipeline, event loop and thread pool) a tile costs several times the CPU of the file
+system's own work; on a rank that computes while it writes, that CPU is the kernel's.
+``DirectChunk`` encodes the chunk with the codec chain campar's arrays have (bytes,
+little-endian; zstd or nothing; CRC32C: ``_zarr._codecs``) and writes it as zarr's
+``LocalStore`` does — aside as ``<key>.<32 hex>.partial``, then renamed into place — and
+leaves out a chunk that holds only the fill, as zarr does (``write_empty_chunks``
+false): the files are byte for byte zarr's (tests/test_store.py), at a fraction of the
+CPU (chunks are files c.<i>.<j> with no folder to make: ``_zarr.CHUNK_KEYS``). An array
+with any other codec chain (a store made by a later campar, say) is written through
+zarr.
 """
 
 import contextlib

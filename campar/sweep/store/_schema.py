@@ -297,7 +297,7 @@ def check_tile_arrays(
     job: Job, tile: Tile, arrays: dict[str, np.ndarray], schemas: list | None = None
 ) -> None:
     """Raise ValueError unless ``arrays`` is exactly what ``run_tile`` returns for ``tile``
-    (``schemas``: the job's ``cell_arrays``, if the caller has them: ~0.2 ms to make)."""
+    (``schemas``: the job's ``cell_arrays``, if the caller has them, made once)."""
     expected = {a.name: a for a in (schemas or cell_arrays(job))}
     if set(arrays) != set(expected):
         missing = sorted(set(expected) - set(arrays))

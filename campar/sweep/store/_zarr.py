@@ -156,8 +156,8 @@ def record_checksums(path: Path, arrays) -> dict[str, str]:
 
 
 # Chunk files named c.<i>.<j> beside the array's zarr.json, not c/<i>/<j>: a tile's first
-# write into c/<i>/ made that folder, and on the 2-rank plane those ~1,300 mkdirs were
-# ~0.5 s of CPU taken from the lanes (docs/scaling.md). Readers follow the metadata.
+# write into c/<i>/ makes that folder, a mkdir a tile row whose CPU is taken from the
+# lanes (docs/scaling.md). Readers follow the metadata.
 CHUNK_KEYS = {"name": "default", "separator": "."}
 CONSOLIDATED = "zarr.json (consolidated)"  # where campar and xarray read a variable's metadata
 GROUP_KEYS = ("zarr_format", "node_type")  # the group's own, under the global checksum
@@ -206,7 +206,7 @@ _fresh: dict[tuple, dict] = {}  # (job hash, separator) → its variables: the l
 
 
 def fresh_variables(job: Job, arrays, separator: str) -> dict:
-    """The variables of a store of ``job`` built afresh (in a temporary folder, ~0.3 s;
+    """The variables of a store of ``job`` built afresh (in a temporary folder, not free:
     kept for the next check of the same job, as ``status`` then ``verify`` make)."""
     key = (job.digest(), separator, tuple(a.name for a in arrays))
     if key not in _fresh:

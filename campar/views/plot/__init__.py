@@ -4,7 +4,10 @@ Every view draws plain arrays that were computed before (a store, ``run_tile``,
 a point simulation) and never recomputes them; nothing here imports the kernel.
 Figures are headless (Agg) and returned, so a caller can adjust or save them.
 
+- ``requests``: what can be asked for (``MAP_VIEWS``, ``parse_range``, ``PlotError``).
 - ``labels``: n-p categories and their fixed colours (``label_colour``, ``map_labels``).
+- ``cells``: grids of cells as flat colours, gaps hatched, legends with counts (the
+  drawing every categorical view shares).
 - ``maps``: two-parameter maps (``MapGrid``, ``plot_map``, ``select_cells``).
 - ``stores``: maps of result stores (``plot_store``, ``read_map``).
 - ``compare``: two maps side by side, and the cells whose labels differ (``plot_compare``).
@@ -28,35 +31,9 @@ Importing this package is cheap (matplotlib loads on first use of a view), so
 the CLI can name the views without paying for matplotlib.
 """
 
-import argparse
 import importlib
-import math
 
-from ...errors import CamparError
-
-
-class PlotError(CamparError):
-    """A figure cannot be drawn as asked (unknown view, empty zoom, array missing)."""
-
-
-# What ``plot_map`` / ``campar plot --what`` can draw.
-MAP_VIEWS = (
-    "labels",
-    "kind",
-    "n",
-    "p",
-    "dc",
-    "eps_max",
-    "eps_min",
-    "pn_max",
-    "revolutions",
-    "lyapunov",
-    "hysteresis",
-    "multistability",
-    "attractor_sets",
-)
-# What ``campar plot --what`` can draw of a store: the map views, and a basin store's one.
-STORE_VIEWS = (*MAP_VIEWS, "basin")
+from .requests import MAP_VIEWS, STORE_VIEWS, PlotError, parse_range
 
 _EXPORTS = {
     "label_colour": "labels",
@@ -83,22 +60,6 @@ _EXPORTS = {
 }
 
 __all__ = ["MAP_VIEWS", "STORE_VIEWS", "PlotError", "parse_range", *_EXPORTS]
-
-
-def parse_range(text: str) -> tuple[float, float]:
-    """A zoom range of ``campar plot --omega/--second``: "2.5:3" → (2.5, 3.0)."""
-    parts = text.split(":")
-    try:
-        if len(parts) != 2:
-            raise ValueError
-        low, high = float(parts[0]), float(parts[1])
-        if not (math.isfinite(low) and math.isfinite(high)):
-            raise ValueError
-        return low, high
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected A:B with two finite numbers, got {text!r}"
-        ) from None
 
 
 def __getattr__(name):

@@ -18,6 +18,7 @@ import numpy as np
 from ...core.codes import Kind
 from ...errors import StoreDamageWarning
 from ...sweep.job import cell_edges
+from .cells import draw_codes
 from .style import axis_label, figure_style, new_figure, parameter_text, save_figure
 
 # Attractors get these colours in rank order (qualitative, distinct; Okabe–Ito first);
@@ -62,7 +63,6 @@ def basin_categories(ds) -> list[tuple[int, str, str]]:
 
 def plot_basin(ds, title: str | None = None):
     """The basin of ``ds`` (``campar.open`` of a basin store) as a Figure."""
-    from .maps import draw_codes  # the map drawer of every categorical view
 
     second, first = ds["basin"].dims  # (ydot0, y0): rows, columns
     basin = ds["basin"].values

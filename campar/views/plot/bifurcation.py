@@ -22,8 +22,9 @@ from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
 
 from ...sweep.job import MODEL_OPTION_DEFAULTS
+from .cells import EDGE
 from .labels import PERIODIC, category_of, label_colour, legend_text, order_key
-from .maps import EDGE, cell_edges
+from .maps import cell_edges
 from .style import axis_label, figure_style, new_figure, parameter_text
 from .transitions import mark_transitions
 

@@ -13,8 +13,9 @@ from pathlib import Path
 import numpy as np
 
 from ...core.codes import Kind
-from . import PlotError
-from .maps import cell_edges, draw_codes, plot_map
+from .cells import draw_codes
+from .maps import cell_edges, plot_map
+from .requests import PlotError
 from .stores import read_map
 from .style import axis_label, figure_style, new_figure, save_figure
 

@@ -16,8 +16,9 @@ from ...sweep.job import DIRECTIONS, Job
 from ...sweep.plan import plan_tiles
 from ..cycles import hysteresis_cells, settled_cycles
 from ..dataset import cycle_tolerance
-from . import PlotError
+from .cells import draw_codes
 from .labels import computed_cells
+from .requests import PlotError
 
 # What the hysteresis of a cell is computed from (per direction).
 HYSTERESIS_ARRAYS = ("kind", "status", "n", "sections")
@@ -83,7 +84,6 @@ def store_hysteresis(store, verified: np.ndarray, rows: np.ndarray, cols: np.nda
 
 def draw_hysteresis(ax, xe, ye, arrays, *, legend: bool) -> None:
     """Hysteretic, one cycle, not compared as flat colours; cells not computed hatched."""
-    from .maps import draw_codes  # maps imports this module
 
     hysteretic = np.asarray(arrays["hysteresis"], bool)
     computed = computed_cells(arrays, hysteretic.shape)

@@ -13,6 +13,7 @@ with one attractor light grey. Cells not computed are hatched as on every map.
 import numpy as np
 
 from ...sweep.attractor_sets import attractor_sets
+from .cells import draw_codes
 from .labels import OTHER_STYLE, POOL, computed_cells
 
 MAX_SETS = 12  # sets with a colour of their own; rarer ones are grouped as "other sets"
@@ -36,7 +37,6 @@ def multistability_codes(n_attractors) -> np.ndarray:
 
 def draw_multistability(ax, xe, ye, arrays, *, legend: bool) -> None:
     """n_attractors as flat colours by category; cells not computed hatched."""
-    from .maps import draw_codes  # maps imports this module
 
     codes = multistability_codes(arrays["n_attractors"])
     computed = computed_cells(arrays, codes.shape) & (codes >= 0)
@@ -56,7 +56,6 @@ def draw_multistability(ax, xe, ye, arrays, *, legend: bool) -> None:
 def draw_attractor_sets(ax, xe, ye, arrays, chatter_p: int, *, legend: bool) -> None:
     """Each cell coloured by its set of coexisting attractors (the MAX_SETS most frequent
     a colour each, from the label palette's distinct POOL), cells with one attractor grey."""
-    from .maps import draw_codes  # maps imports this module
 
     count = np.asarray(arrays["n_attractors"])
     computed = computed_cells(arrays, count.shape) & (count >= 0)

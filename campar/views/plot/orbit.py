@@ -23,7 +23,7 @@ import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from . import PlotError
+from .requests import PlotError
 from .style import (
     EPS_LABEL,
     PN_LABEL,

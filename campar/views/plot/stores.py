@@ -13,9 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import PlotError
 from .hysteresis import HYSTERESIS_ARRAYS, drawn_layer, store_hysteresis
 from .maps import MapGrid, arrays_for, centre_range, plot_map
+from .requests import PlotError
 from .style import parameter_text, save_figure
 
 MAX_DRAWN = 1000  # cells per axis a map of a store draws at most (more do not show at 300 dpi)
