@@ -11,7 +11,15 @@ from campar.core.cam import phased_cam
 from campar.core.codes import OK
 from campar.core.contact import contact_law
 from campar.core.extrema import dense_kinematics
-from campar.core.integrator import DOP853, SolverOptions, advance, dense_eval, make_work, method_tag
+from campar.core.integrator import (
+    DOP853,
+    SolverOptions,
+    advance,
+    dense_eval,
+    make_work,
+    method_tag,
+    prepare_dense,
+)
 from campar.core.model import (
     FALL,
     FREE,
@@ -49,6 +57,7 @@ def cam_at(theta, phase, p):
 
 @njit
 def probe(method, t0, w, h, theta, p, mode, want_force):
+    prepare_dense(model.rhs, method, t0, w.y_old[:2], h, p, mode, w)
     return dense_kinematics(model.rhs, method, w, t0, h, theta, p, mode, want_force)
 
 

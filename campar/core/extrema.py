@@ -35,13 +35,12 @@ PEAK_THETA_TOL = 1e-4
 @hot
 def dense_kinematics(rhs, method, w, t0, h, theta, p, mode, want_force):
     """model.kinematics (ε, dε/dt, d²ε/dt², Pn, dPn/dt) at t0 + θh on the dense output of
-    the step just accepted from t0 (w.y_old → w.y_new); Pn and its rate 0 unless
-    ``want_force``.
+    the step just accepted from t0 (w.y_old → w.y_new; integrator.prepare_dense done); Pn
+    and its rate 0 unless ``want_force``.
 
     One body with one cam evaluation, the arithmetic of model.acceleration and
     model.kinematics term for term (the same numbers): as separate calls (numba inlines
     none) they evaluated the cam twice, the search's main cost."""
-    prepare_dense(rhs, method, t0, w.y_old[:N_STATE], h, p, mode, w)
     dense_eval(method, w, w.y_old, w.y_new, h, theta, N_STATE, w.y_stage)
     t = t0 + theta * h
     y = w.y_stage[0]
@@ -70,6 +69,7 @@ def dense_kinematics(rhs, method, w, t0, h, theta, p, mode, want_force):
 def eps_extremum(rhs, method, w, t0, h, p, mode, guess, de0, de1, want_min):
     """(θ, ε) of ε's interior minimum (want_min) or maximum on the step's dense output,
     from the model's place ``guess``; θ = -1 when Newton leaves the step unbracketed."""
+    prepare_dense(rhs, method, t0, w.y_old[:N_STATE], h, p, mode, w)
     sign = 1.0 if want_min else -1.0  # sign · dε/dt rises through 0 at the extremum
     a = 0.0
     b = 1.0
@@ -106,6 +106,7 @@ def force_peak(rhs, method, w, t0, h, p, mode, guess):
     """Largest Pn inside a step whose end rates bracket dPn/dt's fall through 0, on the
     dense output (Illinois to PEAK_THETA_TOL, first probe at the cubic model's place
     ``guess``)."""
+    prepare_dense(rhs, method, t0, w.y_old[:N_STATE], h, p, mode, w)
     a = 0.0
     b = 1.0
     fa = 1.0  # signs only: dPn/dt > 0 at a, < 0 at b
