@@ -47,7 +47,9 @@ def run_explore(args) -> int:
     if not 0 <= args.port <= 65535:
         raise JobError(f"--port must be in [0, 65535], got {args.port}")
     if not 0 < args.cell_seconds <= MAX_CELL_SECONDS:
-        raise JobError(f"--cell-seconds must be in (0, {MAX_CELL_SECONDS}], got {args.cell_seconds}")
+        raise JobError(
+            f"--cell-seconds must be in (0, {MAX_CELL_SECONDS}], got {args.cell_seconds}"
+        )
     if not 1 <= args.zoom_ranks <= 1024:
         raise JobError(f"--zoom-ranks must be in [1, 1024], got {args.zoom_ranks}")
     try:
