@@ -161,7 +161,8 @@ def cell(store, direction: str | None = None, **coordinates) -> StoredCell:
     Raises
     ------
     campar.errors.JobError
-        An axis unknown or missing, the cell not computed yet, a curves store.
+        An axis unknown or missing, a coordinate not a number or outside its grid
+        (by more than one step), the cell not computed yet, a curves store.
     campar.errors.StoreError
         The store cannot be read.
 
