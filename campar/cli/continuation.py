@@ -95,7 +95,8 @@ def add_continue(sub):
         type=named_range,
         metavar="NAME:A:B",
         help="the curves' second parameter and its window LOW:HIGH inside the model's "
-        "range, e.g. mu_kn:0.7:0.95 (with --curves)",
+        "range, e.g. mu_kn:0.7:0.95 or phi1:1.0:1.1 (a law parameter, when the range is "
+        "not one's) (with --curves)",
     )
     p.add_argument(
         "--line",

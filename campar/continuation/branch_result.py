@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .orbit import multipliers_of, section_points
-from .section_map import PARAMETER_ORDER
 from .special import SpecialPoint
 
 
@@ -105,7 +104,7 @@ def assemble(
     period = [n * 2.0 * math.pi / engine.parameters_at(pt.u[2])[0] for pt in points]
     mult = np.array([multipliers_of(pt.jacobian) for pt in points], dtype=complex).reshape(-1, 2)
     others = {
-        k: float(v) for k, v in zip(PARAMETER_ORDER, engine.par, strict=True) if k != engine.name
+        k: float(v) for k, v in zip(engine.smap.order, engine.par, strict=True) if k != engine.name
     }
     return Branch(
         parameter=engine.name,

@@ -29,8 +29,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ContinuationError
+from ..model.laws import LAW_PARAMETERS
 from ..sweep.curves_job import CURVE_TYPES as CURVE_CODES
-from .section_map import PARAMETER_ORDER, SectionMap, in_range, parameter_index
+from .section_map import SectionMap, in_range
 from .special import NS, PD, SN, G, SpecialPoint, psi_ns, psi_pd, psi_sn
 
 CURVE_TYPES = CURVE_CODES  # the types a curve can have, in the order of their codes
@@ -134,12 +135,18 @@ class CurveContinuation:
             raise ContinuationError(f"no curve of {kind} points; one of {', '.join(CURVE_TYPES)}")
         if names[0] == names[1]:
             raise ContinuationError("a curve needs two different parameters")
+        for name in names:
+            if name in LAW_PARAMETERS and name not in smap.order:
+                raise ContinuationError(
+                    f"a curve in {name} needs a section map that continues it "
+                    f"(SectionMap(law_parameter={name!r}))"
+                )
         self.smap = smap
         self.kind = kind
         self.n = n
         self.par = np.array(par, dtype=np.float64)
         self.names = tuple(names)
-        self.index = tuple(parameter_index(name) for name in names)
+        self.index = tuple(smap.index(name) for name in names)  # a law parameter: its own
         self.lo = np.array([min(w) for w in window], dtype=float)
         self.hi = np.array([max(w) for w in window], dtype=float)
         if np.any(self.hi <= self.lo):
@@ -325,7 +332,8 @@ def continue_curve(
     sp : SpecialPoint
         A PD, SN, NS or G point of a branch (``Branch.special``).
     second : str
-        The plane's second parameter (omega, f0, mu_kn, mu_cn or zeta; not sp's).
+        The plane's second parameter (omega, f0, mu_kn, mu_cn or zeta; not sp's), or the
+        law parameter ``section_map`` continues (``SectionMap.law_parameter``).
     window : ((float, float), (float, float))
         The ranges of sp.parameter and of ``second``; the curve ends where it leaves them.
     section_map, settings
@@ -349,8 +357,8 @@ def continue_curve(
     """
     if sp.type not in CURVE_TYPES:
         raise ContinuationError(f"no curve of {sp.type} points; one of {', '.join(CURVE_TYPES)}")
-    smap = section_map or SectionMap()
-    par = np.array([sp.parameters[name] for name in PARAMETER_ORDER])
+    smap = section_map or SectionMap(law_parameter=second if second in LAW_PARAMETERS else None)
+    par = smap.vector(sp.parameters)  # a law parameter not in sp's: the model's value
     names = (sp.parameter, second)
     engine = CurveContinuation(smap, sp.type, sp.n, par, names, window, settings)
     shots0 = smap.shots
@@ -364,7 +372,7 @@ def continue_curve(
     end = end_ahead if closed else f"{end_behind}; {end_ahead}"
     from .orbit import multipliers_of
 
-    others = {k: float(v) for k, v in zip(PARAMETER_ORDER, par, strict=True) if k not in names}
+    others = {k: float(v) for k, v in zip(smap.order, par, strict=True) if k not in names}
     return BifurcationCurve(
         type=sp.type,
         n=sp.n,

@@ -47,6 +47,9 @@ class StoredCell:
         Every per-cell array's value at the cell, as the store holds it.
     kernel : str or None
         The kernel version that wrote the store (None: a store that does not say).
+    job : Job
+        The store's job (``campar.sweep.job.Job``): its grid, chains and outputs, from
+        which the cell is computed again.
 
     Examples
     --------
@@ -120,13 +123,44 @@ class StoredCell:
 
     def continue_(self, parameter: str, to: float, **options):
         """The branch of the cell's cycle as ``parameter`` goes from the cell's value to
-        ``to`` (``campar.views.continuation.continue_from_cell``)."""
+        ``to``: the cell's model simulated from its stored final state, its cycle (the
+        stored period unless ``cycle`` is given) solved for and continued.
+
+        Parameters
+        ----------
+        parameter : str
+            omega, f0, mu_kn, mu_cn, zeta or a law parameter (phi1 … phi4, n, restitution).
+        to : float
+            The far end of the branch's window.
+        **options
+            ``continue_from_cell``'s keywords: cycle, switch, settings, curve_types,
+            second, second_window, section_map.
+
+        Returns
+        -------
+        campar.views.continuation.ContinuationResult
+
+        Raises
+        ------
+        campar.errors.ContinuationError
+            The cell is not periodic and no ``cycle`` is given, or Newton fails there.
+
+        Examples
+        --------
+        >>> import campar
+        >>> c = campar.cell("results/smoke.zarr", omega=3.0, mu_cn=0.7)
+        >>> result = c.continue_("omega", 2.5)
+        >>> result.start.label == c.simulate().label
+        True
+        """
         from .continuation import continue_from_cell
 
         start = float(self.model.value(parameter))
-        return continue_from_cell(
-            parameter, (start, to), model=self.model, state=self.state, **options
-        )
+        n = int(self.stored.get("n", 0))
+        if n >= 1:
+            options.setdefault("cycle", n)
+        y0, v0 = self.state
+        return continue_from_cell(parameter, (start, to), model=self.model, y0=y0, v0=v0, **options)
 
     def plot(self, path=None):
         """The orbit's figure (phase portrait, ε, Pn, yc against t); saved at ``path`` if
@@ -157,6 +191,11 @@ def cell(store, direction: str | None = None, **coordinates) -> StoredCell:
         down or up: which chain of a ``chains.direction: both`` store (default down).
     **coordinates : float
         The cell's place by the store's axis names.
+
+    Returns
+    -------
+    StoredCell
+        The cell's place, model and stored values; no file is held open.
 
     Raises
     ------

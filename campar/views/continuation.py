@@ -63,13 +63,13 @@ class ContinuationResult:
 def continue_from_cell(
     parameter: str,
     span: tuple[float, float],
-    fixed: dict,
+    fixed: dict | None = None,
     *,
-    y0: float = 0.0,
-    v0: float = 0.0,
+    y0: float | None = None,
+    v0: float | None = None,
     cycle: int | None = None,
     switch: int = 0,
-    model: dict | None = None,
+    model: Model | dict | None = None,
     settings: BranchSettings | None = None,
     curve_types=(),
     second: str | None = None,
@@ -85,10 +85,11 @@ def continue_from_cell(
         the model (phi1 … phi4, n, restitution; campar.model.laws.LAW_PARAMETERS).
     span : (float, float)
         Where the branch starts and the far end of its window.
-    fixed : dict
-        The other parameters (the paper's base values for those not given).
-    y0, v0 : float
-        The simulation's start at θ = 0 (rest by default).
+    fixed : dict, optional
+        The other parameters: the ``model``'s values for those not given (the paper's
+        base values without a Model).
+    y0, v0 : float, optional
+        The simulation's start at θ = 0 (default the model's ``initial``: rest).
     cycle : int, optional
         The period solved for; by default the simulated cell's period.
     switch : int
@@ -104,7 +105,8 @@ def continue_from_cell(
         PD, SN, NS, G: continue the curve of every special point of these types found on
         the branches in the plane (parameter, ``second``) over (span, ``second_window``).
     second : str, optional
-        The second parameter of those curves.
+        The second parameter of those curves: omega, f0, mu_kn, mu_cn, zeta, or a law
+        parameter when ``parameter`` is not one (a plane holds one law parameter).
     second_window : (float, float), optional
         The window of ``second`` the curves stay in.
     section_map : SectionMap, optional
@@ -134,16 +136,18 @@ def continue_from_cell(
         that is empty, not finite or outside the model's range, a second window that is
         not low:high inside its range, curves without a second parameter.
     """
-    check_request(parameter, span, fixed, curve_types, second, second_window)
+    check_request(parameter, span, fixed or {}, curve_types, second, second_window, model)
     began = time.perf_counter()
-    values = {**fixed, parameter: span[0]}
-    base = model if isinstance(model, Model) else Model.build({"omega": values["omega"]})
-    if isinstance(model, dict):  # the force law's options (the model section's keys)
-        base = base.replace(**model)
-    law = parameter if parameter in LAW_PARAMETERS else None
+    given = {**(fixed or {}), parameter: span[0]}
+    base = start_model(model, given)
+    # the law parameter the section map takes as its own: the branch's, or the curves'
+    law = next((name for name in (parameter, second) if name in LAW_PARAMETERS), None)
+    # every parameter of the model continued: its own where neither fixed nor span says
+    values = {**base.parameters, **({law: span[0]} if law == parameter else {})}
     smap = section_map or SectionMap(base, law_parameter=law)
     shots0 = smap.shots
-    cell = simulate_point(base, y0=y0, v0=v0, **values)
+    y0, v0 = (base.initial.y if y0 is None else y0), (base.initial.v if v0 is None else v0)
+    cell = simulate_point(base, state=(y0, v0))
     period = cycle or cell.n
     if not period:
         raise ContinuationError(
@@ -152,7 +156,7 @@ def continue_from_cell(
         )
     if not all(map(math.isfinite, cell.state)):
         raise ContinuationError(f"the cell at {parameter}={span[0]} failed: {cell.status}")
-    start = solve_cycle(period, cell.state, {**fixed, parameter: span[0]}, section_map=smap)
+    start = solve_cycle(period, cell.state, values, section_map=smap)
     direction = 1.0 if span[1] > span[0] else -1.0
     root = continue_with_switching(
         start, parameter, span, switch, direction=direction, section_map=smap, settings=settings
@@ -177,17 +181,32 @@ def continue_from_cell(
     return result
 
 
-def check_request(parameter, span, fixed, curve_types=(), second=None, second_window=None):
+def start_model(model, given: dict) -> Model:
+    """The model at the branch's start: ``model`` (a Model, the force law's options or
+    None: the paper's) with the ``given`` parameters set."""
+    if isinstance(model, Model):
+        return model.replace(**given)
+    if model is not None and not isinstance(model, dict):
+        raise JobError(f"a model is a Model or the force law's options, got {type(model).__name__}")
+    # the model section's keys, then the parameters (a law parameter after the law it sets)
+    return Model.build(None, **{**(model or {}), **given})
+
+
+def check_request(
+    parameter, span, fixed, curve_types=(), second=None, second_window=None, model=None
+):
     """Refuse, before any work, a request that cannot be computed as asked (JobError, one
     line): a parameter the model does not have, a range that is empty, not finite or
     leaves the model's range of its parameter, a fixed value out of range, curves of an
     unknown type, or curves without a second parameter and window (low:high) of their own.
-    The ranges are the model's own (``Model.build`` checks each value)."""
+    The ranges are those of ``model`` (a Model, the force law's options or None: the
+    paper's; ``Model.build`` checks each value): a contact's restitution, say, is a
+    parameter of the laws that have one."""
     if parameter not in (*PARAMETER_ORDER, *LAW_PARAMETERS):
         allowed = ", ".join((*PARAMETER_ORDER, *LAW_PARAMETERS))
         raise JobError(f"cannot continue along {parameter!r}; one of {allowed}")
-    Model.build({"omega": 1.0}, **fixed)  # each fixed value in its range
-    check_range(parameter, span, f"the range {span[0]:g}:{span[1]:g} of {parameter}")
+    at = start_model(model, {"omega": 1.0}).replace(**fixed)  # each fixed value in its range
+    check_range(at, parameter, span, f"the range {span[0]:g}:{span[1]:g} of {parameter}")
     if span[0] == span[1]:
         raise JobError(f"the range of {parameter} is empty: {span[0]:g}:{span[1]:g}")
     unknown = sorted(set(curve_types) - set(CURVE_TYPES))
@@ -198,14 +217,18 @@ def check_request(parameter, span, fixed, curve_types=(), second=None, second_wi
             raise JobError("curves need a second parameter and its window (--second NAME:A:B)")
         return
     where = f"--second {second}:{second_window[0]:g}:{second_window[1]:g}"
-    if second not in PARAMETER_ORDER:
+    if second not in (*PARAMETER_ORDER, *LAW_PARAMETERS):
         raise JobError(
             f"{where}: {second!r} is not a parameter of the model; one of "
-            f"{', '.join(PARAMETER_ORDER)}"
+            f"{', '.join((*PARAMETER_ORDER, *LAW_PARAMETERS))}"
+        )
+    if second in LAW_PARAMETERS and parameter in LAW_PARAMETERS:
+        raise JobError(
+            f"{where}: a curve's plane holds one law parameter; the branch's is {parameter}"
         )
     if second == parameter:
         raise JobError(f"{where}: the second parameter must differ from the branch's, {parameter}")
-    check_range(second, second_window, where)
+    check_range(at, second, second_window, where)
     low, high = second_window
     if low == high:
         raise JobError(f"{where}: the window is empty; give two values, low:high")
@@ -215,12 +238,12 @@ def check_request(parameter, span, fixed, curve_types=(), second=None, second_wi
         raise JobError(f"{where} is the plane of the curves: give their types (--curves PD,G)")
 
 
-def check_range(name: str, span, where: str) -> None:
-    """Both ends of ``span`` finite and inside the model's range of ``name`` (JobError
+def check_range(model: Model, name: str, span, where: str) -> None:
+    """Both ends of ``span`` finite and inside ``model``'s range of ``name`` (JobError
     naming ``where``)."""
     for value in span:
         try:
-            Model.build({"omega": 1.0}, **{name: value})
+            model.replace(**{name: value})
         except JobError as exc:
             raise JobError(f"{where}: {exc}") from None
 

@@ -194,6 +194,8 @@ def line_spec(
         per non-periodic cell, defaults to DEFAULT_SECTIONS.
     name : str
         The line's name.
+    **fields
+        Keys of the model by name or dotted key (``Model.build``), changing ``model``.
 
     Returns
     -------

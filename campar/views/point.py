@@ -97,6 +97,8 @@ class PointResult:
         Largest Lyapunov exponent per revolution, when asked for (``lyapunov=True``).
     trace : OrbitTrace or None
         The steady orbit sampled densely, when asked for (``trace=True``).
+    model : Model or None
+        The cell's whole model (``campar.model.Model``): what its numbers depend on.
 
     Examples
     --------
@@ -127,7 +129,6 @@ class PointResult:
     lyapunov: float | None = None
     trace: OrbitTrace | None = field(default=None, repr=False)
     model: Model | None = field(default=None, repr=False, compare=False)
-    """The cell's whole model (``campar.model.Model``)."""
 
     def to_dict(self) -> dict:
         """JSON-ready summary (multipliers as [re, im] pairs; NaN as None)."""
