@@ -193,7 +193,8 @@ def line(
     Parameters
     ----------
     omega : (float, float)
-        The ω range, either order; computed from the larger value down.
+        The ω range, either order, two different finite numbers (equal ones for one
+        point); computed from the larger value down.
     points : int
         ω values, evenly spaced, at least 2.
     model : Model or mapping, optional

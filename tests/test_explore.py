@@ -363,6 +363,7 @@ def test_a_large_map_is_kept_at_a_stride_and_read_whole_where_zoomed_in(store, m
     assert (fine[::2, ::2] == labels).all() and (fine[1::2, 1::2] == labels).all()
 
 
+@pytest.mark.process  # the explorer's server starts multiprocessing's resource tracker
 def test_a_store_a_run_is_writing_is_drawn_as_its_tiles_commit(store, tmp_path):
     """Tiles not committed are pending (drawn as not computed, a cell there cannot be
     computed: one line, the server goes on); a tile committed later is verified and

@@ -3,6 +3,7 @@
 from ..errors import JobError
 
 LOOPBACK = "127.0.0.1"
+MAX_CELL_SECONDS = 86400.0  # a day: a longer computation belongs in a job, not a page
 
 
 def add_explore(sub):
@@ -45,8 +46,10 @@ def run_explore(args) -> int:
         raise JobError(f"campar explore shows one or two stores, got {len(args.stores)}")
     if not 0 <= args.port <= 65535:
         raise JobError(f"--port must be in [0, 65535], got {args.port}")
-    if not args.cell_seconds > 0:
-        raise JobError(f"--cell-seconds must be > 0, got {args.cell_seconds}")
+    if not 0 < args.cell_seconds <= MAX_CELL_SECONDS:
+        raise JobError(
+            f"--cell-seconds must be in (0, {MAX_CELL_SECONDS}], got {args.cell_seconds}"
+        )
     if not 1 <= args.zoom_ranks <= 1024:
         raise JobError(f"--zoom-ranks must be in [1, 1024], got {args.zoom_ranks}")
     try:

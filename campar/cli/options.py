@@ -112,7 +112,7 @@ def model_of(args, **parameters):
     flags, then ``parameters`` (None values left out); JobError for a bad key or value."""
     from ..model import Model
 
-    base = job_model(args.job) if getattr(args, "job", None) else None
+    base = job_model(args.job) if getattr(args, "job", None) is not None else None
     fields = {}
     for text in getattr(args, "set", []):
         key, _, raw = text.partition("=")

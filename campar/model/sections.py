@@ -13,7 +13,7 @@ from pydantic import Field, field_validator, model_validator
 
 from ..errors import JobError
 from .laws import CamSettings, ContactSettings
-from .settings import MAX_COUNT, MAX_PERIOD, MAX_STEPS, Settings
+from .settings import MAX_COUNT, MAX_PERIOD, MAX_START, MAX_STEPS, Settings
 
 PARAMETERS = ("omega", "f0", "mu_kn", "mu_cn", "zeta")
 # The paper's base values (docs/model.md, sweeps) for parameters a job does not sweep or
@@ -83,6 +83,8 @@ class InitialState(Settings):
     def finite(cls, value: float) -> float:
         if not math.isfinite(value):
             raise ValueError("must be a finite number")
+        if abs(value) > MAX_START:  # as a basin's starts: far outside every attractor
+            raise ValueError(f"must be in [-{MAX_START:g}, {MAX_START:g}]")
         return value
 
 

@@ -12,6 +12,7 @@ Reading is done when ``cell`` returns: a StoredCell holds plain values and no op
 so it may be used from any thread.
 """
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -199,7 +200,8 @@ def cell(store, direction: str | None = None, **coordinates) -> StoredCell:
     Raises
     ------
     campar.errors.JobError
-        An axis unknown or missing, the cell not computed yet, a curves store.
+        An axis unknown or missing, a coordinate not a number or outside its grid
+        (by more than one step), the cell not computed yet, a curves store.
     campar.errors.StoreError
         The store cannot be read.
 
@@ -255,8 +257,23 @@ def nearest_cell(job: Job, coordinates: dict, store) -> tuple[int, int]:
                 )
             index.append(0)
             continue
-        index.append(int(np.argmin(np.abs(values - float(coordinates[name])))))
+        value = axis_value(name, coordinates[name], values, store)
+        index.append(int(np.argmin(np.abs(values - value))))
     return index[0], index[1]
+
+
+def axis_value(name: str, given, values: np.ndarray, store) -> float:
+    """``given`` as a number within the grid's span widened by one step (JobError else:
+    the nearest cell of a point far outside the map is not the cell asked for)."""
+    try:
+        value = float(given)
+    except (TypeError, ValueError):
+        raise JobError(f"{store}: {name} must be a number, got {given!r}") from None
+    low, high = float(values.min()), float(values.max())
+    step = (high - low) / (len(values) - 1) if len(values) > 1 else 0.0
+    if not math.isfinite(value) or (step > 0 and not low - step <= value <= high + step):
+        raise JobError(f"{store}: {name} = {given!r} is outside its grid ({low:g} … {high:g})")
+    return value
 
 
 def which_layer(job: Job, direction: str | None) -> tuple[int | None, str | None]:

@@ -162,6 +162,20 @@ class LineSpec:
         }
 
 
+def omega_range(omega, points: int) -> tuple[float, float]:
+    """(larger, smaller) of a line's ω range: two finite numbers, different unless one point
+    (JobError otherwise; NaN would pass max and min unnoticed)."""
+    try:
+        a, b = (float(value) for value in omega)
+    except (TypeError, ValueError):
+        raise JobError(f"omega: expected a range (A, B) of two numbers, got {omega!r}") from None
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise JobError(f"omega: expected two finite numbers, got {omega!r}")
+    if a == b and points > 1:
+        raise JobError(f"omega: expected A != B for {points} points, got {omega!r}")
+    return max(a, b), min(a, b)
+
+
 def line_spec(
     omega: tuple[float, float], points: int, model=None, *, name: str = "line", **fields
 ) -> LineSpec:
@@ -205,7 +219,7 @@ def line_spec(
         check_count("points", points, 1, MAX_POINTS)
     except ValueError as exc:
         raise JobError(str(exc)) from None
-    hi, lo = max(omega), min(omega)
+    hi, lo = omega_range(omega, points)
     if "initial" in fields:  # the start as a pair (y, y')
         fields["y0"], fields["v0"] = fields.pop("initial")
     base = Model.build(model, omega=hi, **fields)

@@ -402,7 +402,7 @@ def check_same_job(path, attrs: dict, job: Job) -> None:
             "another --store path"
         )
     raise StoreMismatch(
-        f"{path} holds results of a different job:\n  "
-        + "\n  ".join(diffs)
-        + "\nuse --overwrite to replace it, or another --store path"
+        f"{path} holds results of a different job ("
+        + "; ".join(diffs)
+        + "): use --overwrite to replace it, or another --store path"
     )

@@ -32,7 +32,8 @@ STORE_VIEWS = (*MAP_VIEWS, "basin")
 
 
 def parse_range(text: str) -> tuple[float, float]:
-    """A zoom range of ``campar plot --omega/--second``: "2.5:3" → (2.5, 3.0)."""
+    """A range of ``campar plot --omega/--second`` and ``campar line --omega``: "2.5:3" →
+    (2.5, 3.0); either order (the users sort it), two different finite numbers."""
     parts = text.split(":")
     try:
         if len(parts) != 2:
@@ -40,8 +41,10 @@ def parse_range(text: str) -> tuple[float, float]:
         low, high = float(parts[0]), float(parts[1])
         if not (math.isfinite(low) and math.isfinite(high)):
             raise ValueError
-        return low, high
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected A:B with two finite numbers, got {text!r}"
         ) from None
+    if low == high:
+        raise argparse.ArgumentTypeError(f"expected A:B with A != B (an interval), got {text!r}")
+    return low, high
