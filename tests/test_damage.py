@@ -205,10 +205,11 @@ HDF5_DAMAGE = [
 QUICK_HDF5 = ("unsealed, scale_factor added",)  # a rescue in a child process takes seconds
 
 
-def cases(table, quick):
-    """The table's cases as parameters, those not in ``quick`` in the full tier only."""
+def cases(table, quick, full=(pytest.mark.slow,)):
+    """The table's cases as parameters, those not in ``quick`` in the full tier only (with
+    the ``full`` marks)."""
     return [
-        pytest.param(*case[1:], id=case[0], marks=() if case[0] in quick else pytest.mark.slow)
+        pytest.param(*case[1:], id=case[0], marks=() if case[0] in quick else full)
         for case in table
     ]
 
@@ -288,7 +289,11 @@ def test_damaged_zarr_store(tmp_path, capsys, damage, tiles, variable):
     _assert_open_is_the_job(path, job)
 
 
-@pytest.mark.parametrize("damage,variable", cases(HDF5_DAMAGE, QUICK_HDF5))
+# A damaged sealed file is rescued by campar's HDF5 guard in a child process.
+@pytest.mark.parametrize(
+    "damage,variable",
+    cases(HDF5_DAMAGE, QUICK_HDF5, full=(pytest.mark.slow, pytest.mark.process)),
+)
 def test_damaged_hdf5_store(tmp_path, capsys, damage, variable):
     path = tmp_path / "s.h5"
     job = synthetic_store(path, make_job())
