@@ -91,6 +91,7 @@ def _same_attrs(a, b) -> bool:
 
 
 @pytest.mark.slow
+@pytest.mark.process  # HDF5: a damaged sealed file is rescued in the guard's child process
 @pytest.mark.parametrize("suffix", [".zarr", ".h5"])
 def test_fault_campaign(tmp_path, suffix):
     rng = np.random.default_rng(len(suffix))

@@ -167,6 +167,7 @@ def test_random_damage_is_detected_and_repaired(tmp_path, suffix):
 
 
 @pytest.mark.slow
+@pytest.mark.process  # HDF5: a damaged sealed file is rescued in the guard's child process
 @pytest.mark.parametrize("suffix", BACKENDS)
 def test_many_random_damages_are_detected_and_repaired(tmp_path, suffix):
     # an HDF5 round starts rescue processes (~1 s each): these counts keep the suite within
