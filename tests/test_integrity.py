@@ -133,6 +133,7 @@ def test_hdf5_damage_anywhere_in_the_file_is_seen_before_hdf5_reads_it(tmp_path)
 
 
 @pytest.mark.slow  # two rescues in child processes, ~3 s
+@pytest.mark.process
 def test_hdf5_zeroed_user_block_and_zeroed_start_are_named(tmp_path):
     path = tmp_path / "s.h5"
     job = synthetic_store(path)
