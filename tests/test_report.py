@@ -91,6 +91,7 @@ def steady_from_rest(omega: float, tensile: str, **params) -> tuple:
 
 
 @pytest.mark.slow  # the report of two tiny planes, computed once a module: minutes
+@pytest.mark.timeout(1800)  # the first test builds it: its curves shoot the unknown edges
 def test_every_claim_and_quoted_pair_has_a_row(report):
     assert set(report) == {c.key for c in CLAIMS} | {"L1", "L2"}
     for claim in CLAIMS:
@@ -104,6 +105,7 @@ def test_every_claim_and_quoted_pair_has_a_row(report):
 
 
 @pytest.mark.slow  # the report of two tiny planes, computed once a module: minutes
+@pytest.mark.timeout(1800)  # the first test builds it: its curves shoot the unknown edges
 def test_liouville_rows_obey_the_closed_form_bound(report):
     """λ1λ2 of a return map over n revolutions is exp(∮ div f dt) ≤ exp(−4πζn/ω)."""
     for key in ("L1", "L2"):
@@ -134,6 +136,7 @@ def multipliers(text: str) -> list[complex]:
 
 @pytest.mark.parametrize("tensile", ["clamp", "allow"])
 @pytest.mark.slow  # the report of two tiny planes, computed once a module: minutes
+@pytest.mark.timeout(1800)  # the first test builds it: its curves shoot the unknown edges
 def test_multiplier_rows_have_the_determinant_of_the_liouville_rows(report, tensile):
     """E rows: campar's multipliers from the variational equations; L rows: exp(∮ div f dt)
     integrated along the same orbit. Liouville's formula makes λ1λ2 equal to it."""
@@ -161,6 +164,7 @@ def series(text: str) -> dict[str, list[float]]:
 
 @pytest.mark.parametrize("tensile", ["clamp", "allow"])
 @pytest.mark.slow  # the report of two tiny planes, computed once a module: minutes
+@pytest.mark.timeout(1800)  # the first test builds it: its curves shoot the unknown edges
 def test_duty_cycle_trend_and_detachment_angles_agree_with_scipy(report, tensile):
     """T3 (DC over ω = 1, 3, 5 for each f0) and T11 (cam angle of every detachment at
     f0 = 0.5) from SciPy orbits from rest."""
@@ -189,6 +193,7 @@ def test_duty_cycle_trend_and_detachment_angles_agree_with_scipy(report, tensile
 
 @pytest.mark.parametrize("tensile", ["clamp", "allow"])
 @pytest.mark.slow  # the report of two tiny planes, computed once a module: minutes
+@pytest.mark.timeout(1800)  # the first test builds it: its curves shoot the unknown edges
 def test_point_rows_from_rest_agree_with_scipy(report, tensile):
     """P rows' label from rest at μkn = 0.91 (the claimed ω, the centre of the row's
     neighbourhood), from SciPy orbits from rest (and P5 under the clamp from reference
