@@ -10,7 +10,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from damage import synthetic_store
+from support.damage import synthetic_store
 from test_store import fake_tile, make_job
 
 import campar
