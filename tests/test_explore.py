@@ -64,6 +64,15 @@ def get(server, path: str, host: str | None = None, method: str = "GET"):
     return response.status, body
 
 
+def refused(server, path: str, status: int, reason: str) -> str:
+    """The body of a request the server refuses with ``status``: one line, naming the
+    status and ``reason``, no traceback."""
+    got, body = get(server, path)
+    assert got == status, body
+    assert body.count("\n") == 1 and reason in body and "Traceback" not in body, body
+    return body
+
+
 def whole_map(source, w=12, h=6) -> str:
     x0, x1 = source.x_edges[[0, -1]]
     y0, y1 = source.y_edges[[0, -1]]
@@ -100,9 +109,8 @@ def test_binds_the_loopback_interface(server):
     ],
 )
 def test_serves_nothing_but_its_routes(server, path):
-    status, body = get(server, path)
-    assert status == 404, body
-    assert body.count("\n") == 1 and body.startswith("404 Not Found: "), body
+    body = refused(server, path, 404, "404 Not Found: ")
+    assert body.startswith("404 Not Found: ")
     assert "root:" not in body and "zarr_format" not in body
 
 
@@ -112,8 +120,7 @@ def test_the_stores_are_named_by_index_only(server, store):
     (described,) = json.loads(body)
     assert described["name"] == store.name and described["shape"] == [6, 12]
     for bad in ("store=1", "store=-1", "store=../explore.zarr", f"store={store}"):
-        status, body = get(server, f"/api/cell?{bad}&x=3&y=0.8")
-        assert status == 400 and body.count("\n") == 1, body
+        refused(server, f"/api/cell?{bad}&x=3&y=0.8", 400, "400 Bad Request: ")
 
 
 @pytest.mark.parametrize(
@@ -134,10 +141,7 @@ def test_the_stores_are_named_by_index_only(server, store):
     ],
 )
 def test_a_malformed_request_gets_one_line(server, query):
-    status, body = get(server, query)
-    assert status == 400, body
-    assert body.count("\n") == 1 and body.startswith("400 Bad Request: "), body
-    assert "Traceback" not in body
+    assert refused(server, query, 400, "400 Bad Request: ").startswith("400 Bad Request: ")
 
 
 def test_a_malformed_request_line_gets_one_line(server):
@@ -264,8 +268,7 @@ def test_a_cell_is_computed_bounded_in_time_and_failures_shown(server, store):
     args += ["--mu-cn", str(float(ds.mu_cn[2])), "--json"]
     worker = server.explorer.worker
     worker.seconds = 0.01  # the worker's spawn alone takes longer
-    status, body = get(server, "/api/compute?row=2&col=3")
-    assert status == 422 and "limit of 0.01 s" in body and body.count("\n") == 1
+    refused(server, "/api/compute?row=2&col=3", 422, "limit of 0.01 s")
     worker.seconds = 300
     answers = {}
 
@@ -386,8 +389,7 @@ def test_a_store_a_run_is_writing_is_drawn_as_its_tiles_commit(store, tmp_path):
         source = server.explorer.sources[0]
         assert source.status()["verified"] == 1
         assert source.cell(2, 3)["stored"] == "pending"
-        status, body = get(server, "/api/compute?row=2&col=3")
-        assert status == 422 and "not computed yet" in body and body.count("\n") == 1
+        refused(server, "/api/compute?row=2&col=3", 422, "not computed yet")
         field = source.fields["label"]
         box = (*source.x_edges[[0, -1]], *source.y_edges[[0, -1]])
         values, _ = source.view(field, box, 12, 6)
