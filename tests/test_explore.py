@@ -2,7 +2,6 @@
 stores (verified, damaged tiles masked as campar.open masks them), and its computations
 bounded in time. The page in a real browser: test_explore_browser.py."""
 
-import http.client
 import json
 import shutil
 import socket
@@ -10,6 +9,7 @@ import threading
 
 import numpy as np
 import pytest
+from support.http import get, refused
 
 import campar
 from campar.cli import main
@@ -49,28 +49,6 @@ def _scanned(server) -> None:
             if source.status()["scanned"]:
                 break
             threading.Event().wait(0.05)
-
-
-def get(server, path: str, host: str | None = None, method: str = "GET"):
-    """(status, body text) of a request sent as written (no normalisation of the path)."""
-    h, port = server.server_address[:2]
-    conn = http.client.HTTPConnection(h, port, timeout=120)
-    conn.putrequest(method, path, skip_host=True, skip_accept_encoding=True)
-    conn.putheader("Host", host or f"{h}:{port}")
-    conn.endheaders()
-    response = conn.getresponse()
-    body = response.read().decode("utf-8", "replace")
-    conn.close()
-    return response.status, body
-
-
-def refused(server, path: str, status: int, reason: str) -> str:
-    """The body of a request the server refuses with ``status``: one line, naming the
-    status and ``reason``, no traceback."""
-    got, body = get(server, path)
-    assert got == status, body
-    assert body.count("\n") == 1 and reason in body and "Traceback" not in body, body
-    return body
 
 
 def whole_map(source, w=12, h=6) -> str:

@@ -28,6 +28,7 @@ import numpy as np
 from ..errors import CamparError
 from ..views.map_curves import curves_store_path
 from . import render
+from .lines import MAX_LINE_POINTS
 from .source import MapSource
 from .worker import WARM_UP_SECONDS, CellWorker
 
@@ -39,6 +40,7 @@ STATIC = {  # served path → (file of campar/explore/static, content type)
     "/plots.js": ("plots.js", "text/javascript; charset=utf-8"),
     "/exports.js": ("exports.js", "text/javascript; charset=utf-8"),
     "/overlays.js": ("overlays.js", "text/javascript; charset=utf-8"),
+    "/lines.js": ("lines.js", "text/javascript; charset=utf-8"),
     "/explore.css": ("explore.css", "text/css; charset=utf-8"),
 }
 # The page runs only its own script (no inline or evaluated code); images are its maps.
@@ -48,6 +50,7 @@ MAX_PIXELS = 4096  # a view's width or height
 REFRESH_SECONDS = 0.5  # how often a store a run writes is looked at again
 MAX_STARTS = 200  # starts of an attractor census from the page
 MAX_CYCLE = 64  # period of a cycle by shooting from the page
+LINES = ("row", "column", "segment")  # what a bifurcation line runs along
 MAX_EDGE_CELLS = 400 * 400  # cells of a view whose edges are typed at a request
 ZOOM_POINTS = 100  # a zoom's cells along each side
 ZOOM_START_SECONDS = 60.0  # until a zoom's run has created its store
@@ -177,15 +180,15 @@ class Explorer:
 
     def compute(self, q: dict, action: str) -> dict:
         source = self._source(q)
+        if action == "line":
+            return self.worker.run("line", str(source.path), *_line_arguments(q, source))
         row = _integer(q, "row", 0, source.rows - 1)
         col = _integer(q, "col", 0, source.cols - 1, default=0)
         args = [str(source.path), row, col]
         if action == "cell":
             args.append(_integer(q, "layer", 0, source.layers - 1, default=0))
-        elif action == "line":
-            args.pop()
-        elif action == "branch":
-            pass
+        elif action == "branch":  # along the line's row or column
+            args.append(_choice(q, "along", {"row": "row", "column": "column"}, "row"))
         elif action == "attractors":
             args.append(_integer(q, "k", 2, MAX_STARTS, default=16))
         else:
@@ -252,6 +255,20 @@ class Explorer:
 
     def _source(self, q: dict) -> MapSource:
         return self.sources[_integer(q, "store", 0, len(self.sources) - 1, default=0)]
+
+
+def _line_arguments(q: dict, source: MapSource) -> list:
+    """(along, row, col, row2, col2, points) of a line: ``along`` row (default) needs
+    ``row``, column needs ``col``, segment needs both cells and may give ``points``."""
+    along = _choice(q, "along", {k: k for k in LINES}, "row")
+    row = _integer(q, "row", 0, source.rows - 1, default=0 if along == "column" else None)
+    col = _integer(q, "col", 0, source.cols - 1, default=0 if along == "row" else None)
+    if along != "segment":
+        return [along, row, col, None, None, None]
+    row2 = _integer(q, "row2", 0, source.rows - 1)
+    col2 = _integer(q, "col2", 0, source.cols - 1)
+    points = None if "points" not in q else _integer(q, "points", 2, MAX_LINE_POINTS)
+    return [along, row, col, row2, col2, points]
 
 
 def _describe(index: int, s: MapSource) -> dict:
@@ -385,8 +402,10 @@ def _integer(q: dict, key: str, low: int, high: int, default: int | None = None)
     return value
 
 
-def _choice(q: dict, key: str, choices: dict):
+def _choice(q: dict, key: str, choices, default: str | None = None):
     text = _one(q, key)
+    if text is None:
+        text = default
     if text not in choices:
         raise BadRequest(f"{key} must be one of {', '.join(choices)}, got {str(text)[:40]!r}")
     return choices[text]
