@@ -48,6 +48,7 @@ CSP = "default-src 'self'; img-src 'self' data: blob:; style-src 'self' 'unsafe-
 LOOPBACK_NAMES = frozenset({"127.0.0.1", "localhost", "::1"})
 MAX_PIXELS = 4096  # a view's width or height
 REFRESH_SECONDS = 0.5  # how often a store a run writes is looked at again
+ZOOM_REFRESH_SECONDS = 0.1  # … a zoom's store, whose tiles commit a few a second
 MAX_STARTS = 200  # starts of an attractor census from the page
 MAX_CYCLE = 64  # period of a cycle by shooting from the page
 LINES = ("row", "column", "segment")  # what a bifurcation line runs along
@@ -72,6 +73,7 @@ class Explorer:
         self._zooms = {}  # zoom store → its run's process
         self._ranges = {}  # (store, field, layer) → (tiles verified, (low, high))
         self.zoom_ranks = 2
+        self.zoom_runner = None  # the warm process for small zooms (started by the warm-up)
         self._threads = [
             threading.Thread(target=self._watch, args=(s,), daemon=True) for s in self.sources
         ]
@@ -91,6 +93,16 @@ class Explorer:
             self.worker.run("warm_up", seconds=WARM_UP_SECONDS)
         except CamparError as exc:  # the first click says it again
             log.warning("warming the cell worker up: %s", exc)
+        if not self._stop.is_set():  # after the worker's: its kernel is then in the cache
+            self.start_zoom_runner()
+
+    def start_zoom_runner(self) -> None:
+        """Start the process kept warm for small zooms (the first store's kernel loaded)."""
+        from .zoom import ZoomRunner
+
+        runner = ZoomRunner()
+        runner.start(self.sources[0].job)
+        self.zoom_runner = runner
 
     def stop(self) -> None:
         self._stop.set()
@@ -104,11 +116,13 @@ class Explorer:
                     log.warning("the zoom's run into %s did not stop: killed", store)
                     process.kill()  # its committed tiles stay; a resume redoes the rest
                     process.wait()
+        if self.zoom_runner is not None:
+            self.zoom_runner.stop()
 
-    def _watch(self, source: MapSource) -> None:
+    def _watch(self, source: MapSource, seconds: float = REFRESH_SECONDS) -> None:
         try:
             source.scan()
-            while not self._stop.wait(REFRESH_SECONDS):
+            while not self._stop.wait(seconds):
                 if source.status()["verified"] + len(source.damage) < len(source.tiles):
                     source.refresh()
         except Exception:  # the page shows the store as it was; the server goes on
@@ -214,7 +228,7 @@ class Explorer:
 
     def zoom(self, q: dict) -> dict:
         """Start (or find) the zoom of a rectangle; its store is served once it exists."""
-        from .zoom import start_zoom, zoom_job, zoom_store
+        from .zoom import WARM_CELLS, start_zoom, zoom_job, zoom_store
 
         source = self._source(q)
         box = tuple(_number(q, k) for k in ("x0", "x1", "y0", "y1"))
@@ -226,8 +240,13 @@ class Explorer:
                 if other.path == store:
                     return {"store": index, "name": store.name, "running": self._running(store)}
             if not self._running(store):
+                warm = self.zoom_runner
+                small = job.shape[0] * job.shape[1] <= WARM_CELLS
                 try:
-                    self._zooms[store] = start_zoom(source, job, self.zoom_ranks)[1]
+                    if small and warm is not None and warm.free():
+                        self._zooms[store] = warm.run(source, job)[1]
+                    else:
+                        self._zooms[store] = start_zoom(source, job, self.zoom_ranks)[1]
                 except OSError as exc:
                     raise CamparError(
                         f"cannot start the zoom beside {source.path}: {exc}"
@@ -245,7 +264,10 @@ class Explorer:
                         ) from None
                     time.sleep(0.1)
             self.sources.append(added)
-            thread = threading.Thread(target=self._watch, args=(added,), daemon=True)
+            # its tiles come fast: looked at as often as a page redraws
+            thread = threading.Thread(
+                target=self._watch, args=(added, ZOOM_REFRESH_SECONDS), daemon=True
+            )
             thread.start()
             return {"store": len(self.sources) - 1, "name": store.name, "running": True}
 
