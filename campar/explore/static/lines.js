@@ -29,6 +29,7 @@ async function drawLine(store, along, a, b) {
   const params = { store, along, row: a.row, col: a.col };
   if (b) Object.assign(params, { row2: b.row, col2: b.col });
   state.line = { store, along, row: a.row, col: a.col, a, b, data: null };
+  $("branch-head").textContent = "";
   for (const v of activeViews()) v.paint();
   $("line-head").textContent = `computing ${lineTitle(state.line)} …`;
   let data;
