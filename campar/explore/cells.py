@@ -17,7 +17,6 @@ import math
 import numpy as np
 
 from ..errors import CamparError
-from .lines import line_report
 
 TRACE_POINTS = 4000  # samples of an orbit sent to the page (every k-th of the trace)
 
@@ -182,7 +181,6 @@ ACTIONS = {
     "cell": cell_report,
     "attractors": attractors_report,
     "cycle": cycle_report,
-    "line": line_report,
     "edges": edges_report,
     "branch": branch_report,
     "curves": curves_report,

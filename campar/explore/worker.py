@@ -12,7 +12,10 @@ import threading
 import time
 
 from ..errors import CamparError
-from .cells import ACTIONS
+from .cells import ACTIONS as CELL_ACTIONS
+from .lines import line_report
+
+ACTIONS = {**CELL_ACTIONS, "line": line_report}
 
 CELL_SECONDS = 60.0  # default time limit of one computation
 WARM_UP_SECONDS = 900.0  # a cold compile of the kernel and the tracer on a loaded machine

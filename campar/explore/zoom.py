@@ -103,10 +103,12 @@ def start_zoom(source: MapSource, job: Job, ranks: int = 2) -> tuple[Path, subpr
 
 def _serve_zooms(conn, warm_job: dict) -> None:
     """The warm runner's loop: load the kernel of ``warm_job`` (the map's: a zoom keeps
-    every setting of its map), then run each job file it is sent as ``campar run`` runs
-    it, its output appended to the zoom's log, and send back the exit code."""
-    from ..cli import main
-    from ..sweep import runner  # noqa: F401 (its imports and MPI's start, before the first zoom)
+    every setting of its map), then run each zoom's job it is sent (a job mapping naming
+    its store) as ``campar run`` of its job file runs it — its progress lines appended
+    to the zoom's log — and send back the exit code."""
+    from ..errors import CamparError
+    from ..sweep.progress import setup_logging
+    from ..sweep.runner import run_job
     from ..sweep.tile import compile_kernel
 
     with contextlib.suppress(Exception):  # the first zoom compiles it, and says what fails
@@ -114,17 +116,20 @@ def _serve_zooms(conn, warm_job: dict) -> None:
     conn.send("ready")
     while True:
         try:
-            job_file, log = conn.recv()
+            data, log = conn.recv()
         except (EOFError, OSError):
             return
-        sys.stdout.flush()
         sys.stderr.flush()
         fd = os.open(log, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
-        os.dup2(fd, 1)
-        os.dup2(fd, 2)
+        os.dup2(fd, 2)  # the run's log lines (and a failure's one line) go to the zoom's log
         os.close(fd)
-        code = main(["run", str(job_file)])
-        sys.stdout.flush()
+        setup_logging()
+        try:
+            run_job(Job.from_dict(data, source=str(data["store"])), data["store"])
+            code = 0
+        except CamparError as exc:
+            print(f"campar run: {exc}", file=sys.stderr)
+            code = exc.exit_code
         sys.stderr.flush()
         try:
             conn.send(code)
@@ -162,8 +167,8 @@ class ZoomRunner:
 
     def run(self, source: MapSource, job: Job) -> tuple[Path, "WarmRun"]:
         """Run the zoom's job in the warm process (``free()`` first): (store, its run)."""
-        store, job_file = write_zoom_job(source, job)
-        self._conn.send((str(job_file), str(store.with_suffix(".log"))))
+        store, _ = write_zoom_job(source, job)  # the file resumes it: campar run FILE
+        self._conn.send(({**job.to_dict(), "store": str(store)}, str(store.with_suffix(".log"))))
         self._running = WarmRun(self._process, self._conn)
         return store, self._running
 
