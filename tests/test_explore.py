@@ -10,6 +10,7 @@ import threading
 import numpy as np
 import pytest
 from support.http import get, refused
+from support.jobs import EXPLORE_MAP, computed_store
 
 import campar
 from campar.cli import main
@@ -17,22 +18,12 @@ from campar.errors import StoreDamaged
 from campar.explore.server import serve, shutdown
 from campar.explore.source import PENDING_CELL, MapSource
 
-JOB = {
-    "name": "explore",
-    "sweep": {
-        "omega": {"from": 6.0, "to": 1.0, "points": 12},
-        "mu_cn": {"from": 0.9, "to": 0.6, "points": 6},
-    },
-    "outputs": ["label", "dc", "eps", "pn", "multipliers"],
-    "tiles": {"rows": 2},
-}
+JOB = EXPLORE_MAP
 
 
 @pytest.fixture(scope="module")
 def store(tmp_path_factory):
-    path = tmp_path_factory.mktemp("explore") / "explore.zarr"
-    campar.run({**JOB, "store": str(path)})
-    return path
+    return computed_store(tmp_path_factory, JOB)[0]
 
 
 @pytest.fixture

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support.jobs import EXPLORE_MAP
 
 import campar
 from campar.cli import main
@@ -32,14 +33,7 @@ from campar.explore.chromium import CHROMIUM, CHROMIUM_ARGS
 
 pytestmark = [pytest.mark.browser, pytest.mark.process]
 
-JOB = {
-    "sweep": {
-        "omega": {"from": 6.0, "to": 1.0, "points": 12},
-        "mu_cn": {"from": 0.9, "to": 0.6, "points": 6},
-    },
-    "outputs": ["label", "dc", "eps", "pn", "multipliers"],
-    "tiles": {"rows": 2},
-}
+JOB = EXPLORE_MAP
 TIMEOUT_MS = 240_000  # a cold numba cache compiles the kernel in the cell worker first
 
 

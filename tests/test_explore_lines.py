@@ -8,6 +8,7 @@ started from the final state of the one before."""
 import numpy as np
 import pytest
 from support.http import get, refused
+from support.jobs import EXPLORE_MAP, computed_store
 
 import campar
 from campar.errors import CamparError
@@ -15,23 +16,13 @@ from campar.explore.lines import column_line, segment_line
 from campar.explore.server import serve, shutdown
 from campar.views.point import simulate_point
 
-JOB = {
-    "name": "lines",
-    "sweep": {
-        "omega": {"from": 6.0, "to": 1.0, "points": 12},
-        "mu_cn": {"from": 0.9, "to": 0.6, "points": 6},
-    },
-    "outputs": ["label", "dc", "eps", "pn", "multipliers"],
-    "tiles": {"rows": 2},
-}
+JOB = {**EXPLORE_MAP, "name": "lines"}
 SIGMA_TOL = 1e-6  # σn points of one cycle reached from two nearby starts
 
 
 @pytest.fixture(scope="module")
 def store(tmp_path_factory):
-    path = tmp_path_factory.mktemp("lines") / "lines.zarr"
-    campar.run({**JOB, "store": str(path)})
-    return path
+    return computed_store(tmp_path_factory, JOB)[0]
 
 
 def same_cycles(labels, got, expected):

@@ -14,27 +14,18 @@ import warnings
 import numpy as np
 import pytest
 import yaml
+from support.jobs import EXPLORE_MAP, computed_store, plane_job
 
 import campar
 import campar.explore.source as source_module
 from campar.explore.source import MapSource, stored_cell
 
-JOB = {
-    "name": "snapshot",
-    "sweep": {
-        "omega": {"from": 6.0, "to": 1.0, "points": 12},
-        "mu_cn": {"from": 0.9, "to": 0.6, "points": 6},
-    },
-    "outputs": ["label", "dc"],
-    "tiles": {"rows": 2},
-}
+JOB = {**EXPLORE_MAP, "name": "snapshot", "outputs": ["label", "dc"]}
 
 
 @pytest.fixture(scope="module")
 def store(tmp_path_factory):
-    path = tmp_path_factory.mktemp("snapshot") / "snapshot.zarr"
-    campar.run({**JOB, "store": str(path)})
-    return path
+    return computed_store(tmp_path_factory, JOB)[0]
 
 
 def drawn_labels(source: MapSource, width: int, height: int) -> np.ndarray:
@@ -114,17 +105,15 @@ def test_a_lost_commit_flag_is_damage_as_campar_open_has_it(store, tmp_path):
     assert source.status()["verified"] == 2 and source.cell(4, 0)["stored"] == "damaged"
 
 
-RUN_JOB = {
-    "name": "during",
-    "sweep": {
-        "omega": {"from": 6.0, "to": 1.0, "points": 16},
-        "mu_cn": {"from": 0.9, "to": 0.6, "points": 24},
-    },
-    "classify": {"window_revolutions": 16},
-    "transient": {"mode": "fixed", "max_revolutions": 300},  # commits come fast
-    "outputs": ["label", "dc"],
-    "tiles": {"rows": 1},
-}
+RUN_JOB = plane_job(
+    "during",
+    (6.0, 1.0, 16),
+    ("mu_cn", 0.9, 0.6, 24),
+    classify={"window_revolutions": 16},
+    transient={"mode": "fixed", "max_revolutions": 300},  # commits come fast
+    outputs=["label", "dc"],
+    tiles={"rows": 1},
+)
 
 
 @pytest.mark.process

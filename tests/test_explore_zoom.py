@@ -11,28 +11,19 @@ import numpy as np
 import pytest
 import yaml
 from support.http import get
+from support.jobs import EXPLORE_MAP, computed_store
 
 import campar
 from campar.cli import main
 from campar.explore.server import serve, shutdown
 from campar.explore.zoom import WarmRun
 
-JOB = {
-    "name": "warm",
-    "sweep": {
-        "omega": {"from": 6.0, "to": 1.0, "points": 12},
-        "mu_cn": {"from": 0.9, "to": 0.6, "points": 6},
-    },
-    "outputs": ["label", "dc", "eps", "pn", "multipliers"],
-    "tiles": {"rows": 2},
-}
+JOB = {**EXPLORE_MAP, "name": "warm"}
 
 
 @pytest.fixture(scope="module")
 def store(tmp_path_factory):
-    path = tmp_path_factory.mktemp("warm") / "warm.zarr"
-    campar.run({**JOB, "store": str(path)})
-    return path
+    return computed_store(tmp_path_factory, JOB)[0]
 
 
 def warm_server(store):

@@ -16,7 +16,6 @@ one asked while it is busy, runs in a child process of its own (``start_zoom``: 
 """
 
 import contextlib
-import multiprocessing
 import os
 import subprocess
 import sys
@@ -29,6 +28,7 @@ import yaml
 from ..errors import JobError
 from ..sweep.job import Job
 from .source import MapSource, stored_cell
+from .worker import Spawned
 
 MAX_POINTS = 400  # cells along each side of a zoom's grid
 # Cells of a zoom the warm runner takes: below about this many, one warm serial run ends
@@ -137,23 +137,17 @@ def _serve_zooms(conn, warm_job: dict) -> None:
             return
 
 
-class ZoomRunner:
-    """A process kept warm for zooms (one at a time), spawned when the server starts."""
+class ZoomRunner(Spawned):
+    """A process kept warm for zooms (one at a time), spawned when the server starts;
+    ``stop`` ends it (a zoom it runs is stopped first by the server: ``WarmRun``)."""
 
     def __init__(self):
-        self._process = None
-        self._conn = None
+        super().__init__()
         self._ready = False
         self._running = None  # the WarmRun of the zoom it runs, if any
 
     def start(self, warm_job: Job) -> None:
-        ctx = multiprocessing.get_context("spawn")
-        self._conn, child = ctx.Pipe()
-        self._process = ctx.Process(
-            target=_serve_zooms, args=(child, warm_job.to_dict()), daemon=True
-        )
-        self._process.start()
-        child.close()
+        self.spawn(_serve_zooms, warm_job.to_dict())
 
     def free(self) -> bool:
         """Alive, warm and not running a zoom."""
@@ -171,14 +165,6 @@ class ZoomRunner:
         self._conn.send(({**job.to_dict(), "store": str(store)}, str(store.with_suffix(".log"))))
         self._running = WarmRun(self._process, self._conn)
         return store, self._running
-
-    def stop(self) -> None:
-        """End the process (a zoom it runs is stopped first by the server: ``WarmRun``)."""
-        if self._process is not None:
-            self._process.kill()
-            self._process.join(5)
-            self._conn.close()
-        self._process = None
 
 
 class WarmRun:

@@ -68,6 +68,16 @@ def plane_job(name: str, omega: tuple, second: tuple, **sections) -> dict:
     return {"name": name, "sweep": sweep, **sections}
 
 
+# The explorer's tests' map: 6 × 12 cells of the (ω, μcn) plane, two rows a tile.
+EXPLORE_MAP = plane_job(
+    "explore",
+    (6.0, 1.0, 12),
+    ("mu_cn", 0.9, 0.6, 6),
+    outputs=["label", "dc", "eps", "pn", "multipliers"],
+    tiles={"rows": 2},
+)
+
+
 def merge(base: dict, extra: dict) -> dict:
     """``base`` with ``extra``'s keys set, nested dicts merged key by key."""
     out = dict(base)
