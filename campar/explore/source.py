@@ -8,10 +8,15 @@ keeps a field under MOSAIC_CELLS cells: a 400 × 400 map is kept whole, a 4000 �
 one at s = 2. A damaged tile is masked — its cells read as not computed, as
 ``campar.open`` reads them — and named in ``status()``. Tiles a run commits later are
 verified and taken in by ``refresh()`` as they come; a tile not yet committed is pending.
-Every read of a tile goes through the store's snapshot read (``check_tiles`` on a
+Tiles are taken in through the store's snapshot read (``check_tiles`` on a
 ``read_store`` reader, as ``campar.open`` reads): the tiles its root record holds
 committed, each verified whole against the record's checksum — so a tile is drawn whole
-and verified or as pending, never torn by a run writing the store.
+and verified or as pending, never torn by a run writing the store. Taking a tile in
+records a digest of each array a view or a hovered cell reads of it (``DIGEST_BYTES``,
+of the very bytes that verified); reading such an array again later (a close view, a
+hovered cell) checks it against that digest, so it is the verified bytes or the tile is
+masked as damaged — at the cost of hashing the arrays read, not of reading and hashing
+every array of the tile again.
 
 A view asks for one cell per screen pixel (the cell under the pixel's centre, as a map
 image is drawn, never a mixture of cells): where a pixel spans at least s cells the
@@ -19,6 +24,7 @@ kept mosaic answers, else only the tiles the view crosses are read, at full reso
 through a small cache.
 """
 
+import hashlib
 import threading
 from collections import Counter, OrderedDict
 from pathlib import Path
@@ -33,6 +39,7 @@ from .fields import Field, categories, fields_of, numeric
 
 MOSAIC_CELLS = 4_000_000  # per field and direction kept in memory: 16 MB as float32
 CACHE_BYTES = 128 * 2**20  # stored arrays of the tiles read for close views
+DIGEST_BYTES = 16  # BLAKE2b of an array taken in: a changed array passes with p = 2**-128
 PENDING, VERIFIED, DAMAGED = 0, 1, 2
 NO_CELL = -1  # a pixel outside the grid
 PENDING_CELL = -2  # a cell of a tile not committed (or masked as damaged): not computed
@@ -111,6 +118,7 @@ class MapSource:
         self._y_desc = self.job.second_values[0] > self.job.second_values[-1]
         self._lock = threading.RLock()
         self._cache: OrderedDict = OrderedDict()
+        self._digests: dict[tuple[str, int], bytes] = {}  # (array, tile) → as verified
         self._cache_bytes = 0
         self._open_reader = None
         self.scanned = False
@@ -175,6 +183,8 @@ class MapSource:
                 else:
                     values = numeric(field, arrays)
                 self.mosaic[field.name, layer][at] = values[rows, ::s]
+            for name in self._read_names & arrays.keys():
+                self._digests[name, tile.index] = _digest(arrays[name])
             self.state[tile.index] = VERIFIED
 
     # -- reading -------------------------------------------------------------------------
@@ -227,8 +237,8 @@ class MapSource:
             tile = self.tiles[layer * per_layer + k]
             if self.state[tile.index] != VERIFIED:
                 continue
-            arrays = self._tile_arrays(field, tile)
-            if not arrays:  # it failed its check just now: masked
+            arrays = self._tile_arrays(field.needs, tile)
+            if arrays is None:  # it failed its check just now: masked
                 continue
             sel = np.flatnonzero(which == k)
             parts.append({n: a[rows[sel] - tile.row_start][:, cols] for n, a in arrays.items()})
@@ -245,38 +255,39 @@ class MapSource:
         block[np.concatenate(picked)] = values
         return block
 
-    def _tile_arrays(self, field: Field, tile) -> dict:
-        """The stored arrays a field needs of a verified tile, through the cache."""
-        arrays = self._verified(tile)
-        return {} if arrays is None else {name: arrays[name] for name in field.needs}
-
-    def _verified(self, tile) -> dict | None:
-        """The arrays a view or a hovered cell reads of a tile, the tile read through the
-        snapshot read and verified whole (cached, the least recently used dropped past
-        CACHE_BYTES); None when it no longer verifies (masked as damaged from here on)."""
-        if tile.index in self._cache:
-            self._cache.move_to_end(tile.index)
-            return self._cache[tile.index]
-        check = self._check(tile)
-        if check is None:  # a reader older than the tile's commit: look again
-            self._close_reader()
-            check = self._check(tile)
-        if check is None or check.problem:
-            self._mark_damaged(tile.index, check.problem if check else "no longer committed")
-            return None
-        kept = {n: a for n, a in check.arrays.items() if n in self._read_names}
-        self._cache[tile.index] = kept
-        self._cache_bytes += sum(a.nbytes for a in kept.values())
+    def _tile_arrays(self, names, tile) -> dict | None:
+        """The stored arrays ``names`` of a verified tile, through the cache, each read
+        checked against its digest taken when the tile verified; None when one no longer
+        matches or reads (the tile is then masked as damaged)."""
+        out = {}
+        for name in names:
+            key = (name, tile.index)
+            if key in self._cache:
+                self._cache.move_to_end(key)
+                out[name] = self._cache[key]
+                continue
+            try:
+                values = self._reader().read_tile(name, tile)
+            except Exception as exc:  # zarr, numcodecs and h5py raise many kinds
+                self._mark_damaged(tile.index, f"{name} unreadable ({type(exc).__name__})")
+                return None
+            if _digest(values) != self._digests.get(key):
+                self._mark_damaged(
+                    tile.index, f"its {name} changed after it verified (checksum mismatch)"
+                )
+                return None
+            self._cache[key] = out[name] = values
+            self._cache_bytes += values.nbytes
         while self._cache_bytes > CACHE_BYTES and len(self._cache) > 1:
             _, old = self._cache.popitem(last=False)
-            self._cache_bytes -= sum(a.nbytes for a in old.values())
-        return kept
+            self._cache_bytes -= old.nbytes
+        return out
 
-    def _check(self, tile):
-        """The TileCheck of a tile committed in the kept reader's snapshot, or None."""
+    def _reader(self):
+        """A reader kept open for the reads after the scan (reopened by ``refresh``)."""
         if self._open_reader is None:
             self._open_reader = read_store(self.path)
-        return next(check_tiles(self._open_reader, only=[tile.index]), None)
+        return self._open_reader
 
     def _close_reader(self) -> None:
         if self._open_reader is not None:
@@ -305,10 +316,10 @@ class MapSource:
         if state == PENDING:
             return {**where, "stored": "pending"}
         with self._lock:
-            arrays = self._verified(tile)
+            arrays = self._tile_arrays([n for n in CELL_ARRAYS if n in self.names], tile)
         if arrays is None:
             return {**where, "stored": "damaged", "why": self.damage[tile.index]}
-        values = {n: arrays[n][row - tile.row_start, col] for n in CELL_ARRAYS if n in arrays}
+        values = {n: a[row - tile.row_start, col] for n, a in arrays.items()}
         return {**where, "stored": "verified", "arrays": values}
 
     def status(self) -> dict:
@@ -351,6 +362,14 @@ def stored_cell(path, row: int, col: int, layer: int = 0) -> tuple:
     if check.problem:
         raise StoreDamaged(f"tile {tile.index} of {path} is damaged: {check.problem}")
     return job, {name: a[row - tile.row_start, col] for name, a in check.arrays.items()}
+
+
+def _digest(a: np.ndarray) -> bytes:
+    """BLAKE2b of an array's bytes, dtype and shape."""
+    a = np.ascontiguousarray(a)
+    h = hashlib.blake2b(f"{a.dtype.str}:{a.shape};".encode(), digest_size=DIGEST_BYTES)
+    h.update(a.reshape(-1).view(np.uint8))
+    return h.digest()
 
 
 def _category_id(known: list[str], name: str) -> int:
