@@ -166,7 +166,9 @@ def run_chain_over(par: dict, law, x_init, solver, settings, out: CellOutputs) -
     run_chain(*(par[name] for name in CHAIN_PARAMETERS), law, x_init, solver, settings, out)
 
 
-def run_cells(model: Model, omega=None, start=None, outputs=(), law=None, **columns) -> CellOutputs:
+def run_cells(
+    model: Model, omega=None, start=None, outputs=(), law=None, compile=True, **columns
+) -> CellOutputs:
     """One continuation chain of the kernel from a Model: a cell at each ω of ``omega``
     (default the model's ω: one cell), in the order given, each warm-started from the
     one before, the first from ``start`` (default the model's ``initial``). ``columns``:
@@ -175,6 +177,9 @@ def run_cells(model: Model, omega=None, start=None, outputs=(), law=None, **colu
     names) are computed beside the label, state and counts. ``compile``: load or compile
     the kernel first (``compile_cells``: on two cores when the cache is empty); else
     numba compiles it on the first call, on this thread."""
+    unknown = set(columns) - {"f0", "mu_kn", "mu_cn", "zeta"}
+    if unknown:
+        raise TypeError(f"run_cells: no parameter column {', '.join(sorted(unknown))}")
     omega = np.atleast_1d(np.asarray(model.omega if omega is None else omega, float))
     values = {
         name: np.asarray(columns[name], float)
