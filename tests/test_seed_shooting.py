@@ -6,26 +6,18 @@ stored ε extrema cannot show (test_shot_edges.py checks those edges against Sci
 seeds without shooting are none of them, with shooting every one."""
 
 import pytest
-from support.jobs import plane_job
+from support.jobs import SHOT_CORNER
 
 from campar.sweep.job import Job
 from campar.sweep.runner import run_job
 from campar.views.boundaries import store_boundaries
 from campar.views.map_curves import store_seeds
 
-CORNER = plane_job(
-    "corner",
-    (1.50, 1.43, 6),
-    ("mu_kn", 0.95, 0.945, 2),
-    chains={"start": "continue"},
-    outputs=["label", "dc", "eps", "pn", "multipliers"],
-)
-
 
 @pytest.fixture(scope="module")
 def corner(tmp_path_factory):
     path = tmp_path_factory.mktemp("corner") / "corner.zarr"
-    run_job(Job.from_dict(CORNER), path)
+    run_job(Job.from_dict(SHOT_CORNER), path)
     return path
 
 
