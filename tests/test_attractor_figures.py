@@ -21,7 +21,7 @@ NEW_STEMS = (
     "fig2_omega_f0_curves_zooms",
     "fig4_mu_kn_curves_zooms",
 )
-TINY = paper.Size(plane=8, line=60, census=6, zoom=8, shoot=False)
+TINY = paper.Size(plane=8, line=60, census=6, zoom=8)
 
 
 @pytest.fixture(scope="module")
@@ -105,7 +105,7 @@ def test_zoom_jobs_are_finer_than_their_plane_and_cover_their_window():
 
 # -- the report's numbers against counts from the raw arrays ------------------------------
 
-SMALL = paper.Size(plane=24, line=60, census=12, zoom=8, shoot=False)
+SMALL = paper.Size(plane=24, line=60, census=12, zoom=8)
 
 
 @pytest.fixture(scope="module")
