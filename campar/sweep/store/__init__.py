@@ -30,6 +30,8 @@ replace act there, and the links stay. A failed read or write of the store
 cause, and leaves no temporary file behind.
 """
 
+import glob
+import importlib
 import logging
 import os
 import re
@@ -42,7 +44,6 @@ import numpy as np
 from ...errors import StoreDamaged, StoreError, io_error
 from ..job import Job
 from ..plan import plan_tiles
-from . import _hdf5, _zarr
 from ._base import Store, StoreReader
 from ._integrity import Verification, tile_checksum, verify_store
 from ._lock import StoreLock, holder_alive, lock_path
@@ -95,8 +96,13 @@ __all__ = [
 log = logging.getLogger("campar.sweep.store")
 
 HDF5_SUFFIXES = (".h5", ".hdf5")
-_STORES = {_zarr: _zarr.ZarrStore, _hdf5: _hdf5.Hdf5Store}
-_READERS = {_zarr: _zarr.ZarrReader, _hdf5: _hdf5.Hdf5Reader}
+# Each backend's module and its classes, imported when a store of its kind is first met:
+# a run of a Zarr store never loads h5py, nor one of an HDF5 file zarr (each a tenth of a
+# second or more of every process's start-up).
+_MODULES = {"zarr": "._zarr", "hdf5": "._hdf5"}
+_CLASSES = {"zarr": ("ZarrStore", "ZarrReader"), "hdf5": ("Hdf5Store", "Hdf5Reader")}
+_STORES: dict = {}  # backend module → its Store class
+_READERS: dict = {}  # backend module → its StoreReader class
 
 
 def backend_name(path: str | Path) -> str:
@@ -104,7 +110,13 @@ def backend_name(path: str | Path) -> str:
 
 
 def _backend(path: Path):
-    return _hdf5 if backend_name(path) == "hdf5" else _zarr
+    """The backend module of the store at ``path``, imported on first use."""
+    name = backend_name(path)
+    module = importlib.import_module(_MODULES[name], __name__)
+    if module not in _STORES:
+        store, reader = _CLASSES[name]
+        _STORES[module], _READERS[module] = getattr(module, store), getattr(module, reader)
+    return module
 
 
 def real_path(path: Path) -> Path:
@@ -269,7 +281,8 @@ class TileWriter:
         self._cell_arrays = cell_arrays(job)
         self._names = [a.name for a in self._cell_arrays]
         try:
-            self._arrays = _zarr.ZarrTileArrays(self.path, job)
+            zarr_backend = importlib.import_module(_MODULES["zarr"], __name__)
+            self._arrays = zarr_backend.ZarrTileArrays(self.path, job)
         except OSError as exc:
             raise io_error(f"cannot open the store {self.path} to write tiles", exc) from None
 
@@ -347,12 +360,12 @@ def _remove_aside(path: Path) -> None:
     """Remove what a killed creation or deletion left beside the store (we hold the lock),
     and lock files a killed run was writing."""
     for pattern in (".creating-*", ".deleting-*"):
-        for leftover in path.parent.glob(_hdf5.glob_escape(path.name) + pattern):
+        for leftover in path.parent.glob(glob.escape(path.name) + pattern):
             if leftover.is_dir():
                 shutil.rmtree(leftover, ignore_errors=True)
             else:
                 os.unlink(leftover)
-    for leftover in path.parent.glob(_hdf5.glob_escape(path.name) + ".lock.*.tmp"):
+    for leftover in path.parent.glob(glob.escape(path.name) + ".lock.*.tmp"):
         match = LOCK_TMP.search(leftover.name)
         if match and not holder_alive({"pid": int(match.group(1))}):
             leftover.unlink(missing_ok=True)
