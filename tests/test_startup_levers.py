@@ -178,3 +178,17 @@ def test_a_command_from_python_returns_rather_than_leaving(write_job, tmp_path, 
     store = tmp_path / "inproc.zarr"
     assert main(["run", str(job_path), "--store", str(store)]) == 0
     assert main(["verify", str(store)]) == 0
+
+
+@pytest.mark.parametrize("dont_write", [True, False])
+def test_the_startup_bench_launches_with_bytecode_caches(monkeypatch, tmp_path, dont_write):
+    from campar.bench.startup import launch_environment
+
+    monkeypatch.delenv("PYTHONPYCACHEPREFIX", raising=False)
+    if dont_write:
+        monkeypatch.setenv("PYTHONDONTWRITEBYTECODE", "1")
+    else:
+        monkeypatch.delenv("PYTHONDONTWRITEBYTECODE", raising=False)
+    env = launch_environment(tmp_path)
+    assert "PYTHONDONTWRITEBYTECODE" not in env
+    assert env.get("PYTHONPYCACHEPREFIX") == (str(tmp_path / "pycache") if dont_write else None)
