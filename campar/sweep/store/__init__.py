@@ -31,7 +31,6 @@ cause, and leaves no temporary file behind.
 """
 
 import glob
-import importlib
 import logging
 import os
 import re
@@ -96,11 +95,6 @@ __all__ = [
 log = logging.getLogger("campar.sweep.store")
 
 HDF5_SUFFIXES = (".h5", ".hdf5")
-# Each backend's module and its classes, imported when a store of its kind is first met:
-# a run of a Zarr store never loads h5py, nor one of an HDF5 file zarr (each a tenth of a
-# second or more of every process's start-up).
-_MODULES = {"zarr": "._zarr", "hdf5": "._hdf5"}
-_CLASSES = {"zarr": ("ZarrStore", "ZarrReader"), "hdf5": ("Hdf5Store", "Hdf5Reader")}
 _STORES: dict = {}  # backend module → its Store class
 _READERS: dict = {}  # backend module → its StoreReader class
 
@@ -110,12 +104,18 @@ def backend_name(path: str | Path) -> str:
 
 
 def _backend(path: Path):
-    """The backend module of the store at ``path``, imported on first use."""
-    name = backend_name(path)
-    module = importlib.import_module(_MODULES[name], __name__)
-    if module not in _STORES:
-        store, reader = _CLASSES[name]
-        _STORES[module], _READERS[module] = getattr(module, store), getattr(module, reader)
+    """The backend module of the store at ``path``, imported when a store of its kind is
+    first met: a run of a Zarr store never loads h5py, nor one of an HDF5 file zarr (each
+    a good part of a process's start-up, benchmarks/RESULTS.md)."""
+    if backend_name(path) == "hdf5":
+        from . import _hdf5 as module
+
+        store, reader = module.Hdf5Store, module.Hdf5Reader
+    else:
+        from . import _zarr as module
+
+        store, reader = module.ZarrStore, module.ZarrReader
+    _STORES[module], _READERS[module] = store, reader
     return module
 
 
@@ -281,8 +281,9 @@ class TileWriter:
         self._cell_arrays = cell_arrays(job)
         self._names = [a.name for a in self._cell_arrays]
         try:
-            zarr_backend = importlib.import_module(_MODULES["zarr"], __name__)
-            self._arrays = zarr_backend.ZarrTileArrays(self.path, job)
+            from ._zarr import ZarrTileArrays  # only a Zarr store takes a worker's writes
+
+            self._arrays = ZarrTileArrays(self.path, job)
         except OSError as exc:
             raise io_error(f"cannot open the store {self.path} to write tiles", exc) from None
 
