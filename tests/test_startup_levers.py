@@ -192,3 +192,23 @@ def test_the_startup_bench_launches_with_bytecode_caches(monkeypatch, tmp_path, 
     env = launch_environment(tmp_path)
     assert "PYTHONDONTWRITEBYTECODE" not in env
     assert env.get("PYTHONPYCACHEPREFIX") == (str(tmp_path / "pycache") if dont_write else None)
+
+
+def test_a_profiled_or_traced_program_keeps_the_interpreters_exit():
+    """cProfile and coverage write what they gathered at the interpreter's exit: under
+    either the program exits as Python does (``observed``), not with ``os._exit``."""
+    from campar.cli import observed
+
+    saved_trace, saved_profile = sys.gettrace(), sys.getprofile()
+    try:
+        sys.settrace(None)
+        sys.setprofile(None)
+        assert not observed()
+        sys.setprofile(lambda *args: None)
+        assert observed()
+        sys.setprofile(None)
+        sys.settrace(lambda *args: None)
+        assert observed()
+    finally:
+        sys.settrace(saved_trace)
+        sys.setprofile(saved_profile)

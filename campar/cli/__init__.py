@@ -147,7 +147,7 @@ def main(argv=None) -> int:
             # Nothing left to collect that matters: spare the exit the collector's passes
             # over all the program built (after a cold compile, numba's IR).
             gc.freeze()
-    if argv is None and code == 0 and args.command in LEAVE_AT_ONCE:
+    if argv is None and code == 0 and args.command in LEAVE_AT_ONCE and not observed():
         leave(code)
     return code
 
@@ -155,6 +155,12 @@ def main(argv=None) -> int:
 # Commands whose program ends without the interpreter's teardown once they succeed: all
 # their work is done and every file closed by then (``leave``).
 LEAVE_AT_ONCE = ("run",)
+
+
+def observed() -> bool:
+    """Whether a tracer or profiler watches the program (coverage, cProfile): it writes what
+    it gathered at the interpreter's exit, which ``leave`` would skip."""
+    return sys.gettrace() is not None or sys.getprofile() is not None
 
 
 def leave(code: int) -> None:
