@@ -21,7 +21,7 @@ from support.damage import (
     small_disk,
     synthetic_store,
 )
-from support.processes import CAMPAR, MPIRUN, start_campar, wait_until_guarded
+from support.processes import CAMPAR, MPIRUN, start_campar, tree_env, wait_until_guarded
 from test_store import fake_tile, make_job
 
 from campar.cli import main
@@ -119,7 +119,7 @@ def test_hdf5_never_meets_a_full_disk_inside_the_library(tmp_path):
         from test_store import make_job
         synthetic_store({str(disk / "s.h5")!r}, make_job(sweep__omega__points=200))
     """)
-    env = {**os.environ, "PYTHONPATH": os.path.dirname(__file__)}
+    env = tree_env()
     with small_disk(disk, 160):
         done = subprocess.run(
             [sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=120

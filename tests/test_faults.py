@@ -33,7 +33,7 @@ from support.damage import (
     zarr_chunks,
 )
 from support.jobs import assert_same_map
-from support.processes import MPIRUN, kill_tree, subprocess_env, wait_until_guarded
+from support.processes import MPIRUN, kill_tree, subprocess_env, tree_env, wait_until_guarded
 from test_store import make_job
 
 from campar.errors import StoreDamaged
@@ -66,23 +66,31 @@ h5.CHECKPOINT_TILES = 1  # every tile goes through a checkpoint: kills land insi
 from support.damage import finish
 from test_store import make_job
 job = make_job(**{JOB!r})
-threading.Timer(float(sys.argv[2]), os.kill, (os.getpid(), signal.SIGKILL)).start()
+
+def kill_after_creation(path, delay):
+    # A store appears whole (it is built aside and renamed): from then on tiles are written
+    while not os.path.exists(path):
+        time.sleep(0.001)
+    time.sleep(delay)
+    os.kill(os.getpid(), signal.SIGKILL)
+
+threading.Thread(target=kill_after_creation, args=(sys.argv[1], float(sys.argv[2]))).start()
 finish(sys.argv[1], job)
 time.sleep(60)  # finished before the kill: wait for it
 """
 JOB = {"sweep__zeta__points": 24, "tiles__rows": 1, "sweep__omega__points": 40}
 
 
-def kill_writers(path: Path, kills: int, seed: int, span: float = 0.6) -> int:
-    """Start writers of ``path`` and SIGKILL each at a random moment; returns kills done."""
-    env = {**os.environ, "PYTHONPATH": os.path.dirname(__file__)}
+def kill_writers(path: Path, kills: int, seed: int, span: float = 0.4) -> int:
+    """Start writers of ``path`` and SIGKILL each at a random moment within ``span`` seconds
+    of the store's creation (the moment is timed from an event the child sees, not from its
+    start, so a loaded machine's slow imports do not move it before the store exists)."""
     script = WRITER.replace("{JOB!r}", repr(JOB))
     rng = np.random.default_rng(seed)
     for _ in range(kills):
-        at = rng.uniform(0.25, 0.25 + span)  # imports take ~0.25 s
         done = subprocess.run(
-            [sys.executable, "-c", script, str(path), str(at)],
-            env=env,
+            [sys.executable, "-c", script, str(path), str(rng.uniform(0.0, span))],
+            env=tree_env(),
             capture_output=True,
             text=True,
             timeout=120,

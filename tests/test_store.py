@@ -17,6 +17,7 @@ import time
 import h5py
 import numpy as np
 import pytest
+from support.processes import tree_env
 
 from campar.errors import StoreError, StoreLocked, StoreMismatch
 from campar.sweep.arrays import array_names, array_spec
@@ -319,7 +320,7 @@ class StoreSuite:
                 store.write_tile(tiles[i], fake_tile(job, tiles[i], i))
             os.kill(os.getpid(), signal.SIGKILL)
         """)
-        env = {**os.environ, "PYTHONPATH": os.path.dirname(__file__)}
+        env = tree_env()
         killed = subprocess.run([sys.executable, "-c", script], env=env, timeout=120)
         assert killed.returncode == -signal.SIGKILL
         with read_store(path) as reader:
@@ -528,7 +529,7 @@ def test_hdf5_sigkill_inside_a_checkpoint_loses_nothing(tmp_path, when):
         h5.os.replace = dying_replace
         store.checkpoint()
     """)
-    env = {**os.environ, "PYTHONPATH": os.path.dirname(__file__)}
+    env = tree_env()
     killed = subprocess.run([sys.executable, "-c", script], env=env, timeout=120)
     assert killed.returncode == -signal.SIGKILL
     leftovers = list(tmp_path.glob("results.h5.checkpoint-*"))

@@ -29,6 +29,15 @@ def subprocess_env() -> dict:
     return {**os.environ, "PYTHONUNBUFFERED": "1"}
 
 
+def tree_env() -> dict:
+    """The environment of a ``python -c`` child that imports the test modules: the tests'
+    folder and the tree under test come first on its path, so it runs this tree's campar
+    whatever the working directory (an installed campar may be another checkout's)."""
+    tests = Path(__file__).resolve().parents[1]
+    path = [str(tests), str(tests.parent), os.environ.get("PYTHONPATH", "")]
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, path))}
+
+
 def start_campar(*args, launcher=(), **kwargs) -> subprocess.Popen:
     """Start ``campar ARGS`` (under ``launcher``, e.g. mpirun -n 2) in its own session."""
     return subprocess.Popen(
