@@ -63,7 +63,11 @@ CASES = {
 }
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize(
+    "case",
+    # every law but the paper's compiles a kernel of its own (cold: slow)
+    [c if c == "paper" else pytest.param(c, marks=pytest.mark.slow) for c in CASES],
+)
 def test_deferred_extrema_are_the_extrema_refined_at_once(case):
     model, integrator = CASES[case]
     job = job_of(model, integrator)
