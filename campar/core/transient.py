@@ -95,6 +95,7 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
     base = np.int64(0)  # not a literal: numba would compile assess_revolution twice
     jumps = 0
     escapes = 0
+    sighted = -cs.chaos_clear  # the last revolution with a stable cycle in sight
     avoid0 = math.nan  # the cycle the motion escaped from (jumps to it are refused)
     avoid1 = math.nan
     for a in range(cw.est.shape[0]):  # no estimates of this cell yet
@@ -120,7 +121,11 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
         )
         if period > 0:
             return OK, k, period, base, jumps, escapes
-        if nonperiodic_verdict(cw, k, base, cs):
+        if cs.chaos_after > 0 and stable_cycle_nearby(
+            cw.xs, cw.jac, k, base, cs.n_max, TRUSTED_JUMP_MAX
+        ):
+            sighted = k
+        if nonperiodic_verdict(cw, k, base, sighted, cs):
             return OK, k, 0, base, jumps, escapes
         if not cs.newton or jumps >= cs.max_jumps:
             continue
@@ -147,16 +152,17 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
 
 
 @inlined
-def nonperiodic_verdict(cw, k, base, cs):
+def nonperiodic_verdict(cw, k, base, sighted, cs):
     """True when the largest Lyapunov exponent since the last restart (at most a read
     window, analysis.exponent_window) settles a non-periodic verdict.
 
     Chaos: its estimate exceeds cs.chaos_lyapunov, its lower confidence bound
     (analysis.exponent_bounds at the normal quantile cs.chaos_z) exceeds lyap_tol — it
     is positive, beyond the band of an invariant circle —, and no stable cycle of period
-    ≤ n_max is in sight (analysis.stable_cycle_nearby within the reach of a trusted
-    Newton jump): a chaotic transient often shadows the long cycle it settles on, and
-    there the jumps of assess_revolution reach it. Quasi-periodic: the exponent's
+    ≤ n_max has been in sight (analysis.stable_cycle_nearby within the reach of a trusted
+    Newton jump; revolution ``sighted`` the last time) nor a Newton jump taken for
+    cs.chaos_clear revolutions: a chaotic transient often shadows the long cycle it
+    settles on, and there the jumps of assess_revolution reach it. Quasi-periodic: the exponent's
     interval lies within ±lyap_tol, over a whole read window.
     """
     chaos_due = 0 < cs.chaos_after <= k
@@ -169,7 +175,7 @@ def nonperiodic_verdict(cw, k, base, cs):
         chaos_due
         and mean > cs.chaos_lyapunov
         and mean - half > cs.lyap_tol
-        and stable_cycle_nearby(cw.xs, cw.jac, k, base, cs.n_max, TRUSTED_JUMP_MAX) == 0
+        and min(k - sighted, k - base) >= cs.chaos_clear
     ):
         return True
     return qp_due and abs(mean) + half <= cs.lyap_tol

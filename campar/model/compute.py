@@ -95,6 +95,7 @@ def cell_settings(spec, bits: int) -> CellSettings:
         chaos_after=tr.chaos_after,
         chaos_lyapunov=tr.chaos_lyapunov,
         chaos_z=NormalDist().inv_cdf(tr.chaos_confidence),
+        chaos_clear=tr.chaos_clear,
         quasiperiodic_after=tr.quasiperiodic_after,
         output_bits=bits,
     )

@@ -123,7 +123,7 @@ class TransientSettings(Settings):
     extrapolate: Annotated[int, Field(ge=0, le=2)] = 2
     """Warm start: 0 the previous cell's state; 1 linear, 2 quadratic extrapolation
     through the previous cells' fixed points (where they are cycles of one period)."""
-    chaos_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 18
+    chaos_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 96
     """From this revolution on, a surely chaotic motion ends the transient (0: never)."""
     chaos_lyapunov: Annotated[float, Field(gt=0.0)] = 0.1
     """Lyapunov exponent per revolution that counts as clearly chaotic."""
@@ -131,7 +131,10 @@ class TransientSettings(Settings):
     """A chaos verdict needs the exponent (since the last restart, at most a read window,
     at least 16 revolutions after the first two) above chaos_lyapunov and its lower
     bound at this one-sided confidence (Student's t on 4-revolution batch means) above
-    classify.lyap_tol, with the motion not within jump_residual of repeating."""
+    classify.lyap_tol, …"""
+    chaos_clear: Annotated[int, Field(ge=1, le=MAX_COUNT)] = 64
+    """… and no stable cycle in sight (within 0.2, a stable Jacobian over its period)
+    nor a Newton jump for this many revolutions."""
     quasiperiodic_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 0
     """From this revolution on, a quasi-periodic motion (|Lyapunov exponent| ≤ lyap_tol)
     ends the transient (0: never)."""
