@@ -49,6 +49,8 @@ VALUES = {
     "transient.extrapolate": 1,
     "transient.chaos_after": 50,
     "transient.chaos_lyapunov": 0.2,
+    "transient.chaos_confidence": 0.95,
+    "transient.chaos_clear": 32,
     "transient.quasiperiodic_after": 40,
     "classify.n_max": 16,
     "classify.chatter_p": 5,
