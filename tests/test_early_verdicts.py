@@ -21,8 +21,8 @@ from campar.model.sections import DEFAULT_CLASSIFY
 CHAOS = Cell("chaos", 4.5, mu_cn=0.97)  # benchmarks/RESULTS.md, precision
 SLOW_CYCLE = Cell("slow 2-2", 3.45213, mu_cn=0.529474)  # a 2-cycle, multiplier 0.998
 # the early verdict: from revolution 18 (16 revolutions read after the first 2), clear of
-# stable cycles and Newton jumps for 16 revolutions
-EARLY = {"chaos_after": 18, "chaos_clear": 16}
+# Newton jumps and of stable cycles in sight (within 0.2) for 16 revolutions
+EARLY = {"chaos_after": 18, "chaos_clear": 16, "chaos_sight": 0.2}
 
 exponent_bounds = through_numba(analysis.exponent_bounds)
 student_quantile = through_numba(analysis.student_quantile)

@@ -51,6 +51,7 @@ VALUES = {
     "transient.chaos_lyapunov": 0.2,
     "transient.chaos_confidence": 0.95,
     "transient.chaos_clear": 32,
+    "transient.chaos_sight": 0.1,
     "transient.quasiperiodic_after": 40,
     "classify.n_max": 16,
     "classify.chatter_p": 5,

@@ -107,6 +107,7 @@ class CellSettings(NamedTuple):
     chaos_lyapunov: float  # … for a Lyapunov exponent per revolution above this
     chaos_z: float  # … at this confidence: the normal quantile of transient.chaos_confidence
     chaos_clear: int  # … with no stable cycle in sight nor Newton jump for this many revolutions
+    chaos_sight: float  # … in sight: within this distance (0: not looked for)
     quasiperiodic_after: int  # earliest quasi-periodic verdict (0: only at the budget)
     output_bits: int  # OUT_* bits of the optional outputs to compute
 

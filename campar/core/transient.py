@@ -13,7 +13,6 @@ import numpy as np
 
 from .analysis import (
     REV_LOG_STRETCH,
-    TRUSTED_JUMP_MAX,
     assess_revolution,
     exponent_bounds,
     exponent_window,
@@ -121,8 +120,8 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
         )
         if period > 0:
             return OK, k, period, base, jumps, escapes
-        if cs.chaos_after > 0 and stable_cycle_nearby(
-            cw.xs, cw.jac, k, base, cs.n_max, TRUSTED_JUMP_MAX
+        if cs.chaos_sight > 0.0 and stable_cycle_nearby(
+            cw.xs, cw.jac, k, base, cs.n_max, cs.chaos_sight
         ):
             sighted = k
         if nonperiodic_verdict(cw, k, base, sighted, cs):
@@ -159,8 +158,8 @@ def nonperiodic_verdict(cw, k, base, sighted, cs):
     Chaos: its estimate exceeds cs.chaos_lyapunov, its lower confidence bound
     (analysis.exponent_bounds at the normal quantile cs.chaos_z) exceeds lyap_tol — it
     is positive, beyond the band of an invariant circle —, and no stable cycle of period
-    ≤ n_max has been in sight (analysis.stable_cycle_nearby within the reach of a trusted
-    Newton jump; revolution ``sighted`` the last time) nor a Newton jump taken for
+    ≤ n_max has been in sight (analysis.stable_cycle_nearby within cs.chaos_sight, 0:
+    not looked for; revolution ``sighted`` the last time) nor a Newton jump taken for
     cs.chaos_clear revolutions: a chaotic transient often shadows the long cycle it
     settles on, and there the jumps of assess_revolution reach it. Quasi-periodic: the exponent's
     interval lies within ±lyap_tol, over a whole read window.

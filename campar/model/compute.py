@@ -96,6 +96,7 @@ def cell_settings(spec, bits: int) -> CellSettings:
         chaos_lyapunov=tr.chaos_lyapunov,
         chaos_z=NormalDist().inv_cdf(tr.chaos_confidence),
         chaos_clear=tr.chaos_clear,
+        chaos_sight=tr.chaos_sight,
         quasiperiodic_after=tr.quasiperiodic_after,
         output_bits=bits,
     )

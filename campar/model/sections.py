@@ -133,8 +133,11 @@ class TransientSettings(Settings):
     bound at this one-sided confidence (Student's t on 4-revolution batch means) above
     classify.lyap_tol, …"""
     chaos_clear: Annotated[int, Field(ge=1, le=MAX_COUNT)] = 64
-    """… and no stable cycle in sight (within 0.2, a stable Jacobian over its period)
-    nor a Newton jump for this many revolutions."""
+    """… and no Newton jump, nor a stable cycle in sight, for this many revolutions …"""
+    chaos_sight: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0
+    """… in sight: the motion within this distance of repeating with a period ≤ n_max,
+    the Jacobian over that period stable, its Newton estimate as close (0: not looked
+    for)."""
     quasiperiodic_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 0
     """From this revolution on, a quasi-periodic motion (|Lyapunov exponent| ≤ lyap_tol)
     ends the transient (0: never)."""
