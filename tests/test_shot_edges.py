@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from support.jobs import plane_job
 
 from campar.continuation.edges import Cell, type_edge
 from campar.continuation.section_map import SectionMap
@@ -101,16 +102,13 @@ def test_same_cycle_at_any_phase_but_not_another_period():
 
 
 # A corner of the (ω, μkn) plane across the 1-1 | 1-2 boundary of the edge above.
-CORNER = {
-    "name": "corner",
-    "sweep": {
-        "omega": {"from": 1.50, "to": 1.43, "points": 6},
-        "mu_kn": {"from": 0.95, "to": 0.945, "points": 2},
-    },
-    "fixed": {"zeta": 0.2, "mu_cn": 0.8, "f0": 0.5},
-    "chains": {"start": "continue"},
-    "outputs": ["label", "dc", "eps", "pn", "multipliers"],
-}
+CORNER = plane_job(
+    "corner",
+    (1.50, 1.43, 6),
+    ("mu_kn", 0.95, 0.945, 2),
+    chains={"start": "continue"},
+    outputs=["label", "dc", "eps", "pn", "multipliers"],
+)
 
 
 def test_plot_bifurcations_shoot_types_the_unknown_edges(tmp_path, capsys):

@@ -44,7 +44,7 @@ from ..job import Job
 from ..plan import plan_tiles
 from . import _hdf5, _zarr
 from ._base import Store, StoreReader
-from ._integrity import Verification, tile_checksum, verify_store
+from ._integrity import Verification, check_tiles, tile_checksum, verify_store
 from ._lock import StoreLock, holder_alive, lock_path
 from ._metadata import CHECKSUMS_ATTR
 from ._root import HDF5_ATTR, MARK_ATTR, RootDamaged
@@ -90,6 +90,7 @@ __all__ = [
     "tile_shape",
     "upgraded_attrs",
     "verify_store",
+    "check_tiles",
 ]
 
 log = logging.getLogger("campar.sweep.store")
