@@ -39,7 +39,7 @@ def test_revolutions_benchmark_runs_tiny_against_a_baseline(capsys, monkeypatch)
     assert main(["bench", "revolutions", "--quick", "--baseline", str(REPO)]) == 0
     out = capsys.readouterr().out
     assert out.startswith("machine: ") and "load average" in out
-    for text in ("this  baseline", "median", "p90", "p99", "non-periodic share"):
+    for text in ("this  baseline", "kernel", "median", "p90", "p99", "non-periodic share"):
         assert text in out, text
     # the same tree twice: the same map
     assert "cells whose label differs from the baseline's: 0" in out

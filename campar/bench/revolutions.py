@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+import campar
+
 from ..core.codes import Kind
 from ..sweep.store import read_store
 from .common import format_table, machine_line
@@ -36,13 +38,14 @@ QUICK_SETS = ("sweep.omega.points=8", "sweep.mu_cn.points=3")
 
 def compute(job: str, sets: list[str], store: Path, tree: str | None) -> None:
     """``campar run JOB --store STORE --set …`` in a child process, from ``tree`` (a
-    checkout put first on PYTHONPATH) or this campar."""
-    command = [sys.executable, "-m", "campar.cli", "run", job, "--store", str(store)]
+    checkout put first on PYTHONPATH) or this campar's; ``-P``: the working directory,
+    which may hold another campar, is not on its path."""
+    command = [sys.executable, "-P", "-m", "campar.cli", "run", job, "--store", str(store)]
     for item in sets:
         command += ["--set", item]
     env = dict(os.environ)
-    if tree is not None:
-        env["PYTHONPATH"] = os.pathsep.join([tree, *filter(None, [env.get("PYTHONPATH")])])
+    root = tree or str(Path(campar.__file__).resolve().parents[1])
+    env["PYTHONPATH"] = os.pathsep.join([root, *filter(None, [env.get("PYTHONPATH")])])
     done = subprocess.run(command, capture_output=True, text=True, env=env)
     if done.returncode != 0:
         who = tree or "this tree"
@@ -52,9 +55,12 @@ def compute(job: str, sets: list[str], store: Path, tree: str | None) -> None:
 
 
 def stored_cells(store: Path) -> dict:
-    """The store's per-cell revolutions, kind, n and p (flat arrays)."""
+    """The store's per-cell revolutions, kind, n and p (flat arrays), and the version of
+    the kernel that wrote it."""
     with read_store(store) as reader:
-        return {name: np.asarray(reader.read(name)).ravel() for name in FIELDS}
+        cells = {name: np.asarray(reader.read(name)).ravel() for name in FIELDS}
+        cells["kernel"] = reader.attrs.get("versions", {}).get("kernel", "?")
+    return cells
 
 
 def distribution(cells: dict) -> dict:
@@ -65,6 +71,7 @@ def distribution(cells: dict) -> dict:
     periodic = cells["kind"] == Kind.PERIODIC
     long = periodic & (revs > LONG)
     return {
+        "kernel": cells.get("kernel", "?"),
         "cells": revs.size,
         "mean": revs.mean(),
         "median": float(np.median(revs)),
