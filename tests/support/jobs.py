@@ -68,6 +68,18 @@ def plane_job(name: str, omega: tuple, second: tuple, **sections) -> dict:
     return {"name": name, "sweep": sweep, **sections}
 
 
+# A corner of the (ω, μkn) plane across a 1-1 | 1-2 boundary: new flights appear between
+# its cells (grazings), which the stored ε extrema cannot show, so its edges there are
+# unknown until typed by shooting (test_shot_edges.py, test_seed_shooting.py).
+SHOT_CORNER = plane_job(
+    "corner",
+    (1.50, 1.43, 6),
+    ("mu_kn", 0.95, 0.945, 2),
+    chains={"start": "continue"},
+    outputs=["label", "dc", "eps", "pn", "multipliers"],
+)
+
+
 # The explorer's tests' map: 6 × 12 cells of the (ω, μcn) plane, two rows a tile.
 EXPLORE_MAP = plane_job(
     "explore",
