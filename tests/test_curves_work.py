@@ -4,6 +4,7 @@ without that work before anything touches the disk."""
 
 import numpy as np
 import pytest
+from support.jobs import plane_job
 
 import campar
 from campar.bench import scipy_shooting
@@ -14,15 +15,9 @@ from campar.sweep.plan import plan_tiles
 from campar.sweep.runner import run_job
 from campar.sweep.tile import run_tile
 
-MAP = {
-    "name": "tongue",
-    "sweep": {
-        "omega": {"from": 4.2, "to": 2.2, "points": 28},
-        "mu_kn": {"from": 0.93, "to": 0.85, "points": 10},
-    },
-    "fixed": {"zeta": 0.2, "mu_cn": 0.8, "f0": 0.5},
-    "outputs": ["label", "multipliers"],
-}
+MAP = plane_job(
+    "tongue", (4.2, 2.2, 28), ("mu_kn", 0.93, 0.85, 10), outputs=["label", "multipliers"]
+)
 
 
 def curves_job(tmp_path) -> Job:

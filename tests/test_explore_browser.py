@@ -4,7 +4,8 @@ One server (the ``campar explore`` command, a child process) and one browser ses
 every check, in order: the page loads nothing from outside the server; the drawn colour
 of every cell is its stored label's colour in the maps' palette; hovering a cell reads
 its stored values; a click computes the cell and its label is `campar point`'s; a row's
-bifurcation line has the stored row's labels; another variable is drawn with viridis
+bifurcation line has the stored row's labels, a column's and a segment's are the chains
+of campar.explore.lines; another variable is drawn with viridis
 over its range; two stores side by side and their difference; the exports. Screenshots
 go to $CAMPAR_SCREENSHOTS when it is set (docs/explore.md shows them).
 
@@ -24,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support.jobs import EXPLORE_MAP
 
 import campar
 from campar.cli import main
@@ -31,14 +33,7 @@ from campar.explore.chromium import CHROMIUM, CHROMIUM_ARGS
 
 pytestmark = [pytest.mark.browser, pytest.mark.process]
 
-JOB = {
-    "sweep": {
-        "omega": {"from": 6.0, "to": 1.0, "points": 12},
-        "mu_cn": {"from": 0.9, "to": 0.6, "points": 6},
-    },
-    "outputs": ["label", "dc", "eps", "pn", "multipliers"],
-    "tiles": {"rows": 2},
-}
+JOB = EXPLORE_MAP
 TIMEOUT_MS = 240_000  # a cold numba cache compiles the kernel in the cell worker first
 
 
@@ -236,6 +231,60 @@ def test_a_row_gives_its_bifurcation_line(page, stores):
     assert any(abs(p[1] - y) < 1e-6 and p[2] for p in at_cell), (y, at_cell)
     screenshot(page, "line")
     page.evaluate("window.explore.line = null")  # its row's mark off the map's colours
+
+
+def _drawn_pixels(page, canvas: str) -> int:
+    return page.evaluate(
+        f"""() => {{ const c = document.getElementById("{canvas}");
+        const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+        let n = 0; for (let i = 3; i < d.length; i += 4) n += d[i] > 0; return n; }}"""
+    )
+
+
+def test_a_column_and_a_segment_give_their_bifurcation_lines(page, stores):
+    """A column's line (along μcn at the clicked cell's ω) and a segment's (two clicks)
+    are the chains campar.explore.lines computes (test_explore_lines checks those against
+    independent chains); the column's branches pass through the clicked cell's cycle."""
+    from campar.explore.lines import column_line, segment_line
+
+    ds = campar.open(stores[0])
+    page.select_option("#line-along", "column")
+    page.click("#line-mode")
+    page.mouse.click(*_mouse_at(page, ds.omega.values[3], ds.mu_cn.values[2]))
+    page.wait_for_function("window.explore.line && window.explore.line.data")
+    line = page.evaluate("window.explore.line.data")
+    assert (line["along"], line["col"], line["x"]) == ("column", 3, "mu_cn")
+    column = column_line(stores[0], 3)
+    assert line["labels"] == column["labels"] and line["points"] == column["points"]
+    assert page.inner_text("#line-head").startswith("the column ω = ")
+    assert _drawn_pixels(page, "line-plot") > 1000
+    # the branches along μcn through a periodic cell of the column
+    i = next(r for r in range(6) if ds.label.values[r, 3] == "1-1")
+    page.evaluate("window.explore.cell = null")
+    page.mouse.click(*_mouse_at(page, ds.omega.values[3], ds.mu_cn.values[i]))
+    page.wait_for_function("window.explore.cell && window.explore.cell.report")
+    page.click("#branch")
+    page.wait_for_function("window.explore.line.branch")
+    branch = page.evaluate("window.explore.line.branch")
+    y = float(ds.state.values[i, 3, 0])
+    at_cell = [p for b in branch["branches"] for p in b["points"] if p[0] == ds.mu_cn.values[i]]
+    assert any(abs(p[1] - y) < 1e-6 and p[2] for p in at_cell), (y, at_cell)
+    screenshot(page, "column")
+
+    page.select_option("#line-along", "segment")
+    page.click("#line-mode")
+    page.mouse.click(*_mouse_at(page, ds.omega.values[0], ds.mu_cn.values[0]))
+    page.wait_for_function("window.explore.segmentStart")
+    assert "click its other end" in page.inner_text("#line-head")
+    page.mouse.click(*_mouse_at(page, ds.omega.values[11], ds.mu_cn.values[5]))
+    page.wait_for_function("window.explore.line.along === 'segment' && window.explore.line.data")
+    line = page.evaluate("window.explore.line.data")
+    segment = segment_line(stores[0], (0, 0), (5, 11))
+    assert line["labels"] == segment["labels"] and line["points"] == segment["points"]
+    assert line["x"] == "omega" and len(line["labels"]) == 12
+    screenshot(page, "segment")
+    page.evaluate("window.explore.line = null")
+    page.select_option("#line-along", "row")
 
 
 def test_another_variable_is_drawn_over_its_range(page, stores):

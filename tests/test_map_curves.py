@@ -8,6 +8,7 @@ import subprocess
 import numpy as np
 import pytest
 from support.cli import call_campar
+from support.jobs import plane_job
 from support.processes import CAMPAR, MPIRUN, subprocess_env
 from support.stores import stored
 
@@ -21,17 +22,14 @@ from campar.views.map_curves import agreement, curves_job, read_curves, store_se
 
 # the 2-2 tongue of the (ω, μkn) plane, coarse: its lower part, where the 1-1 cycle
 # doubles at both ends
-TONGUE = {
-    "name": "tongue",
-    "sweep": {
-        "omega": {"from": 4.2, "to": 2.2, "points": 28},
-        "mu_kn": {"from": 0.93, "to": 0.85, "points": 10},
-    },
-    "fixed": {"zeta": 0.2, "mu_cn": 0.8, "f0": 0.5},
-    "chains": {"start": "continue"},
-    "outputs": ["label", "dc", "eps", "pn", "multipliers"],
-    "tiles": {"rows": 2},
-}
+TONGUE = plane_job(
+    "tongue",
+    (4.2, 2.2, 28),
+    ("mu_kn", 0.93, 0.85, 10),
+    chains={"start": "continue"},
+    outputs=["label", "dc", "eps", "pn", "multipliers"],
+    tiles={"rows": 2},
+)
 
 
 @pytest.fixture(scope="module")

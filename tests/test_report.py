@@ -14,10 +14,11 @@ from functools import cache
 
 import numpy as np
 import pytest
-from support.jobs import reference_case, short_curves
+from support.jobs import reference_case
 
 from campar.bench.scipy_model import Model, integrate
 from campar.bench.scipy_peer import scipy_cell
+from campar.paper import continued
 from campar.paper import setups as paper
 from campar.paper.claims import average_ranks, rank_correlation
 from campar.paper.report import CLAIMS, build_report, divergence_integral, liouville_bound
@@ -62,12 +63,15 @@ def number(text: str) -> float:
 
 @pytest.fixture(scope="module")
 def regenerated(tmp_path_factory):
-    """The report with 6 × 6 planes and short curves (only its M and N2 rows depend on
-    them), without the section that evaluates every claim again under the options."""
+    """The report with 6 × 6 planes and no continued curves (only its M and N2 rows
+    depend on them, and a curve seeded on so coarse a map locates its point across a whole
+    cell, most of the report's cost; a map's curves are checked in test_map_curves.py,
+    the gallery zooms' in test_attractor_figures.py),
+    without the section that evaluates every claim again under the options."""
     stores = tmp_path_factory.mktemp("stores")
     with pytest.MonkeyPatch.context() as patch:
         patch.setitem(paper.SIZES, "small", paper.Size(plane=6, line=60))
-        short_curves(patch)
+        patch.setattr(continued, "map_curves", lambda ev, plane: [])
         return build_report("small", stores=stores, log=lambda _: None, options=False)
 
 
@@ -90,8 +94,7 @@ def steady_from_rest(omega: float, tensile: str, **params) -> tuple:
     return 0, 0, math.nan, x
 
 
-@pytest.mark.slow  # the report of two tiny planes, computed once a module: minutes
-@pytest.mark.timeout(1800)  # the first test builds it: its curves shoot the unknown edges
+@pytest.mark.slow  # the report of two tiny planes, computed once a module
 def test_every_claim_and_quoted_pair_has_a_row(report):
     assert set(report) == {c.key for c in CLAIMS} | {"L1", "L2"}
     for claim in CLAIMS:
@@ -104,8 +107,7 @@ def test_every_claim_and_quoted_pair_has_a_row(report):
             assert status == f"*not tested*: {claim.untested}", claim.key
 
 
-@pytest.mark.slow  # the report of two tiny planes, computed once a module: minutes
-@pytest.mark.timeout(1800)  # the first test builds it: its curves shoot the unknown edges
+@pytest.mark.slow  # the report of two tiny planes, computed once a module
 def test_liouville_rows_obey_the_closed_form_bound(report):
     """λ1λ2 of a return map over n revolutions is exp(∮ div f dt) ≤ exp(−4πζn/ω)."""
     for key in ("L1", "L2"):
@@ -135,8 +137,7 @@ def multipliers(text: str) -> list[complex]:
 
 
 @pytest.mark.parametrize("tensile", ["clamp", "allow"])
-@pytest.mark.slow  # the report of two tiny planes, computed once a module: minutes
-@pytest.mark.timeout(1800)  # the first test builds it: its curves shoot the unknown edges
+@pytest.mark.slow  # the report of two tiny planes, computed once a module
 def test_multiplier_rows_have_the_determinant_of_the_liouville_rows(report, tensile):
     """E rows: campar's multipliers from the variational equations; L rows: exp(∮ div f dt)
     integrated along the same orbit. Liouville's formula makes λ1λ2 equal to it."""
@@ -163,8 +164,7 @@ def series(text: str) -> dict[str, list[float]]:
 
 
 @pytest.mark.parametrize("tensile", ["clamp", "allow"])
-@pytest.mark.slow  # the report of two tiny planes, computed once a module: minutes
-@pytest.mark.timeout(1800)  # the first test builds it: its curves shoot the unknown edges
+@pytest.mark.slow  # the report of two tiny planes, computed once a module
 def test_duty_cycle_trend_and_detachment_angles_agree_with_scipy(report, tensile):
     """T3 (DC over ω = 1, 3, 5 for each f0) and T11 (cam angle of every detachment at
     f0 = 0.5) from SciPy orbits from rest."""
@@ -192,8 +192,7 @@ def test_duty_cycle_trend_and_detachment_angles_agree_with_scipy(report, tensile
 
 
 @pytest.mark.parametrize("tensile", ["clamp", "allow"])
-@pytest.mark.slow  # the report of two tiny planes, computed once a module: minutes
-@pytest.mark.timeout(1800)  # the first test builds it: its curves shoot the unknown edges
+@pytest.mark.slow  # the report of two tiny planes, computed once a module
 def test_point_rows_from_rest_agree_with_scipy(report, tensile):
     """P rows' label from rest at μkn = 0.91 (the claimed ω, the centre of the row's
     neighbourhood), from SciPy orbits from rest (and P5 under the clamp from reference

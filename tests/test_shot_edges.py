@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from support.jobs import SHOT_CORNER
 
 from campar.continuation.edges import Cell, type_edge
 from campar.continuation.section_map import SectionMap
@@ -100,19 +101,6 @@ def test_same_cycle_at_any_phase_but_not_another_period():
     assert not same_cycle(orbit(n=1, state=(0.1, 0.2)), two)
 
 
-# A corner of the (ω, μkn) plane across the 1-1 | 1-2 boundary of the edge above.
-CORNER = {
-    "name": "corner",
-    "sweep": {
-        "omega": {"from": 1.50, "to": 1.43, "points": 6},
-        "mu_kn": {"from": 0.95, "to": 0.945, "points": 2},
-    },
-    "fixed": {"zeta": 0.2, "mu_cn": 0.8, "f0": 0.5},
-    "chains": {"start": "continue"},
-    "outputs": ["label", "dc", "eps", "pn", "multipliers"],
-}
-
-
 def test_plot_bifurcations_shoot_types_the_unknown_edges(tmp_path, capsys):
     import json
 
@@ -121,7 +109,7 @@ def test_plot_bifurcations_shoot_types_the_unknown_edges(tmp_path, capsys):
     from campar.sweep.runner import run_job
 
     store = tmp_path / "corner.zarr"
-    run_job(Job.from_dict(CORNER), store)
+    run_job(Job.from_dict(SHOT_CORNER), store)
     assert (
         main(["plot", str(store), "--bifurcations", "--json", "-o", str(tmp_path / "a.png")]) == 0
     )

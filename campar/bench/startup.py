@@ -18,7 +18,8 @@ disturbs much less than wall time), and for the plane the median of each round's
 speed-up. The machine's load is printed with them.
 
 With ``--baseline DIR`` (another campar checkout, e.g. main's) each round launches
-both, so the two are compared in the same run, paired.
+both, so the two are compared in the same run, paired. Every launch reads Python's
+bytecode caches, as an installed campar does (``launch_environment``).
 
     campar bench startup                      # 5 rounds, the plane at 100²
     campar bench startup --baseline ../main --rounds 9 --size 60
@@ -73,7 +74,7 @@ def timed_launch(job: Path, store: Path, ranks: int, tree: str | None) -> dict:
         "--store",
         str(store),
     ]
-    env = dict(os.environ)
+    env = launch_environment(store.parent)
     if tree is not None:
         env["PYTHONPATH"] = os.pathsep.join([tree, *filter(None, [env.get("PYTHONPATH")])])
     cpu, start = children_cpu(), time.perf_counter()
@@ -84,6 +85,18 @@ def timed_launch(job: Path, store: Path, ranks: int, tree: str | None) -> dict:
     with read_store(store) as reader:
         entry = reader.attrs["runs"][-1]
     return {"wall": wall, "cpu": children_cpu() - cpu, "run": entry["seconds"]}
+
+
+def launch_environment(tmp: Path) -> dict:
+    """This process's environment for a launch, with Python's bytecode caches as an
+    installed campar has them: where the environment says not to write them
+    (``PYTHONDONTWRITEBYTECODE``), every launch would compile every module of campar from
+    its source, a cost no installed campar pays; the launches then write and read them in
+    a folder of the bench's own (``PYTHONPYCACHEPREFIX``), filled by the warm-up launch."""
+    env = dict(os.environ)
+    if env.pop("PYTHONDONTWRITEBYTECODE", None) is not None:
+        env["PYTHONPYCACHEPREFIX"] = str(tmp / "pycache")
+    return env
 
 
 def rounds_of(job: Path, tmp: Path, name: str, rounds: int, trees: dict) -> dict:

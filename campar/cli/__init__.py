@@ -22,6 +22,7 @@ if MAIN_FILE == "campar" or sys.orig_argv[1:3] == ["-m", "campar.cli"]:
     guard_program()
 
 import argparse  # noqa: E402
+import contextlib  # noqa: E402
 import difflib  # noqa: E402
 import gc  # noqa: E402
 import re  # noqa: E402
@@ -130,7 +131,7 @@ def main(argv=None) -> int:
     try:
         args = parse_arguments(build_parser(), argv)
         command = f"campar {args.command}"
-        return int(args.handler(args) or 0)
+        code = int(args.handler(args) or 0)
     except CamparError as exc:
         if not repeated_by_other_rank(exc):
             print(f"{command}: {exc}", file=sys.stderr)
@@ -146,6 +147,39 @@ def main(argv=None) -> int:
             # Nothing left to collect that matters: spare the exit the collector's passes
             # over all the program built (after a cold compile, numba's IR).
             gc.freeze()
+    if argv is None and code == 0 and args.command in LEAVE_AT_ONCE and not observed():
+        leave(code)
+    return code
+
+
+# Commands whose program ends without the interpreter's teardown once they succeed: all
+# their work is done and every file closed by then (``leave``).
+LEAVE_AT_ONCE = ("run",)
+
+
+def observed() -> bool:
+    """Whether a tracer or profiler watches the program (coverage, cProfile): it writes what
+    it gathered at the interpreter's exit, which ``leave`` would skip."""
+    return sys.gettrace() is not None or sys.getprofile() is not None
+
+
+def leave(code: int) -> None:
+    """End the program now with ``code``, its work done and its store closed: what the
+    interpreter's exit would do that matters — log handlers flushed and closed, MPI
+    finalized under mpirun, the standard streams flushed — then ``os._exit``, without
+    tearing down every module and object the program built (numba's compiled code, zarr's
+    event loop and threads, idle by now), the larger part of a run's exit
+    (benchmarks/RESULTS.md, "Start-up")."""
+    import logging
+
+    logging.shutdown()
+    mpi = sys.modules.get("mpi4py.MPI")
+    if mpi is not None and mpi.Is_initialized() and not mpi.Is_finalized():
+        mpi.Finalize()
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):  # a reader that left, a closed stream
+            stream.flush()
+    os._exit(code)
 
 
 def repeated_by_other_rank(exc: CamparError) -> bool:

@@ -233,6 +233,14 @@ def add_curves(sub):
     )
     p.add_argument("--points", type=int, default=400, help="points of a curve at most (400)")
     p.add_argument("--store", metavar="PATH", help="the curves' store (MAP-curves.zarr)")
+    p.add_argument(
+        "--no-shoot",
+        dest="shoot",
+        action="store_false",
+        help="seed only from the edges the map types itself, without typing its unknown "
+        "edges between periodic cells by shooting first (faster; misses curves whose only "
+        "edges are unknown)",
+    )
     p.add_argument("--overwrite", action="store_true", help="replace a store of another job")
     p.add_argument(
         "--grace",
@@ -269,7 +277,7 @@ def run_curves(args) -> int:
             check_store_path(args.store)
         except ValueError as exc:
             raise JobError(f"store {args.store!r}: {exc}") from None
-    job = curves_job(args.map, types, points=args.points, store=args.store)
+    job = curves_job(args.map, types, points=args.points, store=args.store, shoot=args.shoot)
     setup_logging()
     path = run(job, overwrite=args.overwrite, grace=args.grace)
     finished()

@@ -30,7 +30,7 @@ def add_explore(sub):
         "--zoom-ranks",
         type=int,
         default=2,
-        help="MPI ranks of a zoom's run (mpirun -n; 1: the serial runner) (2)",
+        help="MPI ranks of a zoom too large for the warm runner (mpirun -n; 1: serial) (2)",
     )
     p.set_defaults(handler=run_explore)
 

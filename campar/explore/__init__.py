@@ -8,10 +8,12 @@
   come, and a view's cells chosen one per screen pixel;
 - ``render``: a view's cells as an image (the maps' palette, hatched gaps) and its legend;
 - ``cells``: one cell computed again as ``campar point`` computes it (``cell_at``), and the
-  page's other computations (a row's line, a census, a cycle, branches, typed edges);
+  page's other computations (a census, a cycle, branches, typed edges);
+- ``lines``: bifurcation lines through the map — a row, a column, a segment between two
+  cells — each one warm-started chain as ``campar line`` runs one;
 - ``worker``: the process they run in, which a time limit can end;
 - ``zoom``: a rectangle of a map recomputed at full resolution by the runner, a store of
-  its own beside the map;
+  its own beside the map (a small one in a process kept warm for zooms);
 - ``server``: the HTTP server (standard library) and its routes; ``static/``: the page;
 - ``chromium``: the headless browser the page's tests and benchmark drive.
 

@@ -5,7 +5,8 @@ of the map cell (its model and stored values, its tile verified first) simulated
 ``campar point --from`` simulates it — its chain replayed, so every stored value comes
 back bit for bit — with the steady orbit traced densely. The other actions of the cell
 panel (its attractors from K starts, its n-cycle by shooting, the branches through its
-cycle) start from the same StoredCell.
+cycle) start from the same StoredCell; its lines (a row, a column, a segment) are
+``campar.explore.lines``.
 
 Each is a plain function of plain arguments returning JSON-ready data (``ACTIONS``), run
 by the server's worker process (``campar.explore.worker``).
@@ -66,75 +67,11 @@ def cycle_report(path, row: int, col: int, n: int) -> dict:
     return stored_model_cell(path, row, col).cycle(n).to_dict()
 
 
-def line_report(path, row: int) -> dict:
-    """The bifurcation diagram of map row ``row``: its chain along the first axis run
-    again with every σn point kept (as ``campar line`` runs one), started as the map
-    started the row (from the job's start, or with ``chains.start: continue`` from the
-    stored final state of the row before's first cell); the label of every cell."""
-    from ..core.codes import cell_label
-    from ..sweep.job import Job
-    from ..sweep.plan import Tile
-    from ..sweep.tile import compile_kernel, run_tile
-    from ..views.line import DEFAULT_SECTIONS
-    from .source import stored_cell
-
-    job, _ = stored_cell(path, row, 0)
-    data = job.to_dict()
-    start = data["initial"]
-    if job.chains.start == "continue" and row > 0:
-        _, before = stored_cell(path, row - 1, 0)
-        start = {"y": float(before["state"][0]), "v": float(before["state"][1])}
-    value = float(job.second_values[row])
-    data.update(
-        name=f"{job.name}-row",
-        sweep={
-            job.first: data["sweep"][job.first],
-            job.second: {"from": value, "to": value, "points": 1},
-        },
-        initial=start,
-        outputs=sorted({*job.outputs, "label", "sections"}),
-        classify={**data["classify"], "sections": job.classify.sections or DEFAULT_SECTIONS},
-        tiles={"rows": 1},
-        store=None,
-    )
-    data["chains"] = {**data["chains"], "direction": "down", "start": "rest"}
-    for key in ("attractors", "curves"):
-        data.pop(key, None)
-    line = Job.from_dict(data, source=f"row {row} of {path}")
-    compile_kernel(line)
-    cells = {name: values[0] for name, values in run_tile(line, Tile(0, 0, 1)).items()}
-    chatter = line.classify.chatter_p
-    labels = [
-        cell_label(int(k), int(n), int(p), chatter) if k >= 0 else ""
-        for k, n, p in zip(cells["kind"], cells["n"], cells["p"], strict=True)
-    ]
-    x = line.first_values
-    points = [
-        [float(x[i]), float(y)]
-        for i in range(len(x))
-        for y in cells["sections"][i, : int(cells["n"][i]) or None, 0]
-        if math.isfinite(y)
-    ]
-    changes = [
-        {"at": float(0.5 * (x[i] + x[i + 1])), "from": labels[i], "to": labels[i + 1]}
-        for i in range(len(x) - 1)
-        if labels[i] != labels[i + 1]
-    ]
-    return {
-        "row": row,
-        job.second: value,
-        "x": job.first,
-        "points": points,
-        "labels": labels,
-        "first": x.tolist(),
-        "changes": changes,
-    }
-
-
-def branch_report(path, row: int, col: int) -> dict:
-    """The branches through the cell's cycle along the map's first axis, both ways to the
-    map's ends (``campar continue``), with one level of period doubling followed: each
-    branch's σn points y with their stability, and its special points (PD, SN, NS, G)."""
+def branch_report(path, row: int, col: int, along: str = "row") -> dict:
+    """The branches through the cell's cycle along the map's row (its first axis) or its
+    column (``along``: the second axis), both ways to the map's ends (``campar
+    continue``), with one level of period doubling followed: each branch's σn points y
+    with their stability, and its special points (PD, SN, NS, G)."""
     from ..sweep.store import read_store
     from ..views.continuation import continue_from_cell
 
@@ -142,9 +79,10 @@ def branch_report(path, row: int, col: int) -> dict:
     arrays = stored.stored
     if int(arrays["kind"]) != 0 or int(arrays["n"]) < 1:
         raise CamparError(f"cell ({row}, {col}) is not periodic: no cycle to continue")
-    with read_store(path) as reader:  # the map's own range along its first axis
-        first = reader.job.first
-        axis = reader.job.sweep[first]
+    with read_store(path) as reader:  # the map's own range along the line's axis
+        job = reader.job
+        first = job.first if along == "row" else job.second
+        axis = job.sweep[first]
     here = float(stored.coordinates[first])
     # the cell's parameters, said again: those not given take the paper's values
     fixed = {k: v for k, v in stored.model.parameters.items() if k != first}
@@ -243,7 +181,6 @@ ACTIONS = {
     "cell": cell_report,
     "attractors": attractors_report,
     "cycle": cycle_report,
-    "line": line_report,
     "edges": edges_report,
     "branch": branch_report,
     "curves": curves_report,

@@ -28,6 +28,7 @@ import numpy as np
 from ..errors import CamparError
 from ..views.map_curves import curves_store_path
 from . import render
+from .lines import MAX_LINE_POINTS
 from .source import MapSource
 from .worker import WARM_UP_SECONDS, CellWorker
 
@@ -39,6 +40,7 @@ STATIC = {  # served path → (file of campar/explore/static, content type)
     "/plots.js": ("plots.js", "text/javascript; charset=utf-8"),
     "/exports.js": ("exports.js", "text/javascript; charset=utf-8"),
     "/overlays.js": ("overlays.js", "text/javascript; charset=utf-8"),
+    "/lines.js": ("lines.js", "text/javascript; charset=utf-8"),
     "/explore.css": ("explore.css", "text/css; charset=utf-8"),
 }
 # The page runs only its own script (no inline or evaluated code); images are its maps.
@@ -46,8 +48,10 @@ CSP = "default-src 'self'; img-src 'self' data: blob:; style-src 'self' 'unsafe-
 LOOPBACK_NAMES = frozenset({"127.0.0.1", "localhost", "::1"})
 MAX_PIXELS = 4096  # a view's width or height
 REFRESH_SECONDS = 0.5  # how often a store a run writes is looked at again
+ZOOM_REFRESH_SECONDS = 0.1  # … a zoom's store, whose tiles commit a few a second
 MAX_STARTS = 200  # starts of an attractor census from the page
 MAX_CYCLE = 64  # period of a cycle by shooting from the page
+LINES = ("row", "column", "segment")  # what a bifurcation line runs along
 MAX_EDGE_CELLS = 400 * 400  # cells of a view whose edges are typed at a request
 ZOOM_POINTS = 100  # a zoom's cells along each side
 ZOOM_START_SECONDS = 60.0  # until a zoom's run has created its store
@@ -69,6 +73,7 @@ class Explorer:
         self._zooms = {}  # zoom store → its run's process
         self._ranges = {}  # (store, field, layer) → (tiles verified, (low, high))
         self.zoom_ranks = 2
+        self.zoom_runner = None  # the warm process for small zooms (started by the warm-up)
         self._threads = [
             threading.Thread(target=self._watch, args=(s,), daemon=True) for s in self.sources
         ]
@@ -88,6 +93,16 @@ class Explorer:
             self.worker.run("warm_up", seconds=WARM_UP_SECONDS)
         except CamparError as exc:  # the first click says it again
             log.warning("warming the cell worker up: %s", exc)
+        if not self._stop.is_set():  # after the worker's: its kernel is then in the cache
+            self.start_zoom_runner()
+
+    def start_zoom_runner(self) -> None:
+        """Start the process kept warm for small zooms (the first store's kernel loaded)."""
+        from .zoom import ZoomRunner
+
+        runner = ZoomRunner()
+        runner.start(self.sources[0].job)
+        self.zoom_runner = runner
 
     def stop(self) -> None:
         self._stop.set()
@@ -101,11 +116,13 @@ class Explorer:
                     log.warning("the zoom's run into %s did not stop: killed", store)
                     process.kill()  # its committed tiles stay; a resume redoes the rest
                     process.wait()
+        if self.zoom_runner is not None:
+            self.zoom_runner.stop()
 
-    def _watch(self, source: MapSource) -> None:
+    def _watch(self, source: MapSource, seconds: float = REFRESH_SECONDS) -> None:
         try:
             source.scan()
-            while not self._stop.wait(REFRESH_SECONDS):
+            while not self._stop.wait(seconds):
                 if source.status()["verified"] + len(source.damage) < len(source.tiles):
                     source.refresh()
         except Exception:  # the page shows the store as it was; the server goes on
@@ -177,15 +194,15 @@ class Explorer:
 
     def compute(self, q: dict, action: str) -> dict:
         source = self._source(q)
+        if action == "line":
+            return self.worker.run("line", str(source.path), *_line_arguments(q, source))
         row = _integer(q, "row", 0, source.rows - 1)
         col = _integer(q, "col", 0, source.cols - 1, default=0)
         args = [str(source.path), row, col]
         if action == "cell":
             args.append(_integer(q, "layer", 0, source.layers - 1, default=0))
-        elif action == "line":
-            args.pop()
-        elif action == "branch":
-            pass
+        elif action == "branch":  # along the line's row or column
+            args.append(_choice(q, "along", {"row": "row", "column": "column"}, "row"))
         elif action == "attractors":
             args.append(_integer(q, "k", 2, MAX_STARTS, default=16))
         else:
@@ -211,7 +228,7 @@ class Explorer:
 
     def zoom(self, q: dict) -> dict:
         """Start (or find) the zoom of a rectangle; its store is served once it exists."""
-        from .zoom import start_zoom, zoom_job, zoom_store
+        from .zoom import WARM_CELLS, start_zoom, zoom_job, zoom_store
 
         source = self._source(q)
         box = tuple(_number(q, k) for k in ("x0", "x1", "y0", "y1"))
@@ -223,8 +240,13 @@ class Explorer:
                 if other.path == store:
                     return {"store": index, "name": store.name, "running": self._running(store)}
             if not self._running(store):
+                warm = self.zoom_runner
+                small = job.shape[0] * job.shape[1] <= WARM_CELLS
                 try:
-                    self._zooms[store] = start_zoom(source, job, self.zoom_ranks)[1]
+                    if small and warm is not None and warm.free():
+                        self._zooms[store] = warm.run(source, job)[1]
+                    else:
+                        self._zooms[store] = start_zoom(source, job, self.zoom_ranks)[1]
                 except OSError as exc:
                     raise CamparError(
                         f"cannot start the zoom beside {source.path}: {exc}"
@@ -242,7 +264,10 @@ class Explorer:
                         ) from None
                     time.sleep(0.1)
             self.sources.append(added)
-            thread = threading.Thread(target=self._watch, args=(added,), daemon=True)
+            # its tiles come fast: looked at as often as a page redraws
+            thread = threading.Thread(
+                target=self._watch, args=(added, ZOOM_REFRESH_SECONDS), daemon=True
+            )
             thread.start()
             return {"store": len(self.sources) - 1, "name": store.name, "running": True}
 
@@ -252,6 +277,20 @@ class Explorer:
 
     def _source(self, q: dict) -> MapSource:
         return self.sources[_integer(q, "store", 0, len(self.sources) - 1, default=0)]
+
+
+def _line_arguments(q: dict, source: MapSource) -> list:
+    """(along, row, col, row2, col2, points) of a line: ``along`` row (default) needs
+    ``row``, column needs ``col``, segment needs both cells and may give ``points``."""
+    along = _choice(q, "along", {k: k for k in LINES}, "row")
+    row = _integer(q, "row", 0, source.rows - 1, default=0 if along == "column" else None)
+    col = _integer(q, "col", 0, source.cols - 1, default=0 if along == "row" else None)
+    if along != "segment":
+        return [along, row, col, None, None, None]
+    row2 = _integer(q, "row2", 0, source.rows - 1)
+    col2 = _integer(q, "col2", 0, source.cols - 1)
+    points = None if "points" not in q else _integer(q, "points", 2, MAX_LINE_POINTS)
+    return [along, row, col, row2, col2, points]
 
 
 def _describe(index: int, s: MapSource) -> dict:
@@ -385,8 +424,10 @@ def _integer(q: dict, key: str, low: int, high: int, default: int | None = None)
     return value
 
 
-def _choice(q: dict, key: str, choices: dict):
+def _choice(q: dict, key: str, choices, default: str | None = None):
     text = _one(q, key)
+    if text is None:
+        text = default
     if text not in choices:
         raise BadRequest(f"{key} must be one of {', '.join(choices)}, got {str(text)[:40]!r}")
     return choices[text]

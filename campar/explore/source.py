@@ -8,6 +8,15 @@ keeps a field under MOSAIC_CELLS cells: a 400 × 400 map is kept whole, a 4000 �
 one at s = 2. A damaged tile is masked — its cells read as not computed, as
 ``campar.open`` reads them — and named in ``status()``. Tiles a run commits later are
 verified and taken in by ``refresh()`` as they come; a tile not yet committed is pending.
+Tiles are taken in through the store's snapshot read (``check_tiles`` on a
+``read_store`` reader, as ``campar.open`` reads): the tiles its root record holds
+committed, each verified whole against the record's checksum — so a tile is drawn whole
+and verified or as pending, never torn by a run writing the store. Taking a tile in
+records a digest of each array a view or a hovered cell reads of it (``DIGEST_BYTES``,
+of the very bytes that verified); reading such an array again later (a close view, a
+hovered cell) checks it against that digest, so it is the verified bytes or the tile is
+masked as damaged — at the cost of hashing the arrays read, not of reading and hashing
+every array of the tile again.
 
 A view asks for one cell per screen pixel (the cell under the pixel's centre, as a map
 image is drawn, never a mixture of cells): where a pixel spans at least s cells the
@@ -15,6 +24,7 @@ kept mosaic answers, else only the tiles the view crosses are read, at full reso
 through a small cache.
 """
 
+import hashlib
 import threading
 from collections import Counter, OrderedDict
 from pathlib import Path
@@ -24,11 +34,12 @@ import numpy as np
 from ..errors import StoreDamaged, StoreError
 from ..sweep.job import cell_edges
 from ..sweep.plan import plan_tiles
-from ..sweep.store import read_store, tile_checksum, verify_store
+from ..sweep.store import check_tiles, read_store, verify_store
 from .fields import Field, categories, fields_of, numeric
 
 MOSAIC_CELLS = 4_000_000  # per field and direction kept in memory: 16 MB as float32
 CACHE_BYTES = 128 * 2**20  # stored arrays of the tiles read for close views
+DIGEST_BYTES = 16  # BLAKE2b of an array taken in: a changed array passes with p = 2**-128
 PENDING, VERIFIED, DAMAGED = 0, 1, 2
 NO_CELL = -1  # a pixel outside the grid
 PENDING_CELL = -2  # a cell of a tile not committed (or masked as damaged): not computed
@@ -81,6 +92,8 @@ class MapSource:
         self.rows, self.cols = self.job.shape
         self.layers = len(self.job.directions)
         self.fields = {f.name: f for f in fields_of(self.names)}
+        # the arrays a view or a hovered cell reads (not the σn points: cached tiles stay small)
+        self._read_names = {*CELL_ARRAYS, *(n for f in self.fields.values() for n in f.needs)}
         self.stride = 1
         while -(-self.rows // self.stride) * -(-self.cols // self.stride) > MOSAIC_CELLS:
             self.stride *= 2
@@ -105,6 +118,7 @@ class MapSource:
         self._y_desc = self.job.second_values[0] > self.job.second_values[-1]
         self._lock = threading.RLock()
         self._cache: OrderedDict = OrderedDict()
+        self._digests: dict[tuple[str, int], bytes] = {}  # (array, tile) → as verified
         self._cache_bytes = 0
         self._open_reader = None
         self.scanned = False
@@ -124,28 +138,31 @@ class MapSource:
     def refresh(self) -> int:
         """Verify and take in the tiles committed since the last look; how many."""
         with read_store(self.path) as reader:
-            done = reader.tile_flags()[0]
-            new = [i for i in np.flatnonzero(done & (self.state == PENDING)).tolist()]
+            done, flag_problems = reader.tile_flags()
+            done[list(flag_problems)] = True  # committed, its flag damaged: check_tiles says
+            new = np.flatnonzero(done & (self.state == PENDING)).tolist()
             if not new:
                 return 0
-            with self._lock:  # a reader opened before these tiles may not see them (HDF5)
-                if self._open_reader is not None:
-                    self._open_reader.close()
-                    self._open_reader = None
-            sums = reader.tile_checksums()[0]
-            for index in new:
-                try:
-                    arrays = verified_tile(reader, self.tiles[index], sums)
-                except StoreDamaged as exc:
-                    self._mark_damaged(index, str(exc))
-                    continue
-                self._ingest(self.tiles[index], arrays)
+            with self._lock:  # a reader opened before these tiles does not see them
+                self._close_reader()
+            for check in check_tiles(reader, only=new):
+                if check.problem:
+                    self._mark_damaged(check.tile.index, check.problem)
+                else:
+                    self._ingest(check.tile, check.arrays)
         return len(new)
 
     def _mark_damaged(self, index: int, why: str) -> None:
+        """A tile that failed its check: named in ``status()``, its cells masked."""
+        tile = self.tiles[index]
+        s = self.stride
+        at = slice(-(-tile.row_start // s), -(-tile.row_stop // s))
         with self._lock:
             self.state[index] = DAMAGED
             self.damage[index] = why
+            for (name, layer), mosaic in self.mosaic.items():
+                if layer == (tile.layer or 0):
+                    mosaic[at] = PENDING_CELL if self.fields[name].categorical else np.nan
 
     def _ingest(self, tile, arrays: dict) -> None:
         layer = tile.layer or 0
@@ -166,6 +183,8 @@ class MapSource:
                 else:
                     values = numeric(field, arrays)
                 self.mosaic[field.name, layer][at] = values[rows, ::s]
+            for name in self._read_names & arrays.keys():
+                self._digests[name, tile.index] = _digest(arrays[name])
             self.state[tile.index] = VERIFIED
 
     # -- reading -------------------------------------------------------------------------
@@ -218,8 +237,10 @@ class MapSource:
             tile = self.tiles[layer * per_layer + k]
             if self.state[tile.index] != VERIFIED:
                 continue
+            arrays = self._tile_arrays(field.needs, tile)
+            if arrays is None:  # it failed its check just now: masked
+                continue
             sel = np.flatnonzero(which == k)
-            arrays = self._tile_arrays(field, tile)
             parts.append({n: a[rows[sel] - tile.row_start][:, cols] for n, a in arrays.items()})
             picked.append(sel)
         if not parts:
@@ -234,27 +255,44 @@ class MapSource:
         block[np.concatenate(picked)] = values
         return block
 
-    def _tile_arrays(self, field: Field, tile) -> dict:
-        """The stored arrays a field needs of a verified tile, through the cache."""
+    def _tile_arrays(self, names, tile) -> dict | None:
+        """The stored arrays ``names`` of a verified tile, through the cache, each read
+        checked against its digest taken when the tile verified; None when one no longer
+        matches or reads (the tile is then masked as damaged)."""
         out = {}
-        for name in field.needs:
+        for name in names:
             key = (name, tile.index)
             if key in self._cache:
                 self._cache.move_to_end(key)
-            else:
-                self._cache[key] = self._reader().read_tile(name, tile)
-                self._cache_bytes += self._cache[key].nbytes
-            out[name] = self._cache[key]
+                out[name] = self._cache[key]
+                continue
+            try:
+                values = self._reader().read_tile(name, tile)
+            except Exception as exc:  # zarr, numcodecs and h5py raise many kinds
+                self._mark_damaged(tile.index, f"{name} unreadable ({type(exc).__name__})")
+                return None
+            if _digest(values) != self._digests.get(key):
+                self._mark_damaged(
+                    tile.index, f"its {name} changed after it verified (checksum mismatch)"
+                )
+                return None
+            self._cache[key] = out[name] = values
+            self._cache_bytes += values.nbytes
         while self._cache_bytes > CACHE_BYTES and len(self._cache) > 1:
             _, old = self._cache.popitem(last=False)
             self._cache_bytes -= old.nbytes
         return out
 
     def _reader(self):
-        """A reader kept open for the full-resolution reads (reopened by ``refresh``)."""
+        """A reader kept open for the reads after the scan (reopened by ``refresh``)."""
         if self._open_reader is None:
             self._open_reader = read_store(self.path)
         return self._open_reader
+
+    def _close_reader(self) -> None:
+        if self._open_reader is not None:
+            self._open_reader.close()
+            self._open_reader = None
 
     def cell(self, row: int, col: int, layer: int = 0) -> dict:
         """Everything the store holds of one cell (no σn points), or why it has nothing."""
@@ -278,9 +316,10 @@ class MapSource:
         if state == PENDING:
             return {**where, "stored": "pending"}
         with self._lock:
-            reader = self._reader()
-            names = [n for n in CELL_ARRAYS if n in reader.names]
-            values = {n: reader.read_tile(n, tile)[row - tile.row_start, col] for n in names}
+            arrays = self._tile_arrays([n for n in CELL_ARRAYS if n in self.names], tile)
+        if arrays is None:
+            return {**where, "stored": "damaged", "why": self.damage[tile.index]}
+        values = {n: a[row - tile.row_start, col] for n, a in arrays.items()}
         return {**where, "stored": "verified", "arrays": values}
 
     def status(self) -> dict:
@@ -305,23 +344,10 @@ class MapSource:
         return items
 
 
-def verified_tile(reader, tile, sums=None) -> dict:
-    """Every array of a committed tile, checked against its checksum (StoreDamaged if not);
-    ``sums``: the store's tile checksums, read once for many tiles (None: read here)."""
-    try:
-        arrays = {name: reader.read_tile(name, tile) for name in reader.names}
-    except Exception as exc:  # zarr, numcodecs and h5py raise many kinds
-        raise StoreDamaged(f"unreadable ({type(exc).__name__}: {exc})") from None
-    if sums is None:
-        sums = reader.tile_checksums()[0]
-    if sums is not None and tile_checksum(arrays, reader.names) != int(sums[tile.index]):
-        raise StoreDamaged("checksum mismatch: its arrays changed after the commit")
-    return arrays
-
-
 def stored_cell(path, row: int, col: int, layer: int = 0) -> tuple:
-    """(job, {array: value}) of one cell of a store, its tile verified (its tile alone is
-    read); StoreError when its tile is not committed, StoreDamaged when it is damaged."""
+    """(job, {array: value}) of one cell of a store, its tile read through the snapshot
+    read and verified (its tile alone is read); StoreError when its tile is not committed,
+    StoreDamaged when it is damaged."""
     with read_store(path) as reader:
         job = reader.job
         rows, cols = job.shape
@@ -330,13 +356,20 @@ def stored_cell(path, row: int, col: int, layer: int = 0) -> tuple:
         tiles = plan_tiles(job)
         per_layer = len(tiles) // len(job.directions)
         tile = next(t for t in tiles[layer * per_layer :] if row < t.row_stop)
-        if not reader.tile_flags()[0][tile.index]:
-            raise StoreError(f"cell ({row}, {col}) is not computed yet (tile {tile.index})")
-        try:
-            arrays = verified_tile(reader, tile)
-        except StoreDamaged as exc:
-            raise StoreDamaged(f"tile {tile.index} of {path} is damaged: {exc}") from None
-    return job, {name: a[row - tile.row_start, col] for name, a in arrays.items()}
+        check = next(check_tiles(reader, only=[tile.index]), None)
+    if check is None:
+        raise StoreError(f"cell ({row}, {col}) is not computed yet (tile {tile.index})")
+    if check.problem:
+        raise StoreDamaged(f"tile {tile.index} of {path} is damaged: {check.problem}")
+    return job, {name: a[row - tile.row_start, col] for name, a in check.arrays.items()}
+
+
+def _digest(a: np.ndarray) -> bytes:
+    """BLAKE2b of an array's bytes, dtype and shape."""
+    a = np.ascontiguousarray(a)
+    h = hashlib.blake2b(f"{a.dtype.str}:{a.shape};".encode(), digest_size=DIGEST_BYTES)
+    h.update(a.reshape(-1).view(np.uint8))
+    return h.digest()
 
 
 def _category_id(known: list[str], name: str) -> int:

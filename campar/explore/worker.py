@@ -12,7 +12,10 @@ import threading
 import time
 
 from ..errors import CamparError
-from .cells import ACTIONS
+from .cells import ACTIONS as CELL_ACTIONS
+from .lines import line_report
+
+ACTIONS = {**CELL_ACTIONS, "line": line_report}
 
 CELL_SECONDS = 60.0  # default time limit of one computation
 WARM_UP_SECONDS = 900.0  # a cold compile of the kernel and the tracer on a loaded machine
@@ -40,21 +43,40 @@ class CellTimeout(CamparError):
     pass
 
 
-class CellWorker:
-    """One worker process for the cell computations, restarted after a time-out."""
+class Spawned:
+    """A process of the server's, spawned (it shares no numba state with the server's
+    threads), with a pipe to it; ``stop`` ends it."""
 
-    def __init__(self, seconds: float = CELL_SECONDS):
-        self.seconds = seconds
-        self._lock = threading.Lock()
+    def __init__(self):
         self._process = None
         self._conn = None
 
-    def start(self) -> None:
+    def spawn(self, target, *args) -> None:
+        """Start ``target(conn, *args)`` in a new process."""
         ctx = multiprocessing.get_context("spawn")
         self._conn, child = ctx.Pipe()
-        self._process = ctx.Process(target=_serve, args=(child,), daemon=True)
+        self._process = ctx.Process(target=target, args=(child, *args), daemon=True)
         self._process.start()
         child.close()
+
+    def stop(self) -> None:
+        if self._process is not None:
+            self._process.kill()
+            self._process.join(5)
+            self._conn.close()
+        self._process = None
+
+
+class CellWorker(Spawned):
+    """One worker process for the cell computations, restarted after a time-out."""
+
+    def __init__(self, seconds: float = CELL_SECONDS):
+        super().__init__()
+        self.seconds = seconds
+        self._lock = threading.Lock()
+
+    def start(self) -> None:
+        self.spawn(_serve)
 
     def run(self, action: str, *args, seconds: float | None = None):
         """The action's data; CamparError with the failure's line, or CellTimeout after
@@ -81,10 +103,3 @@ class CellWorker:
         if isinstance(data, dict):
             data["seconds"] = round(data_seconds, 3)
         return data
-
-    def stop(self) -> None:
-        if self._process is not None:
-            self._process.kill()
-            self._process.join(5)
-            self._conn.close()
-        self._process = None

@@ -157,7 +157,18 @@ def _compile(spec, law, bits, n_sections, solver, share, trace) -> None:
         split_compile.reap(helper)
 
 
-def run_cells(model: Model, omega=None, start=None, outputs=(), law=None, **columns) -> CellOutputs:
+CHAIN_PARAMETERS = ("omega", "zeta", "f0", "mu_kn", "mu_cn")  # run_chain's order
+
+
+def run_chain_over(par: dict, law, x_init, solver, settings, out: CellOutputs) -> None:
+    """The kernel's run_chain over the cells whose parameters ``par`` holds by name
+    (CHAIN_PARAMETERS, arrays of one length); ``out`` is filled in place."""
+    run_chain(*(par[name] for name in CHAIN_PARAMETERS), law, x_init, solver, settings, out)
+
+
+def run_cells(
+    model: Model, omega=None, start=None, outputs=(), law=None, compile=True, **columns
+) -> CellOutputs:
     """One continuation chain of the kernel from a Model: a cell at each ω of ``omega``
     (default the model's ω: one cell), in the order given, each warm-started from the
     one before, the first from ``start`` (default the model's ``initial``). ``columns``:
@@ -166,6 +177,9 @@ def run_cells(model: Model, omega=None, start=None, outputs=(), law=None, **colu
     names) are computed beside the label, state and counts. ``compile``: load or compile
     the kernel first (``compile_cells``: on two cores when the cache is empty); else
     numba compiles it on the first call, on this thread."""
+    unknown = set(columns) - {"f0", "mu_kn", "mu_cn", "zeta"}
+    if unknown:
+        raise TypeError(f"run_cells: no parameter column {', '.join(sorted(unknown))}")
     omega = np.atleast_1d(np.asarray(model.omega if omega is None else omega, float))
     values = {
         name: np.asarray(columns[name], float)
@@ -180,16 +194,5 @@ def run_cells(model: Model, omega=None, start=None, outputs=(), law=None, **colu
     x0 = np.array(model.start if start is None else start, dtype=float)
     settings = cell_settings(model, bits)
     out = allocate_outputs(len(omega), bits, model.n_sections)
-    run_chain(
-        omega,
-        values["zeta"],
-        values["f0"],
-        values["mu_kn"],
-        values["mu_cn"],
-        law,
-        x0,
-        solver_options(model),
-        settings,
-        out,
-    )
+    run_chain_over({"omega": omega, **values}, law, x0, solver_options(model), settings, out)
     return out

@@ -123,7 +123,8 @@ def map_curves(ev: Evidence, plane: str) -> list:
         from ..views.map_curves import curves_beside
 
         job = ev.job(setups.plane_job(plane, ev.size, ev.tensile))
-        return curves_beside(setups.run_plane(job, ev.stores))
+        shoot = setups.SIZES[ev.size].shoot
+        return curves_beside(setups.run_plane(job, ev.stores), shoot=shoot)
 
     return ev._keep(("map_curves", plane), compute)
 

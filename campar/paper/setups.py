@@ -50,13 +50,15 @@ LAW = DEFAULT_MODEL.tensile  # the default force law; its figures and planes get
 @dataclass(frozen=True)
 class Size:
     """Resolution of a figure set: plane grid (None: the job file's own), line cells, the
-    census maps' grid (None: the plane's) and the points across a zoom window
-    (``campar.paper.structure``)."""
+    census maps' grid (None: the plane's), the points across a zoom window
+    (``campar.paper.structure``) and whether the curves continued over a map are seeded
+    from its unknown edges too, typed by shooting (``views.map_curves.store_seeds``)."""
 
     plane: int | None
     line: int
     census: int | None = None
     zoom: int = 12
+    shoot: bool = True
 
 
 # full: the census on every third cell of the 400 × 400 planes (134 = 399/3 + 1), zooms

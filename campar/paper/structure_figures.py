@@ -218,7 +218,7 @@ def draw_zooms(g, plane: str) -> None:
         zstore = compute(g, zjob)
         zparent, zarrays = store_labels(zstore)
         found = store_boundaries(zstore, omega=zoom.omega, trace=True)
-        continued = curves_beside(zstore)
+        continued = curves_beside(zstore, shoot=setups.SIZES[g.size].shoot)
         dw, ds = structure.spacing(zjob)
         panels.append(
             Panel(

@@ -18,8 +18,8 @@ the chain's own arrays. Cost: K + 1 cold one-cell runs per cell (benchmarks/RESU
 
 import numpy as np
 
-from ..core.kernel import OUT_MULTIPLIERS, OUT_SECTIONS, OUT_STATS, CellOutputs, run_chain
-from ..model.compute import allocate_outputs, cell_settings, solver_options
+from ..core.kernel import OUT_MULTIPLIERS, OUT_SECTIONS, OUT_STATS, CellOutputs
+from ..model.compute import allocate_outputs, cell_settings, run_chain_over, solver_options
 from .census import CHAOS_AFTER, CLOUD_POINTS, cycle_tolerance, group_cells
 from .census import spread_starts as census_starts
 from .job import Job
@@ -44,18 +44,7 @@ def run_starts(
     law = job.law() if law is None else law
     for i, x0 in enumerate(starts):
         rec = allocate_outputs(1, CENSUS_BITS, n_sections)
-        run_chain(
-            cell["omega"],
-            cell["zeta"],
-            cell["f0"],
-            cell["mu_kn"],
-            cell["mu_cn"],
-            law,
-            np.array(x0, float),
-            solver,
-            settings,
-            rec,
-        )
+        run_chain_over(cell, law, np.array(x0, float), solver, settings, rec)
         for mine, one in zip(records, rec, strict=True):
             if len(one):  # outputs not asked for have no cells
                 mine[i] = one[0]

@@ -100,9 +100,14 @@ class ThreadLane:
     ):
         """With ``preload`` the thread first loads the kernel (``load_kernel``, a cold
         compile split as ``share`` says) while the caller waits for the master; tiles
-        queue behind it. ``tile_work``: what computes the tiles where the kernel does not."""
+        queue behind it. ``tile_work``: what computes the tiles where the kernel does not.
+        ``warm`` says whether the kernel is loaded (``Master.local_takes``): at once
+        unless ``preload``, else once the load is over."""
         self.job, self.where, self.preload, self.halted = job, where, preload, halted
         self.share, self.tile_work = share, tile_work
+        # Whether the kernel is loaded (set by the thread; a failed load counts: the first
+        # tile meets the error and reports it).
+        self.warm = not preload
         self.held: list[int] = []  # tiles started or queued, not yet reported, in order
         self.seconds = 0.0
         self.shortest_tile = float("inf")  # seconds, of the tiles it reported
@@ -163,6 +168,7 @@ class ThreadLane:
                 (self.tile_work.load if self.tile_work else load_kernel)(self.job, self.share)
         except Exception:  # the first tile meets the same error and reports it
             log.debug("loading the kernel ahead failed", exc_info=True)
+        self.warm = True
         while (tile := self._next()) is not None:
             start = time.perf_counter()
             try:
@@ -319,23 +325,42 @@ class Master:
         return None
 
     def hand_out(self) -> None:
-        """Every lane its next tile; then, while the queue holds one for every lane, one
-        more to keep (``TILES_HELD``). A worker holding nothing once the queue is empty is
-        told to stop."""
+        """Every lane its next tile, the workers' first (``local_takes``); then, while the
+        queue holds one for every lane, one more to keep (``TILES_HELD``). A worker holding
+        nothing once the queue is empty is told to stop."""
         ranks = self.workers.open_ranks() if self.workers else []
         if self.stop_reason is None:
             for depth in range(1, TILES_HELD + 1):
                 if depth > 1 and len(self.queue) < self.n_lanes:
                     break  # near the end a queued tile would wait for its lane: no lane keeps one
-                if len(self.local.held) < depth and (tile := self.next_tile(0)):
-                    self.local.start(tile)
                 for rank in ranks:
                     if self.workers.room(rank, depth) and (tile := self.next_tile(rank)):
                         self.workers.assign(rank, tile)
+                if self.local_takes(depth) and (tile := self.next_tile(0)):
+                    self.local.start(tile)
         if self.stop_reason is not None or not self.queue:
             for rank in ranks:
                 if not self.workers.holding(rank):
                     self.workers.stop(rank)
+
+    def local_takes(self, depth: int) -> bool:
+        """Whether the master's own lane takes a tile to hold ``depth``. Under MPI its lane
+        loads the kernel after the store is open, after every worker's lane began to: while
+        it loads, a tile goes to it only once every worker (ready or still to say so) holds
+        one or cannot take the next (it failed there), so a job of fewer tiles than ranks is
+        computed by the lanes that are warm first (a one-cell job by a worker, about a
+        kernel load sooner)."""
+        if len(self.local.held) >= depth:
+            return False
+        if self.workers is None or self.local.warm or not self.queue:
+            return True
+        failed = self.failed_on.get(self.queue[0].index, ())
+        return not any(
+            rank not in self.workers.stopped
+            and not self.workers.holding(rank)
+            and rank not in failed
+            for rank in range(1, self.workers.comm.Get_size())
+        )
 
     def dismiss_workers(self) -> None:
         """STOP every worker (busy ones abandon their tile) and wait for each to say BYE."""

@@ -20,7 +20,7 @@ contact cells it has, NaN where none).
 import numpy as np
 
 from ..core.codes import OK
-from ..core.kernel import run_chain
+from ..model.compute import run_chain_over
 from .job import Job
 
 OMEGA_TOL = 1e-6  # the bracket of the separation speed at the end of the bisection
@@ -52,18 +52,7 @@ def separation_row(job: Job, par: dict, out, law, solver, settings, allocate) ->
             name: np.array([values[hi] if name != "omega" else mid]) for name, values in par.items()
         }
         one = allocate(1)
-        run_chain(
-            cell["omega"],
-            cell["zeta"],
-            cell["f0"],
-            cell["mu_kn"],
-            cell["mu_cn"],
-            law,
-            state,
-            solver,
-            settings,
-            one,
-        )
+        run_chain_over(cell, law, state, solver, settings, one)
         if one.status[0] != OK:
             break  # the bracket so far: the chain cannot be followed further
         if one.p[0] > 0:

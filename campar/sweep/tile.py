@@ -9,7 +9,7 @@ depend on the number of ranks or on interruptions.
 import numpy as np
 
 from ..core.jitcache import ensure_fresh_cache, located_cache_dir  # noqa: F401 (runner's)
-from ..core.kernel import CellOutputs, CellSettings, run_chain
+from ..core.kernel import CellOutputs, CellSettings
 from ..core.model import N_STATE
 from ..core.revolution import make_trace
 from ..core.tracer import trace_orbit
@@ -77,18 +77,7 @@ def run_row(job: Job, row: int, cells: int | None = None):
     settings = cell_settings(job)
     out = allocate_outputs(len(par["omega"]), settings.output_bits, job.n_sections)
     law = job.law(row)
-    run_chain(
-        par["omega"],
-        par["zeta"],
-        par["f0"],
-        par["mu_kn"],
-        par["mu_cn"],
-        law,
-        chain_starts(job)[row],
-        solver_options(job),
-        settings,
-        out,
-    )
+    compute.run_chain_over(par, law, chain_starts(job)[row], solver_options(job), settings, out)
     return par, out, law
 
 
@@ -167,33 +156,12 @@ def chain_starts(job: Job) -> np.ndarray:
             for row in range(n_rows):
                 cell = {name: values[row : row + 1] for name, values in par.items()}
                 one = allocate_outputs(1, 0, job.n_sections)
-                run_chain(
-                    cell["omega"],
-                    cell["zeta"],
-                    cell["f0"],
-                    cell["mu_kn"],
-                    cell["mu_cn"],
-                    job.law(row),
-                    state,
-                    solver_options(job),
-                    settings,
-                    one,
-                )
+                law = job.law(row)
+                compute.run_chain_over(cell, law, state, solver_options(job), settings, one)
                 out.state[row] = one.state[0]
                 state = one.state[0] if np.all(np.isfinite(one.state[0])) else x_init
         else:
-            run_chain(
-                par["omega"],
-                par["zeta"],
-                par["f0"],
-                par["mu_kn"],
-                par["mu_cn"],
-                job.law(),
-                x_init,
-                solver_options(job),
-                settings,
-                out,
-            )
+            compute.run_chain_over(par, job.law(), x_init, solver_options(job), settings, out)
         ok = np.all(np.isfinite(out.state), axis=1)[:, None]
         _FIRST_COLUMN_STARTS[key] = np.where(ok, out.state, x_init)
     return _FIRST_COLUMN_STARTS[key]

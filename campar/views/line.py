@@ -255,7 +255,7 @@ def compute_line(spec: LineSpec, *, transitions: bool = True) -> BifurcationLine
     from .transitions import find_transitions
 
     model = spec.model
-    out = run_cells(model, omega=spec.omega, outputs=LINE_OUTPUTS, compile=False)
+    out = run_cells(model, omega=spec.omega, outputs=LINE_OUTPUTS)
     parameters = {name: float(getattr(model, name)) for name in ("f0", "mu_kn", "mu_cn", "zeta")}
     options = model.model
     parameters.update(

@@ -5,7 +5,11 @@ SN and G edge into seeds (``campar.continuation.mapscale.Seed``): the periodic c
 side whose cycle bifurcates, with its stored state — for PD the side of the shorter
 period (the cycle whose multiplier goes to −1), for SN the side whose multiplier goes to
 +1 (the cycle that disappears), for G each periodic side. Seeds of one type and period
-on neighbouring edges are grouped into one task (``group_seeds``).
+on neighbouring edges are grouped into one task (``group_seeds``). With ``shoot`` (the
+default of ``campar curves`` and the report) the edges the map cannot type between two
+periodic cells are typed by shooting first (``views.shot_edges``), so a curve whose only
+trace in the map is such an edge gets its seed too; without, the seeds come from the
+edges the stored data types, at no cost beyond reading the store.
 
 ``agreement`` measures the map against its curves: the share of the map's edges of a
 type that lie within one cell of a continued curve of that type, and the share of each
@@ -41,13 +45,18 @@ def seed_sides(segment: Segment) -> list:
     return list(periodic.items())
 
 
-def store_seeds(path, types=SEED_TYPES, *, group: bool = True) -> list[list[Seed]]:
+def store_seeds(
+    path, types=SEED_TYPES, *, group: bool = True, shoot: bool = True
+) -> list[list[Seed]]:
     """The tasks of a map store's curves of ``types`` (PD, SN, G): seeds grouped by curve
-    (``group_seeds``), or each seed a task of its own."""
+    (``group_seeds``), or each seed a task of its own. ``shoot``: seed from the unknown
+    edges between periodic cells too, typed by shooting (two Newton solves and a
+    continuation an edge: most of the cost on a coarse map, whose edges are mostly
+    unknown); False seeds only from the edges the stored data types."""
     from ..sweep.store import read_store
     from .dataset import open as open_store
 
-    found = store_boundaries(path, shoot=True)  # the edges the map cannot type, by shooting
+    found = store_boundaries(path, shoot=shoot)
     second_name = found.second_name
     with read_store(path) as store:
         job = store.job
@@ -173,9 +182,10 @@ def curves_store_path(map_path) -> str:
     return str(path.with_name(f"{path.stem}-curves{path.suffix}"))
 
 
-def curves_job(map_path, types=SEED_TYPES, *, points: int = 400, store=None):
-    """The curves job of a map store: its seeds grouped into tasks (``store_seeds``), as a
-    validated Job (campar.sweep.curves_job) that ``campar.run`` runs."""
+def curves_job(map_path, types=SEED_TYPES, *, points: int = 400, store=None, shoot: bool = True):
+    """The curves job of a map store: its seeds grouped into tasks (``store_seeds``, with
+    ``shoot`` as there), as a validated Job (campar.sweep.curves_job) that ``campar.run``
+    runs."""
     from ..errors import JobError
     from ..sweep.curves_job import curves_job_data
     from ..sweep.job import Job
@@ -185,7 +195,7 @@ def curves_job(map_path, types=SEED_TYPES, *, points: int = 400, store=None):
         map_job = reader.job
     if map_job.kind != "map":
         raise JobError(f"{map_path} is a {map_job.kind} store: curves are seeded from a map")
-    tasks = store_seeds(map_path, types)
+    tasks = store_seeds(map_path, types, shoot=shoot)
     if not tasks:
         raise JobError(
             f"{map_path}: no typed edge of {', '.join(types)} to seed a curve from "
@@ -259,16 +269,17 @@ def read_curves(path, *, merge: bool = True) -> list:
     return [found[i] for i in merge_curves(found, plane, spacing)]
 
 
-def curves_beside(map_path, types=SEED_TYPES) -> list:
+def curves_beside(map_path, types=SEED_TYPES, *, shoot: bool = True) -> list:
     """The map's curves of ``types``: computed into the store beside it where not there
-    yet (``campar curves``, serial or under mpirun as the caller runs), then read back
-    (``read_curves``); [] where the map has no typed edge to seed from."""
+    yet (``campar curves``, serial or under mpirun as the caller runs; ``shoot`` as in
+    ``store_seeds``), then read back (``read_curves``); [] where the map has no typed edge
+    to seed from."""
     from ..continuation.tasks import CURVES_WORK
     from ..errors import JobError
     from ..sweep.runner import run_job
 
     try:
-        job = curves_job(map_path, types)
+        job = curves_job(map_path, types, shoot=shoot)
     except JobError:
         return []
     run_job(job, tile_work=CURVES_WORK)

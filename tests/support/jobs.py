@@ -58,6 +58,38 @@ SMALL_JOB = {
 SLOW = {"transient": {"mode": "fixed", "max_revolutions": 1500}}
 
 
+def plane_job(name: str, omega: tuple, second: tuple, **sections) -> dict:
+    """A job over the (ω, second) plane, every other parameter at the paper's value (the
+    job fills unfixed ones in): ``omega`` is (from, to, points), ``second`` is (parameter,
+    from, to, points); ``sections`` are the job's other sections as keywords."""
+    axis, *span = second
+    sweep = {"omega": dict(zip(("from", "to", "points"), omega, strict=True))}
+    sweep[axis] = dict(zip(("from", "to", "points"), span, strict=True))
+    return {"name": name, "sweep": sweep, **sections}
+
+
+# A corner of the (ω, μkn) plane across a 1-1 | 1-2 boundary: new flights appear between
+# its cells (grazings), which the stored ε extrema cannot show, so its edges there are
+# unknown until typed by shooting (test_shot_edges.py, test_seed_shooting.py).
+SHOT_CORNER = plane_job(
+    "corner",
+    (1.50, 1.43, 6),
+    ("mu_kn", 0.95, 0.945, 2),
+    chains={"start": "continue"},
+    outputs=["label", "dc", "eps", "pn", "multipliers"],
+)
+
+
+# The explorer's tests' map: 6 × 12 cells of the (ω, μcn) plane, two rows a tile.
+EXPLORE_MAP = plane_job(
+    "explore",
+    (6.0, 1.0, 12),
+    ("mu_cn", 0.9, 0.6, 6),
+    outputs=["label", "dc", "eps", "pn", "multipliers"],
+    tiles={"rows": 2},
+)
+
+
 def merge(base: dict, extra: dict) -> dict:
     """``base`` with ``extra``'s keys set, nested dicts merged key by key."""
     out = dict(base)

@@ -124,13 +124,7 @@ class MapView {
       ctx.imageSmoothingEnabled = false;
       ctx.drawImage(this.image, ax, ay, bx - ax, by - ay);
       for (const im of this.overlays) ctx.drawImage(im, ax, ay, bx - ax, by - ay);
-      if (state.line && state.line.store === this.storeIndex()) {
-        const [, py] = this.toPixel(0, state.line.y);
-        ctx.strokeStyle = "#e41a1c";
-        ctx.setLineDash([6, 4]);
-        ctx.beginPath(); ctx.moveTo(r.x, py); ctx.lineTo(r.x + r.w, py); ctx.stroke();
-        ctx.setLineDash([]);
-      }
+      paintLine(this, ctx, r);
       if (state.edges && state.edges.store === this.storeIndex() && state.compare !== "diff") {
         const styles = state.edges.data.styles;
         ctx.lineWidth = 2;
@@ -311,8 +305,8 @@ async function click(view, px, py) {
   const cell = await api("cell", { store, layer: state.layer, x, y }).catch((e) => ({ error: e.message }));
   if (cell.error || cell.outside) return;
   if (state.mode === "line") {
-    setMode(null);
-    return drawLine(store, cell);
+    if (lineClick(store, cell)) setMode(null);
+    return;
   }
   computeCell(store, cell);
 }
@@ -388,63 +382,6 @@ function describeCycle(o) {
     `σn: ${o.sections.map(([y, v]) => `(${fmt(y, 6)}, ${fmt(v, 6)})`).join(" ")}`;
 }
 
-// -- a bifurcation line ----------------------------------------------------------------
-
-async function drawLine(store, cell) {
-  const s = state.stores[store];
-  state.line = { store, row: cell.row, y: cell[s.y.name], data: null };
-  for (const v of activeViews()) v.paint();
-  $("line-head").textContent = `computing the row ${SYMBOL[s.y.name]} = ${fmt(cell[s.y.name], 5)} …`;
-  let data;
-  try {
-    data = await api("line", { store, row: cell.row });
-  } catch (error) {
-    $("line-head").textContent = error.message;
-    return;
-  }
-  state.line.data = data;
-  state.line.branch = null;
-  $("line-head").textContent = `${SYMBOL[s.y.name]} = ${fmt(cell[s.y.name], 5)}: σn points y over ` +
-    `${SYMBOL[s.x.name]}, ${data.points.length} points; label changes dashed (${data.changes.length})`;
-  drawLinePlot();
-}
-
-function drawLinePlot() {
-  const line = state.line, s = state.stores[line.store], data = line.data;
-  const series = [{ points: data.points, dot: "#222", size: 2.5 }];
-  const marks = data.changes.map((c) => ({ x: c.at }));
-  if (line.branch) {
-    const stable = [], unstable = [];
-    for (const b of line.branch.branches) {
-      for (const [x, y, ok] of b.points) (ok ? stable : unstable).push([x, y]);
-    }
-    series.push({ points: stable, dot: "#2c7be5", size: 2 }, { points: unstable, dot: "#f28e2b", size: 2 });
-    series.push({ points: line.branch.special.map((p) => [p.value, p.y]), dot: "#e41a1c", size: 6 });
-  }
-  plot($("line-plot"), series, axisTitle(s.x.name), "σn: y (units of h)", "", marks);
-}
-
-// The branches through the clicked cell's cycle along the row (campar continue).
-async function continueCell() {
-  const c = state.cell, line = state.line;
-  if (!c || !c.report || !line || !line.data || c.store !== line.store || c.row !== line.row) {
-    $("branch-head").textContent = "draw a row's line, then click a periodic cell of that row";
-    return;
-  }
-  $("branch-head").textContent = "continuing the cycle …";
-  try {
-    line.branch = await api("branch", { store: c.store, row: c.row, col: c.col });
-  } catch (error) {
-    $("branch-head").textContent = error.message;
-    return;
-  }
-  const sp = line.branch.special.map((p) => `${p.type} at ${fmt(p.value, 4)}`).join(", ");
-  const count = line.branch.branches.length;
-  $("branch-head").textContent = `${count} branch${count === 1 ? "" : "es"}: stable blue, ` +
-    `unstable orange; special points (red) ${sp || "none"}`;
-  drawLinePlot();
-}
-
 // -- a zoom that computes --------------------------------------------------------------
 
 async function startZoom(parent, box) {
@@ -516,6 +453,7 @@ function showError(message) {
 
 function setMode(mode) {
   state.mode = state.mode === mode ? null : mode;
+  if (state.mode !== "line") state.segmentStart = null;
   $("line-mode").classList.toggle("active", state.mode === "line");
   $("zoom-mode").classList.toggle("active", state.mode === "zoom");
 }
@@ -556,7 +494,7 @@ function watchStores() {
     state.stores = stores;
     if (changed) for (const v of activeViews()) v.draw();
     if (!busy) { clearInterval(watching); watching = null; }
-  }, 500); // as often as the server looks at a store a run writes
+  }, 250); // twice as often as the server looks at a store a run writes (a zoom: more)
 }
 
 async function main() {

@@ -30,6 +30,7 @@ replace act there, and the links stay. A failed read or write of the store
 cause, and leaves no temporary file behind.
 """
 
+import glob
 import logging
 import os
 import re
@@ -42,9 +43,8 @@ import numpy as np
 from ...errors import StoreDamaged, StoreError, io_error
 from ..job import Job
 from ..plan import plan_tiles
-from . import _hdf5, _zarr
 from ._base import Store, StoreReader
-from ._integrity import Verification, tile_checksum, verify_store
+from ._integrity import Verification, check_tiles, tile_checksum, verify_store
 from ._lock import StoreLock, holder_alive, lock_path
 from ._metadata import CHECKSUMS_ATTR
 from ._root import HDF5_ATTR, MARK_ATTR, RootDamaged
@@ -90,13 +90,14 @@ __all__ = [
     "tile_shape",
     "upgraded_attrs",
     "verify_store",
+    "check_tiles",
 ]
 
 log = logging.getLogger("campar.sweep.store")
 
 HDF5_SUFFIXES = (".h5", ".hdf5")
-_STORES = {_zarr: _zarr.ZarrStore, _hdf5: _hdf5.Hdf5Store}
-_READERS = {_zarr: _zarr.ZarrReader, _hdf5: _hdf5.Hdf5Reader}
+_STORES: dict = {}  # backend module → its Store class
+_READERS: dict = {}  # backend module → its StoreReader class
 
 
 def backend_name(path: str | Path) -> str:
@@ -104,7 +105,19 @@ def backend_name(path: str | Path) -> str:
 
 
 def _backend(path: Path):
-    return _hdf5 if backend_name(path) == "hdf5" else _zarr
+    """The backend module of the store at ``path``, imported when a store of its kind is
+    first met: a run of a Zarr store never loads h5py, nor one of an HDF5 file zarr (each
+    a good part of a process's start-up, benchmarks/RESULTS.md)."""
+    if backend_name(path) == "hdf5":
+        from . import _hdf5 as module
+
+        store, reader = module.Hdf5Store, module.Hdf5Reader
+    else:
+        from . import _zarr as module
+
+        store, reader = module.ZarrStore, module.ZarrReader
+    _STORES[module], _READERS[module] = store, reader
+    return module
 
 
 def real_path(path: Path) -> Path:
@@ -269,7 +282,9 @@ class TileWriter:
         self._cell_arrays = cell_arrays(job)
         self._names = [a.name for a in self._cell_arrays]
         try:
-            self._arrays = _zarr.ZarrTileArrays(self.path, job)
+            from ._zarr import ZarrTileArrays  # only a Zarr store takes a worker's writes
+
+            self._arrays = ZarrTileArrays(self.path, job)
         except OSError as exc:
             raise io_error(f"cannot open the store {self.path} to write tiles", exc) from None
 
@@ -347,12 +362,12 @@ def _remove_aside(path: Path) -> None:
     """Remove what a killed creation or deletion left beside the store (we hold the lock),
     and lock files a killed run was writing."""
     for pattern in (".creating-*", ".deleting-*"):
-        for leftover in path.parent.glob(_hdf5.glob_escape(path.name) + pattern):
+        for leftover in path.parent.glob(glob.escape(path.name) + pattern):
             if leftover.is_dir():
                 shutil.rmtree(leftover, ignore_errors=True)
             else:
                 os.unlink(leftover)
-    for leftover in path.parent.glob(_hdf5.glob_escape(path.name) + ".lock.*.tmp"):
+    for leftover in path.parent.glob(glob.escape(path.name) + ".lock.*.tmp"):
         match = LOCK_TMP.search(leftover.name)
         if match and not holder_alive({"pid": int(match.group(1))}):
             leftover.unlink(missing_ok=True)

@@ -19,7 +19,7 @@ computed cells only.
 """
 
 import hashlib
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Collection, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -104,10 +104,16 @@ class Verification:
         return lines + list(self.problems)
 
 
-def check_tiles(reader, batch_bytes: int = BATCH_BYTES) -> Iterator[TileCheck]:
-    """Every committed tile of ``reader``'s store, read back and verified, in index order."""
+def check_tiles(
+    reader, batch_bytes: int = BATCH_BYTES, only: Collection[int] | None = None
+) -> Iterator[TileCheck]:
+    """Every committed tile of ``reader``'s store (of ``only``'s tile indices, if given),
+    read back and verified against the reader's snapshot, in index order."""
     job = reader.job
     tiles = plan_tiles(job)
+    if only is not None:
+        wanted = set(only)
+        tiles = [t for t in tiles if t.index in wanted]
     done, flag_problems = reader.tile_flags()
     sums, sum_problems = reader.tile_checksums()
     committed = [t for t in tiles if done[t.index] or t.index in flag_problems]

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 import zarr
+import zarr.api.asynchronous
 from zarr.codecs import Crc32cCodec, ZstdCodec
 from zarr.core.sync import sync
 from zarr.errors import ZarrUserWarning
@@ -118,12 +119,25 @@ def _settle(seconds: float = 30.0) -> None:
 
 def _build(tmp: Path, job: Job, separator: str | None = None) -> None:
     """A new store of ``job`` at ``tmp`` (chunk keys with ``separator``; None: CHUNK_KEYS)."""
-    group = zarr.create_group(tmp, zarr_format=3, attributes=initial_attrs(job))
-    keys = CHUNK_KEYS if separator is None else {**CHUNK_KEYS, "separator": separator}
     arrays = store_arrays(job)
-    for a in arrays:
+    sync(_create_nodes(tmp, job, arrays, separator))
+    variables = record_checksums(tmp, arrays)
+    write_zarr_root(tmp, new_root(initial_attrs(job), variables, len(plan_tiles(job))))
+
+
+async def _create_nodes(tmp: Path, job: Job, arrays, separator: str | None) -> None:
+    """The group, then every array (metadata, and a coordinate's values) at once, in one
+    pass through zarr's event loop rather than a round trip per array: every document is
+    the same as one array at a time writes. Every write has ended when this returns or
+    raises (the first error), so a failed creation leaves nothing running."""
+    group = await zarr.api.asynchronous.create_group(
+        store=tmp, zarr_format=3, attributes=initial_attrs(job)
+    )
+    keys = CHUNK_KEYS if separator is None else {**CHUNK_KEYS, "separator": separator}
+
+    async def create(a) -> None:
         text = a.dtype.kind == "U"
-        array = group.create_array(
+        array = await group.create_array(
             a.name,
             shape=a.shape,
             dtype=str if text else a.dtype,
@@ -135,9 +149,12 @@ def _build(tmp: Path, job: Job, separator: str | None = None) -> None:
             chunk_key_encoding=keys,
         )
         if a.values is not None:
-            array[...] = a.values
-    variables = record_checksums(tmp, arrays)
-    write_zarr_root(tmp, new_root(initial_attrs(job), variables, len(plan_tiles(job))))
+            await array.setitem(..., a.values)
+
+    results = await asyncio.gather(*(create(a) for a in arrays), return_exceptions=True)
+    for result in results:
+        if isinstance(result, BaseException):
+            raise result
 
 
 def record_checksums(path: Path, arrays) -> dict[str, str]:
