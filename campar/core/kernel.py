@@ -23,7 +23,6 @@ from numba import njit, typeof
 
 from . import model
 from .analysis import (
-    N_REV_STATS,
     cycle_jacobian,
     distinct_period,
     multipliers_of,
@@ -45,6 +44,7 @@ from .codes import (
     OK,
     PERIODIC,
 )
+from .deferred import DEFER_COLUMNS, refine_deferred
 from .integrator import StepWork, initial_step, make_work, restart_control
 from .jit import hot, inlined
 from .model import (
@@ -140,11 +140,13 @@ class ChainWork(NamedTuple):
     xs: np.ndarray  # (R+1, 2) section points
     jac: np.ndarray  # (R, 4) one-revolution Jacobians
     est: np.ndarray  # (n_max, n_max, 3) cycle estimates by period (assess_revolution)
-    revs: np.ndarray  # (R, N_REV_STATS)
+    revs: np.ndarray  # (R, deferred.DEFER_COLUMNS): statistics, then the deferred steps
     u: np.ndarray  # tangent vector for the Lyapunov exponent
     x_start: np.ndarray  # (2,) the start of the current cell
     prev: np.ndarray  # (3, 2) final states of the last three cells, newest first
     revolution: np.ndarray  # int64 [address, fingerprint] of run_revolution (revolution_call)
+    refine: StepWork  # deferred.refine_deferred's buffers (N_STATE components)
+    refine_mode: np.ndarray  # … and its contact mode
 
 
 def make_chain_work(cs) -> ChainWork:
@@ -162,11 +164,13 @@ def make_chain_work(cs) -> ChainWork:
         xs=np.zeros((rows + 1, 2)),
         jac=np.zeros((rows, 4)),
         est=np.full((cs.n_max, cs.n_max, 3), -1.0),
-        revs=np.zeros((rows, N_REV_STATS)),
+        revs=np.zeros((rows, DEFER_COLUMNS)),
         u=np.array([1.0, 0.0]),
         x_start=np.empty(2),
         prev=np.empty((3, 2)),
         revolution=np.zeros(2, dtype=np.int64),  # linked by run_chain
+        refine=make_work(N_STATE, MAX_EVENTS, 0.0),
+        refine_mode=np.zeros(2, dtype=np.int64),
     )
 
 
@@ -194,8 +198,11 @@ def fail_cell(out, i, status, k, steps):
 
 
 @inlined
-def record_window(out, i, cw, first, count, period):
-    """Statistics of revolutions first … first+count−1 into the outputs of cell i."""
+def record_window(out, i, cw, first, count, period, p, method):
+    """Statistics of revolutions first … first+count−1 into the outputs of cell i, their
+    deferred extrema refined first (campar.core.deferred)."""
+    for j in range(first, first + count):
+        refine_deferred(cw.revs[j], cw.refine, cw.refine_mode, p, method)
     t_free, detach, eps_min, eps_max, pn_max, stretch, graze = window_stats(cw.revs, first, count)
     out.p[i] = int(detach + 0.5)
     out.dc[i] = t_free / (count * period)
@@ -265,7 +272,7 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
         m = distinct_period(cw.xs, k, n, cs.period_tol)
         if cs.transient == CONVERGED:  # (the paper's recipe keeps its plain repeat test)
             m = stable_subperiod(cw.xs, cw.jac, k, m, PERIOD_REACH)
-        _, graze = record_window(out, i, cw, k - m, m, period_time)
+        _, graze = record_window(out, i, cw, k - m, m, period_time, p, opt.method)
         if graze < GRAZE_TOL:
             flags |= FLAG_GRAZING
         out.n[i] = m
@@ -293,7 +300,7 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     else:
         count = min(cs.window_revolutions, k - max(base, variational_from))
         count = max(count, 1)
-        stretch, _ = record_window(out, i, cw, k - count, count, period_time)
+        stretch, _ = record_window(out, i, cw, k - count, count, period_time, p, opt.method)
         out.n[i] = 0
         out.kind[i] = nonperiodic_kind(stretch, cs.lyap_tol)
         if slow_cycle_period(cw.xs, cw.jac, k, k - count, cs.n_max, SLOW_REACH, SLOW_MARGIN):
