@@ -25,6 +25,7 @@ from . import model
 from .analysis import (
     cycle_jacobian,
     distinct_period,
+    exponent_window,
     multipliers_of,
     near_unit_circle,
     nonperiodic_kind,
@@ -82,7 +83,8 @@ class CellSettings(NamedTuple):
 
     Each field is the job setting of the same name (campar.sweep.job:
     transient.*, classify.*, integrator.*), but for ``transient`` (the job's
-    transient.mode) and ``output_bits`` (the job's outputs).
+    transient.mode), ``chaos_z`` (from transient.chaos_confidence) and ``output_bits``
+    (the job's outputs).
     """
 
     transient: int  # CONVERGED or FIXED
@@ -103,6 +105,9 @@ class CellSettings(NamedTuple):
     rk4_steps: int  # RK4 steps per revolution
     chaos_after: int  # earliest revolution of a chaotic verdict (0: only at the budget)
     chaos_lyapunov: float  # … for a Lyapunov exponent per revolution above this
+    chaos_z: float  # … at this confidence: the normal quantile of transient.chaos_confidence
+    chaos_clear: int  # … with no stable cycle in sight nor Newton jump for this many revolutions
+    chaos_sight: float  # … in sight: within this distance (0: not looked for)
     quasiperiodic_after: int  # earliest quasi-periodic verdict (0: only at the budget)
     output_bits: int  # OUT_* bits of the optional outputs to compute
 
@@ -298,9 +303,12 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
                 best = d
                 final = j
     else:
-        count = min(cs.window_revolutions, k - max(base, variational_from))
-        count = max(count, 1)
-        stretch, _ = record_window(out, i, cw, k - count, count, period_time, p, opt.method)
+        if cs.transient == CONVERGED:  # the revolutions a chaos verdict read
+            first, count = exponent_window(k, base, cs.window_revolutions)
+        else:
+            count = max(min(cs.window_revolutions, k - variational_from), 1)
+            first = k - count
+        stretch, _ = record_window(out, i, cw, first, count, period_time, p, opt.method)
         out.n[i] = 0
         out.kind[i] = nonperiodic_kind(stretch, cs.lyap_tol)
         if slow_cycle_period(cw.xs, cw.jac, k, k - count, cs.n_max, SLOW_REACH, SLOW_MARGIN):
