@@ -10,8 +10,8 @@ import math
 
 import numpy as np
 import pytest
-from numba import njit
 from scipy.optimize import brentq
+from support.jit import cached_njit
 
 from campar.core import model
 from campar.core.codes import OK
@@ -27,7 +27,7 @@ Y0 = (0.26850804780352705, -0.6694702171548769)
 ZETA, F0 = 0.2, 0.5
 
 
-@njit
+@cached_njit
 def free_step(t, t_end, y, f, p, mode, opt, w):
     model.rhs(t, y, p, mode, f)
     return advance(model.rhs, model.events, t, t_end, y, f, p, mode, opt, w)

@@ -4,7 +4,7 @@ arithmetic in one body (one cam evaluation), so a change to either must reach it
 
 import numpy as np
 import pytest
-from numba import njit
+from support.jit import cached_njit
 
 from campar.core import model
 from campar.core.cam import phased_cam
@@ -43,25 +43,25 @@ LAWS = {
 THETAS = (0.0, 0.137, 0.5, 0.81, 1.0)
 
 
-@njit
+@cached_njit
 def one_step(t, t_end, y, p, mode, opt, w):
     f = np.zeros(y.shape[0])
     model.rhs(t, y, p, mode, f)
     return advance(model.rhs, model.events, t, t_end, y, f, p, mode, opt, w)
 
 
-@njit
+@cached_njit
 def cam_at(theta, phase, p):
     return model.cam(theta, phase, p.cam)
 
 
-@njit
+@cached_njit
 def probe(method, t0, w, h, theta, p, mode, want_force):
     prepare_dense(model.rhs, method, t0, w.y_old[:2], h, p, mode, w)
     return dense_kinematics(model.rhs, method, w, t0, h, theta, p, mode, want_force)
 
 
-@njit
+@cached_njit
 def reference(method, t, w, h, theta, p, mode):
     """model.acceleration, then model.kinematics, at the dense output's state."""
     dense_eval(method, w, w.y_old, w.y_new, h, theta, 2, w.y_stage)

@@ -223,6 +223,22 @@ def _scaling_arguments(p):
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 
+@benchmark(
+    "revolutions",
+    "revolutions per cell of a map: distribution, non-periodic cells' share, against a baseline",
+)
+def _revolutions_arguments(p):
+    p.add_argument("--job", default="jobs/mu_cn.yaml", help="map job (jobs/mu_cn.yaml)")
+    p.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="change one key of the job, e.g. sweep.omega.points=100 (repeatable)",
+    )
+    p.add_argument("--baseline", metavar="DIR", help="another campar checkout, run in turn")
+    p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
+
+
 @benchmark("startup", "fixed cost of a campar run, and 1 against 2 ranks, whole and run part")
 def _startup_arguments(p):
     p.add_argument("--job", default="jobs/mu_cn.yaml", help="plane (jobs/mu_cn.yaml)")

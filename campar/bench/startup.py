@@ -67,6 +67,7 @@ def timed_launch(job: Path, store: Path, ranks: int, tree: str | None) -> dict:
     command = [
         *launcher,
         sys.executable,
+        "-P",  # the tree named, never a campar in the working directory
         "-m",
         "campar.cli",
         "run",
@@ -75,8 +76,8 @@ def timed_launch(job: Path, store: Path, ranks: int, tree: str | None) -> dict:
         str(store),
     ]
     env = launch_environment(store.parent)
-    if tree is not None:
-        env["PYTHONPATH"] = os.pathsep.join([tree, *filter(None, [env.get("PYTHONPATH")])])
+    tree = tree or str(Path(__file__).resolve().parents[2])
+    env["PYTHONPATH"] = os.pathsep.join([tree, *filter(None, [env.get("PYTHONPATH")])])
     cpu, start = children_cpu(), time.perf_counter()
     done = subprocess.run(command, capture_output=True, text=True, env=env)
     wall = time.perf_counter() - start

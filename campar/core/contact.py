@@ -126,6 +126,12 @@ def note_impact(law, deps):
     raise TypeError("campar.core.contact.note_impact is for compiled code")
 
 
+def impact_velocity(law):
+    """The impact velocity the law keeps, 0 for a law without one (compiled code only):
+    note_impact(law, impact_velocity(law)) restores it."""
+    raise TypeError("campar.core.contact.impact_velocity is for compiled code")
+
+
 def _own_damping(law, c):
     return c
 
@@ -176,10 +182,32 @@ def _keep_impact(law, deps):
     law.impact[0] = max(deps, law.floor)
 
 
-_IMPLS = {  # damping, pushing, force_and_rate, force, note_impact
-    HuntCrossleyHertz: (_own_damping, _hertz_pushing, _hertz_rate, _hertz_force, _no_memory),
-    HuntCrossley: (_own_damping, _power_pushing, _power_rate, _power_force, _no_memory),
-    RestitutionDamped: (_impact_damping, _power_pushing, _power_rate, _power_force, _keep_impact),
+def _no_impact(law):
+    return 0.0
+
+
+def _kept_impact(law):
+    return law.impact[0]
+
+
+_IMPLS = {  # damping, pushing, force_and_rate, force, note_impact, impact_velocity
+    HuntCrossleyHertz: (
+        _own_damping,
+        _hertz_pushing,
+        _hertz_rate,
+        _hertz_force,
+        _no_memory,
+        _no_impact,
+    ),
+    HuntCrossley: (_own_damping, _power_pushing, _power_rate, _power_force, _no_memory, _no_impact),
+    RestitutionDamped: (
+        _impact_damping,
+        _power_pushing,
+        _power_rate,
+        _power_force,
+        _keep_impact,
+        _kept_impact,
+    ),
 }
 
 
@@ -211,3 +239,8 @@ def _force(law, k, c, eps, deps):
 @overload(note_impact, jit_options=OPTIONS)
 def _note_impact(law, deps):
     return _impl(law, 4)
+
+
+@overload(impact_velocity, jit_options=OPTIONS)
+def _impact_velocity(law):
+    return _impl(law, 5)

@@ -136,6 +136,26 @@ def force_peak(rhs, method, w, t0, h, p, mode, guess):
 
 
 @hot
+def step_models(h, mode, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
+    """(reads, pn_hi): whether step_extremes reads the step's dense output (the models see
+    an interior extremum of ε, or a peak of Pn the end rates bracket), and where it does
+    not, the largest Pn step_extremes returns (its ε has no interior extremum then).
+    Cheap, for every step: step_extremes is called only where ``reads``."""
+    if hermite_extremum(e0, de0 * h, e1, de1 * h, MINIMUM)[0] > 0.0:
+        return True, 0.0
+    if hermite_extremum(e0, de0 * h, e1, de1 * h, MAXIMUM)[0] > 0.0:
+        return True, 0.0
+    pn_hi = max(pn0, pn1)
+    if mode[1] == PUSH:
+        th, val = hermite_extremum(pn0, dpn0 * h, pn1, dpn1 * h, MAXIMUM)
+        if th > 0.0:
+            if dpn0 > 0.0 > dpn1:
+                return True, 0.0
+            pn_hi = max(pn_hi, val)
+    return False, pn_hi
+
+
+@hot
 def step_extremes(
     rhs, method, w, t0, h, p, mode, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1
 ):

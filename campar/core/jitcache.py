@@ -31,6 +31,7 @@ COMPILED_MODULES = (
     "integrator",
     "analysis",
     "extrema",
+    "deferred",
     "revolution",
     "revolution_call",
     "transient",

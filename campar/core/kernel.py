@@ -23,9 +23,9 @@ from numba import njit, typeof
 
 from . import model
 from .analysis import (
-    N_REV_STATS,
     cycle_jacobian,
     distinct_period,
+    exponent_window,
     multipliers_of,
     near_unit_circle,
     nonperiodic_kind,
@@ -45,6 +45,7 @@ from .codes import (
     OK,
     PERIODIC,
 )
+from .deferred import DEFER_COLUMNS, refine_deferred
 from .integrator import StepWork, initial_step, make_work, restart_control
 from .jit import hot, inlined
 from .model import (
@@ -82,7 +83,8 @@ class CellSettings(NamedTuple):
 
     Each field is the job setting of the same name (campar.sweep.job:
     transient.*, classify.*, integrator.*), but for ``transient`` (the job's
-    transient.mode) and ``output_bits`` (the job's outputs).
+    transient.mode), ``chaos_z`` (from transient.chaos_confidence) and ``output_bits``
+    (the job's outputs).
     """
 
     transient: int  # CONVERGED or FIXED
@@ -103,6 +105,9 @@ class CellSettings(NamedTuple):
     rk4_steps: int  # RK4 steps per revolution
     chaos_after: int  # earliest revolution of a chaotic verdict (0: only at the budget)
     chaos_lyapunov: float  # … for a Lyapunov exponent per revolution above this
+    chaos_z: float  # … at this confidence: the normal quantile of transient.chaos_confidence
+    chaos_clear: int  # … with no stable cycle in sight nor Newton jump for this many revolutions
+    chaos_sight: float  # … in sight: within this distance (0: not looked for)
     quasiperiodic_after: int  # earliest quasi-periodic verdict (0: only at the budget)
     output_bits: int  # OUT_* bits of the optional outputs to compute
 
@@ -140,11 +145,13 @@ class ChainWork(NamedTuple):
     xs: np.ndarray  # (R+1, 2) section points
     jac: np.ndarray  # (R, 4) one-revolution Jacobians
     est: np.ndarray  # (n_max, n_max, 3) cycle estimates by period (assess_revolution)
-    revs: np.ndarray  # (R, N_REV_STATS)
+    revs: np.ndarray  # (R, deferred.DEFER_COLUMNS): statistics, then the deferred steps
     u: np.ndarray  # tangent vector for the Lyapunov exponent
     x_start: np.ndarray  # (2,) the start of the current cell
     prev: np.ndarray  # (3, 2) final states of the last three cells, newest first
     revolution: np.ndarray  # int64 [address, fingerprint] of run_revolution (revolution_call)
+    refine: StepWork  # deferred.refine_deferred's buffers (N_STATE components)
+    refine_mode: np.ndarray  # … and its contact mode
 
 
 def make_chain_work(cs) -> ChainWork:
@@ -162,11 +169,13 @@ def make_chain_work(cs) -> ChainWork:
         xs=np.zeros((rows + 1, 2)),
         jac=np.zeros((rows, 4)),
         est=np.full((cs.n_max, cs.n_max, 3), -1.0),
-        revs=np.zeros((rows, N_REV_STATS)),
+        revs=np.zeros((rows, DEFER_COLUMNS)),
         u=np.array([1.0, 0.0]),
         x_start=np.empty(2),
         prev=np.empty((3, 2)),
         revolution=np.zeros(2, dtype=np.int64),  # linked by run_chain
+        refine=make_work(N_STATE, MAX_EVENTS, 0.0),
+        refine_mode=np.zeros(2, dtype=np.int64),
     )
 
 
@@ -194,8 +203,11 @@ def fail_cell(out, i, status, k, steps):
 
 
 @inlined
-def record_window(out, i, cw, first, count, period):
-    """Statistics of revolutions first … first+count−1 into the outputs of cell i."""
+def record_window(out, i, cw, first, count, period, p, method):
+    """Statistics of revolutions first … first+count−1 into the outputs of cell i, their
+    deferred extrema refined first (campar.core.deferred)."""
+    for j in range(first, first + count):
+        refine_deferred(cw.revs[j], cw.refine, cw.refine_mode, p, method)
     t_free, detach, eps_min, eps_max, pn_max, stretch, graze = window_stats(cw.revs, first, count)
     out.p[i] = int(detach + 0.5)
     out.dc[i] = t_free / (count * period)
@@ -265,7 +277,7 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
         m = distinct_period(cw.xs, k, n, cs.period_tol)
         if cs.transient == CONVERGED:  # (the paper's recipe keeps its plain repeat test)
             m = stable_subperiod(cw.xs, cw.jac, k, m, PERIOD_REACH)
-        _, graze = record_window(out, i, cw, k - m, m, period_time)
+        _, graze = record_window(out, i, cw, k - m, m, period_time, p, opt.method)
         if graze < GRAZE_TOL:
             flags |= FLAG_GRAZING
         out.n[i] = m
@@ -291,9 +303,12 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
                 best = d
                 final = j
     else:
-        count = min(cs.window_revolutions, k - max(base, variational_from))
-        count = max(count, 1)
-        stretch, _ = record_window(out, i, cw, k - count, count, period_time)
+        if cs.transient == CONVERGED:  # the revolutions a chaos verdict read
+            first, count = exponent_window(k, base, cs.window_revolutions)
+        else:
+            count = max(min(cs.window_revolutions, k - variational_from), 1)
+            first = k - count
+        stretch, _ = record_window(out, i, cw, first, count, period_time, p, opt.method)
         out.n[i] = 0
         out.kind[i] = nonperiodic_kind(stretch, cs.lyap_tol)
         if slow_cycle_period(cw.xs, cw.jac, k, k - count, cs.n_max, SLOW_REACH, SLOW_MARGIN):

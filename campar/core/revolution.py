@@ -6,6 +6,7 @@ contact mode at every event the integrator locates, counts detachments and
 folds every step into the revolution's statistics.
 """
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -13,8 +14,9 @@ import numpy as np
 from . import model
 from .analysis import REV_DETACH, add_step_stats, reset_revolution_stats
 from .codes import EVENT_LOOP, OK, STEP_LIMIT
-from .contact import note_impact
-from .extrema import step_extremes
+from .contact import impact_velocity, note_impact
+from .deferred import clear_deferred, defer_step
+from .extrema import step_extremes, step_models
 from .integrator import SolverOptions, advance, dense_eval, prepare_dense
 from .jit import hot
 from .model import (
@@ -113,8 +115,10 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
 
     Steps end on every cam phase boundary and every contact event; with the
     variational part, Φ starts at I, so x[2:6] ends as the Jacobian of the
-    one-revolution map. Fills the revolution's statistics in ``row``; fails with
-    STEP_LIMIT once the workspace has counted more than step_limit steps.
+    one-revolution map. Fills the revolution's statistics in ``row``; a row wider than
+    N_REV_STATS (the chain's) keeps the steps whose extrema need the dense output for
+    deferred.refine_deferred instead of refining them. Fails with STEP_LIMIT once the
+    workspace has counted more than step_limit steps.
     Records the orbit into ``rec`` unless it is None: numba then prunes every
     recording branch before typing, so a map's kernel never compiles the recorder.
     """
@@ -124,6 +128,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
         x[4] = 0.0
         x[5] = 1.0
     reset_revolution_stats(row)
+    clear_deferred(row)
     mode[0] = RISE
     eps, deps = gap(0.0, x, p, mode[0])  # not RISE: numba would compile a variant for the literal
     mode[1] = contact_mode(eps, deps, p)
@@ -157,14 +162,23 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                     record_step(rec, opt.method, w, t_prev, t, x, p, mode)
                 if want_stats:
                     e1, de1, dde1, pn1, dpn1 = contact_kinematics(t, x, f, p, mode)
-                    dip, peak, pn_hi = step_extremes(
-                        model.rhs,
-                        opt.method,
-                        w,
+                    h = t - t_prev
+                    free = released(contact, p)
+                    dense, pn_hi = step_models(h, mode, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1)
+                    if not dense:
+                        add_step_stats(row, h, free, e0, e1, math.nan, math.nan, pn_hi)
+                    elif defer_step(
+                        row,
+                        w.y_old,
+                        w.y_new,
+                        w.K,
+                        w.F,
+                        w.ctrl,
                         t_prev,
-                        t - t_prev,
-                        p,
+                        h,
                         mode,
+                        free,
+                        impact_velocity(p.contact),
                         e0,
                         de0,
                         dde0,
@@ -175,9 +189,29 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                         dpn0,
                         pn1,
                         dpn1,
-                    )
-                    free = released(contact, p)
-                    add_step_stats(row, t - t_prev, free, e0, e1, dip, peak, pn_hi)
+                    ):
+                        add_step_stats(row, h, free, e0, e1, math.nan, math.nan, max(pn0, pn1))
+                    else:
+                        dip, peak, pn_hi = step_extremes(
+                            model.rhs,
+                            opt.method,
+                            w,
+                            t_prev,
+                            h,
+                            p,
+                            mode,
+                            e0,
+                            de0,
+                            dde0,
+                            e1,
+                            de1,
+                            dde1,
+                            pn0,
+                            dpn0,
+                            pn1,
+                            dpn1,
+                        )
+                        add_step_stats(row, h, free, e0, e1, dip, peak, pn_hi)
                     e0, de0, dde0, pn0, dpn0 = e1, de1, dde1, pn1, dpn1
                     fresh = True
             elif which >= 0:

@@ -14,10 +14,12 @@ import numpy as np
 from .analysis import (
     REV_LOG_STRETCH,
     assess_revolution,
+    exponent_bounds,
+    exponent_window,
     repeat_period,
+    stable_cycle_nearby,
     stretch_tangent,
     unstable_cycle_nearby,
-    window_stats,
 )
 from .codes import NONFINITE, OK
 from .integrator import CTRL_ERR, CTRL_H
@@ -70,14 +72,16 @@ def share_step_size(src, dst):
 def transient_converged(cw, p, opt, cs, want_stats, step_budget):
     """Revolutions until assess_revolution accepts a cycle or the budget ends.
 
-    From revolution cs.chaos_after on (0: never), a motion whose largest
-    Lyapunov exponent over the last window exceeds cs.chaos_lyapunov per
-    revolution is declared chaotic at once: a clearly positive exponent does not
-    turn into a cycle within the rest of the budget. From revolution
-    cs.quasiperiodic_after on (0: never), a motion whose exponent lies within
-    ±lyap_tol, as on an invariant circle, is declared quasi-periodic. Both
-    verdicts trade a few cells on long transients for revolutions (measured
-    by `campar bench map`).
+    From revolution cs.chaos_after on (0: never), a motion whose largest Lyapunov
+    exponent since the last restart exceeds cs.chaos_lyapunov per revolution at the
+    confidence of cs.chaos_z is declared chaotic at once (nonperiodic_verdict): near a
+    stable cycle every revolution contracts the tangent, so a sure positive exponent
+    rules out that the motion was near one in the window, and a motion that stretches
+    that steadily rarely finds one later. From revolution cs.quasiperiodic_after on (0:
+    never), a motion whose exponent lies within ±lyap_tol at that confidence over a
+    whole read window, as on an invariant circle, is declared quasi-periodic. Both
+    verdicts trade a few cells on long transients for revolutions (measured by
+    `campar bench revolutions` and by adjudicating the cells they change).
 
     A motion that lingers at an unstable cycle (analysis.unstable_cycle_nearby: next to
     a period doubling its multiplier is near −1 and the escape takes hundreds of
@@ -90,6 +94,7 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
     base = np.int64(0)  # not a literal: numba would compile assess_revolution twice
     jumps = 0
     escapes = 0
+    sighted = -cs.chaos_clear  # the last revolution with a stable cycle in sight
     avoid0 = math.nan  # the cycle the motion escaped from (jumps to it are refused)
     avoid1 = math.nan
     for a in range(cw.est.shape[0]):  # no estimates of this cell yet
@@ -115,7 +120,11 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
         )
         if period > 0:
             return OK, k, period, base, jumps, escapes
-        if k - base >= cs.window_revolutions and nonperiodic_verdict(cw, k, cs):
+        if cs.chaos_sight > 0.0 and stable_cycle_nearby(
+            cw.xs, cw.jac, k, base, cs.n_max, cs.chaos_sight
+        ):
+            sighted = k
+        if nonperiodic_verdict(cw, k, base, sighted, cs):
             return OK, k, 0, base, jumps, escapes
         if not cs.newton or jumps >= cs.max_jumps:
             continue
@@ -142,14 +151,33 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
 
 
 @inlined
-def nonperiodic_verdict(cw, k, cs):
-    """True when the last window's Lyapunov exponent settles a non-periodic verdict."""
+def nonperiodic_verdict(cw, k, base, sighted, cs):
+    """True when the largest Lyapunov exponent since the last restart (at most a read
+    window, analysis.exponent_window) settles a non-periodic verdict.
+
+    Chaos: its estimate exceeds cs.chaos_lyapunov, its lower confidence bound
+    (analysis.exponent_bounds at the normal quantile cs.chaos_z) exceeds lyap_tol — it
+    is positive, beyond the band of an invariant circle —, and no stable cycle of period
+    ≤ n_max has been in sight (analysis.stable_cycle_nearby within cs.chaos_sight, 0:
+    not looked for; revolution ``sighted`` the last time) nor a Newton jump taken for
+    cs.chaos_clear revolutions: a chaotic transient often shadows the long cycle it
+    settles on, and there the jumps of assess_revolution reach it. Quasi-periodic: the exponent's
+    interval lies within ±lyap_tol, over a whole read window.
+    """
     chaos_due = 0 < cs.chaos_after <= k
-    qp_due = 0 < cs.quasiperiodic_after <= k
+    qp_due = 0 < cs.quasiperiodic_after <= k and k - base >= cs.window_revolutions
     if not (chaos_due or qp_due):
         return False
-    stretch = window_stats(cw.revs, k - cs.window_revolutions, cs.window_revolutions)[5]
-    return (chaos_due and stretch > cs.chaos_lyapunov) or (qp_due and abs(stretch) <= cs.lyap_tol)
+    first, count = exponent_window(k, base, cs.window_revolutions)
+    mean, half = exponent_bounds(cw.revs, first, count, cs.chaos_z)
+    if (
+        chaos_due
+        and mean > cs.chaos_lyapunov
+        and mean - half > cs.lyap_tol
+        and min(k - sighted, k - base) >= cs.chaos_clear
+    ):
+        return True
+    return qp_due and abs(mean) + half <= cs.lyap_tol
 
 
 @inlined

@@ -7,6 +7,7 @@ classes, so a map's tile and a single cell hand the kernel the same values.
 """
 
 import threading
+from statistics import NormalDist
 
 import numpy as np
 
@@ -93,6 +94,9 @@ def cell_settings(spec, bits: int) -> CellSettings:
         rk4_steps=integ.rk4_steps,
         chaos_after=tr.chaos_after,
         chaos_lyapunov=tr.chaos_lyapunov,
+        chaos_z=NormalDist().inv_cdf(tr.chaos_confidence),
+        chaos_clear=tr.chaos_clear,
+        chaos_sight=tr.chaos_sight,
         quasiperiodic_after=tr.quasiperiodic_after,
         output_bits=bits,
     )

@@ -124,9 +124,20 @@ class TransientSettings(Settings):
     """Warm start: 0 the previous cell's state; 1 linear, 2 quadratic extrapolation
     through the previous cells' fixed points (where they are cycles of one period)."""
     chaos_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 96
-    """From this revolution on, a clearly chaotic motion ends the transient (0: never)."""
+    """From this revolution on, a surely chaotic motion ends the transient (0: never)."""
     chaos_lyapunov: Annotated[float, Field(gt=0.0)] = 0.1
-    """Lyapunov exponent per revolution (last read window) that counts as clearly chaotic."""
+    """Lyapunov exponent per revolution that counts as clearly chaotic."""
+    chaos_confidence: Annotated[float, Field(ge=0.5, lt=1.0)] = 0.9
+    """A chaos verdict needs the exponent (since the last restart, at most a read window,
+    at least 16 revolutions after the first two) above chaos_lyapunov and its lower
+    bound at this one-sided confidence (Student's t on 4-revolution batch means) above
+    classify.lyap_tol, …"""
+    chaos_clear: Annotated[int, Field(ge=1, le=MAX_COUNT)] = 64
+    """… and no Newton jump, nor a stable cycle in sight, for this many revolutions …"""
+    chaos_sight: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0
+    """… in sight: the motion within this distance of repeating with a period ≤ n_max,
+    the Jacobian over that period stable, its Newton estimate as close (0: not looked
+    for)."""
     quasiperiodic_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 0
     """From this revolution on, a quasi-periodic motion (|Lyapunov exponent| ≤ lyap_tol)
     ends the transient (0: never)."""

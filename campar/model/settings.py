@@ -13,14 +13,11 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 class Settings(BaseModel):
     # allow_inf_nan: no infinity or NaN in any number of a job (settings and axis ends alike).
-    # defer_build: a model's validator is built when it first validates, not at import: a
-    # command builds the few its job needs (a run, the job's), not every section's.
     model_config = ConfigDict(
         extra="forbid",
         frozen=True,
         populate_by_name=True,
         allow_inf_nan=False,
-        defer_build=True,
     )
 
     @field_validator("*", mode="before")

@@ -12,6 +12,11 @@ A tier marker says what a test does that costs more than a contributor's inner l
 ``--all-tiers`` runs every tier (the README's test command); ``-m EXPR`` selects by marker
 as usual (``-m mpi``, ``-m "not slow"``), and a test named by its node id always runs.
 
+``pytest`` without paths (the tier, or every tier) runs on every core under pytest-xdist
+when it is installed, as ``-n auto`` would; ``-n N`` (``-n 0``: this process), ``-p
+no:xdist``, ``--pdb`` and named files or tests keep their usual meaning, and a machine of
+one core runs in this process.
+
 The markers are applied by what a test does, not by memory: while a test runs (its
 fixtures included), an audit hook records every program it starts, and a test that starts
 one without ``process``, or mpirun without ``mpi`` (SLURM without ``slurm``, a browser
@@ -133,6 +138,35 @@ def pytest_configure(config: pytest.Config) -> None:
         sys.addaudithook(WATCH.audit)
         sys._campar_tiers_audit = True
         _posixsubprocess.fork_exec = WATCH.fork_exec(_posixsubprocess.fork_exec)
+
+
+def default_workers(config: pytest.Config) -> int | None:
+    """The xdist workers plain ``pytest`` runs with (None: as the command line says)."""
+    if (
+        not config.pluginmanager.has_plugin("xdist")
+        or getattr(config, "workerinput", None) is not None
+        or config.args_source is not pytest.Config.ArgsSource.TESTPATHS
+        or config.getoption("numprocesses") is not None
+        or config.getoption("dist") != "no"
+        or config.getoption("tx")
+        or config.getoption("usepdb")
+        or config.getoption("collectonly")
+    ):
+        return None
+    workers = config.hook.pytest_xdist_auto_num_workers(config=config)
+    return workers if workers > 1 else None
+
+
+# A wrapper, so that it runs before xdist's own turns -n into workers whichever plugin
+# was registered first. A worker's start-up (campar imported, the compiled kernel loaded:
+# a few CPU seconds) pays for itself over a tier, not for a file or a test named on the
+# command line.
+@pytest.hookimpl(wrapper=True)
+def pytest_cmdline_main(config: pytest.Config):
+    workers = default_workers(config)
+    if workers is not None:
+        config.option.numprocesses = workers
+    return (yield)
 
 
 def _selects_all(config: pytest.Config) -> bool:

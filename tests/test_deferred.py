@@ -1,0 +1,94 @@
+"""The chain's deferred extrema (campar.core.deferred) are the extrema refined at once.
+
+The reference is the same chain with statistics rows of N_REV_STATS columns, where every
+step's extremum is refined on the dense output as the step is taken (extrema.step_extremes,
+checked against SciPy in test_extrema): every output of every cell, bit for bit, for the
+paper's law and others — a law that keeps the impact velocity, another cam law, each
+integrator — on chains that reach cycles and non-periodic motions.
+"""
+
+import numpy as np
+import pytest
+
+from campar.core.analysis import N_REV_STATS
+from campar.core.deferred import DEFER_COLUMNS, DEFERRED
+from campar.core.kernel import chain_compiled, make_chain_work
+from campar.core.model import kernel_law, start_chain
+from campar.core.revolution_call import revolution_link
+from campar.sweep.job import Job
+from campar.sweep.plan import chain_parameters
+from campar.sweep.tile import allocate_outputs, cell_settings, chain_starts, solver_options
+
+
+def job_of(model=None, integrator=None, outputs=("label", "dc", "eps", "pn", "multipliers")):
+    spec = {
+        "name": "deferred",
+        "sweep": {
+            "omega": {"from": 3.0, "to": 0.6, "points": 9},
+            "mu_cn": {"from": 0.8, "to": 0.8, "points": 1},
+        },
+        "fixed": {"zeta": 0.2, "mu_kn": 0.8, "f0": 0.5},
+        "chains": {"start": "continue"},
+        "outputs": list(outputs),
+        "model": model or {},
+        "integrator": integrator or {},
+    }
+    return Job.from_dict(spec)
+
+
+def run(job, deferring):
+    """(outputs, chain work) of the job's chain 0, statistics rows wide (deferring) or
+    of N_REV_STATS columns (each extremum refined at once)."""
+    par = chain_parameters(job, 0)
+    cs = cell_settings(job)
+    out = allocate_outputs(len(par["omega"]), cs.output_bits, job.n_sections)
+    solver = solver_options(job)
+    law = kernel_law(job.law(0))
+    cw = make_chain_work(cs)
+    if not deferring:
+        cw = cw._replace(revs=np.zeros((cw.revs.shape[0], N_REV_STATS)))
+    cw.revolution[:] = revolution_link(solver, cs, cw.w6, law=law)
+    start_chain(law)
+    args = [par[name] for name in ("omega", "zeta", "f0", "mu_kn", "mu_cn")]
+    chain_compiled(*args, law, chain_starts(job)[0], solver, cs, out, cw)
+    return out, cw
+
+
+CASES = {
+    "paper": ({}, {}),
+    "restitution": ({"contact": {"law": "lankarani-nikravesh", "restitution": 0.7}}, {}),
+    "dp54": ({}, {"method": "dp54", "rtol": 1e-8}),
+}
+
+
+@pytest.mark.parametrize(
+    "case",
+    # the impact velocity a restitution law keeps, and a method whose step prepares its own
+    # dense output; each compiles a kernel of its own (cold: slow)
+    [c if c == "paper" else pytest.param(c, marks=pytest.mark.slow) for c in CASES],
+)
+def test_deferred_extrema_are_the_extrema_refined_at_once(case):
+    model, integrator = CASES[case]
+    job = job_of(model, integrator)
+    deferred, cw = run(job, True)
+    at_once, narrow = run(job, False)
+    assert cw.revs.shape[1] == DEFER_COLUMNS
+    for name, values in deferred._asdict().items():
+        assert values.tobytes() == getattr(at_once, name).tobytes(), name
+    assert np.isfinite(deferred.eps_min).all() and np.isfinite(deferred.pn_max).all()
+    assert (deferred.eps_min < 0.0).any()  # some cells fly: dips were refined
+    # steps were deferred (some are left in transient revolutions' rows, or DOP853
+    # evaluated the field to prepare the windows' dense outputs); the narrow chain none
+    assert (cw.revs[:, DEFERRED] > 0).any() or cw.refine.counts[2] > 0
+    if integrator.get("method", "dop853") == "dop853":
+        assert cw.refine.counts[2] > 0
+    assert narrow.refine.counts[2] == 0
+
+
+def test_a_map_without_statistics_defers_and_refines_nothing():
+    job = job_of(outputs=("label", "multipliers"))
+    out, cw = run(job, True)
+    assert (out.n > 0).any()
+    assert np.isnan(out.dc).all() and np.isnan(out.eps_min).all()
+    assert not cw.revs[:, DEFERRED].any()
+    assert not cw.refine.counts.any()
