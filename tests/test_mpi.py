@@ -13,6 +13,7 @@ import textwrap
 import time
 
 import pytest
+from support.cli import call_campar
 from support.jobs import assert_same_map
 from support.processes import (
     CAMPAR,
@@ -125,7 +126,7 @@ def test_mpi_run_killed_with_sigkill_resumes_to_the_same_map(write_job):
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGUSR1])
 @pytest.mark.process
 @pytest.mark.mpi
-def test_a_signal_to_mpirun_exits_75_and_a_serial_run_resumes(write_job, signum):
+def test_a_signal_to_mpirun_exits_75_and_a_serial_run_resumes(write_job, signum, capsys):
     path, job = write_job(slow=True)
     proc = start_campar("run", path, launcher=mpirun(2))
     wait_for_tiles(job.store, 1, proc)
@@ -135,7 +136,7 @@ def test_a_signal_to_mpirun_exits_75_and_a_serial_run_resumes(write_job, signum)
     assert stderr.count("run the same command again") == 1  # rank 0 only
     with read_store(job.store) as reader:
         assert 1 <= int(reader.done.sum()) < 6
-    resumed = run_campar("run", path)
+    resumed = call_campar(capsys, "run", path)  # in this process: no boundary to test here
     assert resumed.returncode == 0, resumed.stderr
     with read_store(job.store) as reader:
         assert_same_map(reader, job)
@@ -313,12 +314,12 @@ def test_ranks_of_a_node_split_a_cold_compile_and_load_each_others_half(write_jo
 @slow
 @pytest.mark.process
 @pytest.mark.mpi
-def test_a_refusal_under_mpi_ends_every_rank_of_the_cli_and_of_an_spmd_caller(write_job):
+def test_a_refusal_under_mpi_ends_every_rank_of_the_cli_and_of_an_spmd_caller(write_job, capsys):
     """One store made by a serial run, then a changed job refused twice: by ``campar run``
     under mpirun (one line, every rank ends), and by library callers, which run the same
     code on every rank: the refusal must reach them all."""
     path, job = write_job()
-    assert run_campar("run", path).returncode == 0
+    assert call_campar(capsys, "run", path).returncode == 0  # the store, made in this process
     changed_path, changed = write_job(integrator={"rtol": 1e-9}, store=job.store)
     refused = run_mpi(3, "run", changed_path, timeout=120)
     assert refused.returncode == 3
