@@ -57,8 +57,10 @@ def test_one_core_is_this_process(project, monkeypatch):
 
 
 @pytest.mark.process
-def test_plain_pytest_runs_in_workers_and_n0_in_this_process(project):
+def test_plain_pytest_runs_in_workers_and_n0_in_this_process(project, monkeypatch):
     """End to end: the hook reaches xdist before it starts its workers."""
+    for name in ("PYTEST_XDIST_WORKER", "PYTEST_XDIST_WORKER_COUNT", "PYTEST_XDIST_TESTRUNUID"):
+        monkeypatch.delenv(name, raising=False)  # this test's own worker, if it runs in one
     plugin = ("-p", "support.tiers", "-s")
     project.syspathinsert(os.path.dirname(os.path.dirname(__file__)))
     run = project.runpytest_subprocess(*plugin)

@@ -38,8 +38,9 @@ COLD_POINT = textwrap.dedent("""
                   analysis.distinct_period, analysis.stable_subperiod, analysis.cycle_jacobian,
                   analysis.near_unit_circle, analysis.multipliers_of, analysis.spectral_radius,
                   analysis.slow_cycle_period, analysis.nonperiodic_kind, analysis.stretch_tangent]
-    revolution_side = [analysis.add_step_stats, integrator.step_error, integrator.dense_eval,
-                       integrator.advance]
+    revolution_side = [integrator.step_error, integrator.advance]
+    # the window's deferred extrema (campar.core.deferred) are refined by the chain
+    both_sides = [analysis.add_step_stats, integrator.dense_eval]
     stats = revolution.run_revolution.stats
     print(json.dumps({
         "forked": [pid is not None for pid in forked],
@@ -47,6 +48,7 @@ COLD_POINT = textwrap.dedent("""
         "revolutions": len(revolution.run_revolution.signatures),
         "chain_side": {d.py_func.__name__: len(d.signatures) for d in chain_side},
         "revolution_side": {d.py_func.__name__: len(d.signatures) for d in revolution_side},
+        "both_sides": {d.py_func.__name__: len(d.signatures) for d in both_sides},
         # a DOP853 job's kernel has no other stepper (integrator.method_tag)
         "other_steppers": len(integrator.rk4_step.signatures + integrator.error_norm.signatures),
         "result": result.to_dict(),
@@ -87,6 +89,7 @@ def test_split_compile_loads_the_helpers_revolution_and_matches_a_serial_compile
     assert (serial["hits"], serial["misses"], serial["revolutions"]) == (0, 2, 2)
     # the chain's classification compiled once per function, in this process
     assert set(split["chain_side"].values()) == {1}, split["chain_side"]
+    assert set(split["both_sides"].values()) == {1}, split["both_sides"]
     assert split["result"] == serial["result"] and split["trace"] == serial["trace"]
     here = simulate_point(3.0, mu_cn=0.75, multipliers=True, trace=True)
     assert json.loads(json.dumps(here.to_dict())) == serial["result"]

@@ -388,10 +388,12 @@ def window_stats(revs, first, count):
 def exponent_window(k, base, window):
     """(first, count): the revolutions after revolution k that estimate the largest Lyapunov
     exponent, the last ``window`` (at most) since the restart at ``base`` but for the
-    tangent's first TANGENT_SETTLE; all since ``base`` where that leaves none."""
+    tangent's first TANGENT_SETTLE; all since ``base`` where that leaves fewer than
+    MIN_BATCHES batches (too few to tell a motion's exponent: a budget that ends that soon
+    reads the whole way from the start, its contraction included)."""
     count = min(window, k - base - TANGENT_SETTLE)
-    if count < 1:
-        count = max(k - base, 1)
+    if count < MIN_BATCHES * BATCH_REVOLUTIONS:
+        count = max(min(window, k - base), 1)
     return k - count, count
 
 

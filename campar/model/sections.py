@@ -143,6 +143,15 @@ class TransientSettings(Settings):
     ends the transient (0: never)."""
 
 
+# Transient settings whose default leaves a job's hash as it was before the setting
+# existed (``job_digest``); what the kernel computes with them is told apart by the store's
+# ``versions.kernel``.
+TRANSIENT_OPTION_DEFAULTS = {
+    name: TransientSettings.model_fields[name].default
+    for name in ("chaos_confidence", "chaos_clear", "chaos_sight")
+}
+
+
 class ClassifySettings(Settings):
     n_max: Annotated[int, Field(ge=1, le=MAX_PERIOD)] = 32
     chatter_p: Annotated[int, Field(ge=1, le=MAX_COUNT)] = 7

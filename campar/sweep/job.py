@@ -30,6 +30,7 @@ from ..model.sections import (  # noqa: F401 (the model's sections, the job's to
     MODEL_OPTION_DEFAULTS,
     PAPER_VALUES,
     PARAMETERS,
+    TRANSIENT_OPTION_DEFAULTS,
     ClassifySettings,
     InitialState,
     IntegratorSettings,
@@ -451,12 +452,16 @@ def job_digest(data: dict) -> str:
         for key, value in data.items()
         if key != "store" and not (key in OPTIONAL_SECTIONS and value is None)
     }
-    if isinstance(data.get("model"), dict):
-        data["model"] = {
-            key: value
-            for key, value in data["model"].items()
-            if key not in MODEL_OPTION_DEFAULTS or MODEL_OPTION_DEFAULTS[key] != value
-        }
+    for section, defaults in (
+        ("model", MODEL_OPTION_DEFAULTS),
+        ("transient", TRANSIENT_OPTION_DEFAULTS),
+    ):
+        if isinstance(data.get(section), dict):
+            data[section] = {
+                key: value
+                for key, value in data[section].items()
+                if key not in defaults or defaults[key] != value
+            }
     text = json.dumps(data, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
