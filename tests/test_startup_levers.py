@@ -158,7 +158,7 @@ def test_a_run_that_leaves_at_once_leaves_its_store_whole(
 
 @pytest.mark.process
 @pytest.mark.mpi
-def test_a_two_rank_run_that_leaves_at_once_finalizes_mpi_and_leaves_its_store_whole(
+def test_a_two_rank_run_ends_through_the_interpreter_and_leaves_its_store_whole(
     write_job, tmp_path, warm_numba_cache
 ):
     job_path, _ = write_job()

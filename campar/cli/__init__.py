@@ -147,7 +147,7 @@ def main(argv=None) -> int:
             # Nothing left to collect that matters: spare the exit the collector's passes
             # over all the program built (after a cold compile, numba's IR).
             gc.freeze()
-    if argv is None and code == 0 and args.command in LEAVE_AT_ONCE and not observed():
+    if argv is None and code == 0 and args.command in LEAVE_AT_ONCE and alone():
         leave(code)
     return code
 
@@ -163,10 +163,21 @@ def observed() -> bool:
     return sys.gettrace() is not None or sys.getprofile() is not None
 
 
+def alone() -> bool:
+    """Whether the program may leave at once: no tracer or profiler watches it and it is no
+    rank of a parallel run — under mpirun the ranks end through the interpreter's exit,
+    which finalizes MPI after every rank's last message (a rank gone at once was seen to
+    take a three-rank run down with it)."""
+    mpi = sys.modules.get("mpi4py.MPI")
+    parallel = mpi is not None and mpi.Is_initialized() and mpi.COMM_WORLD.Get_size() > 1
+    return not observed() and not parallel
+
+
 def leave(code: int) -> None:
     """End the program now with ``code``, its work done and its store closed: what the
     interpreter's exit would do that matters — log handlers flushed and closed, MPI
-    finalized under mpirun, the standard streams flushed — then ``os._exit``, without
+    finalized where a one-rank run initialized it, the standard streams flushed — then
+    ``os._exit``, without
     tearing down every module and object the program built (numba's compiled code, zarr's
     event loop and threads, idle by now), the larger part of a run's exit
     (benchmarks/RESULTS.md, "Start-up")."""
