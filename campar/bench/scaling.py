@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from ..errors import JobError
 from .common import machine_line
 
 MPIRUN = Path(sys.executable).parent / "mpirun"
@@ -46,6 +47,8 @@ QUICK = {"size": 8, "ranks": [1, 2], "repeat": 2}
 
 def write_job(source: Path, directory: Path, size: int, rows: int | None) -> Path:
     """``source`` at size × size points (rows chains a tile, else the job's own) without a store."""
+    if not source.is_file():
+        raise JobError(f"{source}: no such job file (give --job PATH)")
     data = yaml.safe_load(source.read_text())
     data["name"] = f"bench_{size}"
     for axis in data["sweep"].values():
