@@ -41,7 +41,9 @@ BASIN = {
 MONOSTABLE = merge(BASIN, {"fixed": {"omega": 5.8, "mu_kn": 0.82}})
 
 
-@pytest.fixture(scope="module")
+# Session-wide: the test under mpirun that compares with it runs apart from the module's
+# others (with the exclusive tests, tests/support/tiers.py), and would build it again.
+@pytest.fixture(scope="session")
 def basin(tmp_path_factory):
     """The BASIN store (Zarr) and its job."""
     return computed_store(tmp_path_factory, BASIN)

@@ -273,12 +273,15 @@ def interrupt_until_complete(job_file, job, mpi: bool, rng, how: str, timing) ->
     return counts
 
 
+# The serial cases share the machine with the other tests; those under mpirun get it alone
+UNDER_MPIRUN = pytest.param(True, marks=pytest.mark.mpi)
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("mpi", [False, True], ids=["serial", "mpi"])
+@pytest.mark.parametrize("mpi", [False, UNDER_MPIRUN], ids=["serial", "mpi"])
 @pytest.mark.parametrize("suffix", BACKENDS)
 @pytest.mark.parametrize("how", ["kill", "signal"])
 @pytest.mark.process
-@pytest.mark.mpi
 @pytest.mark.timeout(1200)  # runs again and again until one completes (up to 60)
 def test_runs_interrupted_at_random_moments_resume_bitwise_identical(
     write_job, tmp_path, suffix, mpi, how
@@ -305,10 +308,9 @@ def test_runs_interrupted_at_random_moments_resume_bitwise_identical(
 @pytest.mark.parametrize(
     ("suffix", "mpi"),
     # under mpirun a Zarr store's worker writes its own tiles: its full disk ends the run too
-    [*((suffix, False) for suffix in BACKENDS), (".zarr", True)],
+    [*((suffix, False) for suffix in BACKENDS), pytest.param(".zarr", True, marks=pytest.mark.mpi)],
 )
 @pytest.mark.process
-@pytest.mark.mpi
 def test_runs_on_a_full_disk_fail_in_one_line_and_resume_identical(
     write_job, tmp_path, suffix, mpi
 ):

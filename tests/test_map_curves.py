@@ -32,7 +32,9 @@ TONGUE = plane_job(
 )
 
 
-@pytest.fixture(scope="module")
+# Session-wide: the test under mpirun that compares with it runs apart from the module's
+# others (with the exclusive tests, tests/support/tiers.py), and would build it again.
+@pytest.fixture(scope="session")
 def tongue(tmp_path_factory):
     """The map, and its curves computed serially by the command."""
     where = tmp_path_factory.mktemp("tongue")

@@ -49,7 +49,9 @@ GRID = {
 BISTABLE, MONOSTABLE = (0, 1), (2, 1)  # (row, column): (0.86, 5.8) and (0.82, 5.8)
 
 
-@pytest.fixture(scope="module")
+# Session-wide: the test under mpirun that compares with it runs apart from the module's
+# others (with the exclusive tests, tests/support/tiers.py), and would build it again.
+@pytest.fixture(scope="session")
 def census(tmp_path_factory):
     """The GRID map's store (Zarr) and its job."""
     return computed_store(tmp_path_factory, GRID)

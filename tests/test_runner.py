@@ -5,6 +5,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -105,9 +106,18 @@ def test_a_job_without_store_is_a_job_error_and_creates_nothing(write_job, tmp_p
 
 
 def signal_during(
-    monkeypatch, index, *, sleep=0.0, again_after=None, signum=signal.SIGTERM, after=0.0
+    monkeypatch,
+    index,
+    *,
+    sleep=0.0,
+    again_after=None,
+    signum=signal.SIGTERM,
+    after=0.0,
+    hold: threading.Event | None = None,
 ):
-    """Make run_tile signal this process while computing tile ``index``, ``after`` s in."""
+    """Make run_tile signal this process while computing tile ``index``, ``after`` s in,
+    then sleep ``sleep`` s, or with ``hold``, wait until the test sets it (a tile that
+    never ends by itself)."""
 
     def tile_with_signal(job, tile):
         if tile.index == index:
@@ -116,6 +126,8 @@ def signal_during(
             if again_after is not None:
                 time.sleep(again_after)
                 os.kill(os.getpid(), signum)
+            if hold is not None:
+                hold.wait()
             time.sleep(sleep)
         return run_tile(job, tile)
 
@@ -150,23 +162,32 @@ def test_a_signal_takes_back_the_tile_queued_on_the_lane(write_job, monkeypatch)
     assert tiles_done(job.store) == [True, True, False, False, False, False]
 
 
+# The tile in flight below never ends until the test lets it: the run returns only by
+# abandoning it, whatever the machine's speed (a run that waits for it hangs, and the
+# test's timeout fails it).
+
+
 def test_a_second_signal_abandons_the_tile_in_flight(write_job, monkeypatch):
     _, job = write_job()
-    signal_during(monkeypatch, 2, again_after=1.3, sleep=30)
-    start = time.monotonic()
-    with pytest.raises(Interrupted):
-        runner.run_job(job, grace=60)
-    assert time.monotonic() - start < 10
+    release = threading.Event()
+    signal_during(monkeypatch, 2, again_after=1.3, hold=release)
+    try:
+        with pytest.raises(Interrupted):
+            runner.run_job(job, grace=3600)  # only the second signal ends the wait
+    finally:
+        release.set()
     assert tiles_done(job.store) == [True, True, False, False, False, False]
 
 
 def test_the_grace_period_bounds_the_wait_for_tiles_in_flight(write_job, monkeypatch):
     _, job = write_job()
-    signal_during(monkeypatch, 0, sleep=30)
-    start = time.monotonic()
-    with pytest.raises(Interrupted):
-        runner.run_job(job, grace=0.5)
-    assert time.monotonic() - start < 10
+    release = threading.Event()
+    signal_during(monkeypatch, 0, hold=release)
+    try:
+        with pytest.raises(Interrupted):
+            runner.run_job(job, grace=0.5)
+    finally:
+        release.set()
     assert not any(tiles_done(job.store))
 
 

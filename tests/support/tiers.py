@@ -27,7 +27,9 @@ forks a helper to split a cold compile, in whichever test compiles first).
 Under pytest-xdist, a test marked ``mpi`` or ``slurm`` runs alone: it takes an exclusive
 lock that every other test takes shared, so its ranks get the machine's cores instead of
 sharing them with another worker's test (a pending exclusive request stops new shared
-ones, so the MPI tests are not starved).
+ones, so the MPI tests are not starved). Each worker runs its exclusive tests first, back
+to back under one hold, then the modules with tests of other tiers, then the unit tests
+(``run_order``): the machine is handed over once, and no long test starts last.
 
 Every test has 120 s (pytest-timeout; longer where a test says why with
 ``@pytest.mark.timeout``). The timeout catches a hang, not a slow machine: on a machine
@@ -185,40 +187,88 @@ def tier_of(markers) -> str:
     return "unit"
 
 
+def is_exclusive(item: pytest.Item) -> bool:
+    """A test that gets the machine to itself under xdist (its marker says it starts ranks)."""
+    return any(item.get_closest_marker(m) for m in EXCLUSIVE)
+
+
+def run_order(items: list[pytest.Item]) -> list[pytest.Item]:
+    """The order an xdist worker runs its tests in: the exclusive ones first, one after the
+    other, then every module that holds a test of another tier, then the rest.
+
+    Exclusive tests scattered through the run make the other worker stop at each, and the
+    exclusive one wait for the other's test in flight (a slow one, often): together first,
+    they run back to back on the worker that holds them (``SharedLock``, ``keep``) while
+    the other waits once. The longer tests next and the unit tests last leave no long test
+    starting alone at the end. Apart from the exclusive tests a module's tests stay
+    together, in their order, so its module-scoped fixtures are set up once."""
+    heavy = {
+        item.path
+        for item in items
+        if not is_exclusive(item) and tier_of({m.name for m in item.iter_markers()}) != "unit"
+    }
+    return sorted(
+        items, key=lambda item: 0 if is_exclusive(item) else 1 if item.path in heavy else 2
+    )
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     for item in items:
         if any(item.get_closest_marker(m) for m in IMPLY_PROCESS):
             item.add_marker("process")
-    if _selects_all(config):
-        return
-    kept, deselected = [], []
-    for item in items:
-        tiered = any(item.get_closest_marker(m) for m in TIERS)
-        (deselected if tiered else kept).append(item)
-    if deselected:
-        config.hook.pytest_deselected(items=deselected)
-        items[:] = kept
+    if not _selects_all(config):
+        kept, deselected = [], []
+        for item in items:
+            tiered = any(item.get_closest_marker(m) for m in TIERS)
+            (deselected if tiered else kept).append(item)
+        if deselected:
+            config.hook.pytest_deselected(items=deselected)
+            items[:] = kept
+    if getattr(config, "workerinput", None) is not None:
+        items[:] = run_order(items)  # every worker collects the same order, as xdist needs
 
 
 class SharedLock:
     """A readers-writer lock between xdist workers on two files (flock): a turnstile that
-    an exclusive request holds while it waits, so shared requests queue behind it."""
+    an exclusive request holds while it waits, so shared requests queue behind it.
+
+    An exclusive hold may be kept for the worker's next test when that one is exclusive
+    too: the other workers' tests then wait until the last of a run of exclusive tests,
+    instead of one of theirs starting between each two (and the next exclusive test
+    waiting for it to end)."""
 
     def __init__(self, folder: Path) -> None:
         self.turnstile = os.open(folder / "turnstile.lock", os.O_RDWR | os.O_CREAT)
         self.room = os.open(folder / "room.lock", os.O_RDWR | os.O_CREAT)
+        self.kept = False  # the room is held exclusively, from the test before
 
-    @contextlib.contextmanager
-    def hold(self, exclusive: bool):
+    def _acquire(self, exclusive: bool) -> None:
         fcntl.flock(self.turnstile, fcntl.LOCK_EX)
         try:
             fcntl.flock(self.room, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
         finally:
             fcntl.flock(self.turnstile, fcntl.LOCK_UN)
+
+    @contextlib.contextmanager
+    def hold(self, exclusive: bool, keep: bool = False):
+        """The room, shared or exclusive, for one test; ``keep``: an exclusive hold stays
+        after it, for the next test (which must then ask for it exclusively)."""
+        if self.kept and not exclusive:
+            self.release()
+        if not self.kept:
+            self._acquire(exclusive)
+        self.kept = False
         try:
             yield
         finally:
-            fcntl.flock(self.room, fcntl.LOCK_UN)
+            if exclusive and keep:
+                self.kept = True
+            else:
+                self.release()
+
+    def release(self) -> None:
+        fcntl.flock(self.room, fcntl.LOCK_UN)
+        self.kept = False
 
 
 _LOCK: list[SharedLock] = []
@@ -239,8 +289,9 @@ def _worker_lock(config: pytest.Config) -> SharedLock | None:
 @pytest.hookimpl(hookwrapper=True, tryfirst=True)
 def pytest_runtest_protocol(item: pytest.Item, nextitem):
     lock = _worker_lock(item.config)
-    exclusive = any(item.get_closest_marker(m) for m in EXCLUSIVE)
-    with lock.hold(exclusive) if lock else contextlib.nullcontext():
+    exclusive = is_exclusive(item)
+    keep = exclusive and nextitem is not None and is_exclusive(nextitem)
+    with lock.hold(exclusive, keep) if lock else contextlib.nullcontext():
         WATCH.take()
         WATCH.active = True
         try:
