@@ -420,13 +420,15 @@ def test_a_400_by_400_map_renders_to_png(tmp_path):
     arrays["kind"][np.sin(40 * w) * np.cos(60 * s) < 0.5] = P  # mostly periodic, like a real map
     grid = MapGrid(w[0], s[:, 0], "mu_kn", 7, {"f0": 0.5, "mu_cn": 0.8, "zeta": 0.2})
     for what in ("labels", "dc"):
-        start = time.perf_counter()
+        start = time.process_time()  # CPU: the other processes of a busy machine do not count
         path = tmp_path / f"{what}.png"
         plot_map(grid, arrays, what).savefig(path, dpi=300)
-        elapsed = time.perf_counter() - start
-        print(f"400×400 {what} map → PNG at 300 dpi: {elapsed:.2f} s")
+        elapsed = time.process_time() - start
+        print(f"400×400 {what} map → PNG at 300 dpi: {elapsed:.2f} CPU s")
         assert path.read_bytes().startswith(b"\x89PNG")
-        assert elapsed < 30.0  # target < 5 s; generous so a busy machine does not fail it
+        # one mesh: seconds; a renderer that draws cell by cell (160 000 artists): minutes.
+        # The bound catches that, not a slower CPU.
+        assert elapsed < 30.0
 
 
 def test_parse_range():
