@@ -136,11 +136,14 @@ def force_peak(rhs, method, w, t0, h, p, mode, guess):
 
 
 @hot
-def step_models(h, mode, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
+def step_models(h, mode, k0, k1):
     """(reads, pn_hi): whether step_extremes reads the step's dense output (the models see
     an interior extremum of ε, or a peak of Pn the end rates bracket), and where it does
     not, the largest Pn step_extremes returns (its ε has no interior extremum then).
-    Cheap, for every step: step_extremes is called only where ``reads``."""
+    k0, k1: model.contact_kinematics at the step's ends. Cheap, for every step:
+    step_extremes is called only where ``reads``."""
+    e0, de0, _, pn0, dpn0 = k0
+    e1, de1, _, pn1, dpn1 = k1
     if hermite_extremum(e0, de0 * h, e1, de1 * h, MINIMUM)[0] > 0.0:
         return True, 0.0
     if hermite_extremum(e0, de0 * h, e1, de1 * h, MAXIMUM)[0] > 0.0:
@@ -156,12 +159,12 @@ def step_models(h, mode, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
 
 
 @hot
-def step_extremes(
-    rhs, method, w, t0, h, p, mode, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1
-):
+def step_extremes(rhs, method, w, t0, h, p, mode, k0, k1):
     """ε's interior minimum and maximum (NaN: none) and Pn's largest value over the step
-    just accepted from t0 (size h), from the values and rates at its ends (model.kinematics)
-    and its dense output."""
+    just accepted from t0 (size h), from the values and rates at its ends (k0, k1:
+    model.contact_kinematics, ε with two rates and Pn with one) and its dense output."""
+    e0, de0, dde0, pn0, dpn0 = k0
+    e1, de1, dde1, pn1, dpn1 = k1
     h2 = h * h
     dip = math.nan
     peak = math.nan
