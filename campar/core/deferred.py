@@ -91,9 +91,10 @@ def defer_step(row, w, t0, h, mode, free, impact, k0, k1):
 
 
 @hot
-def refine_deferred(row, w, mode, p, method):
+def refine_deferred(row, w, mode, p, method, extremes):
     """Refine the steps the revolution of ``row`` deferred and fold their extremes into
-    its statistics, in the steps' order; w (N_STATE components) and mode are scratch. The
+    its statistics, in the steps' order (``extremes``: as extrema.step_extremes's); w
+    (N_STATE components) and mode are scratch. The
     contact law's impact velocity is the step's while it is refined, then the cell's
     again."""
     if row.shape[0] < DEFER_COLUMNS:
@@ -119,7 +120,9 @@ def refine_deferred(row, w, mode, p, method):
         w.ctrl[CTRL_DENSE] = 1.0 if prepared else 0.0
         k0 = (s[ENDS], s[ENDS + 1], s[ENDS + 2], s[ENDS + 3], s[ENDS + 4])
         k1 = (s[ENDS + 5], s[ENDS + 6], s[ENDS + 7], s[ENDS + 8], s[ENDS + 9])
-        dip, peak, pn_hi = step_extremes(model.rhs, method, w, s[T0], s[H], p, mode, k0, k1)
+        dip, peak, pn_hi = step_extremes(
+            model.rhs, method, w, s[T0], s[H], p, mode, k0, k1, extremes
+        )
         # the step's time and end values are in the row already (h 0 adds nothing)
         add_step_stats(row, 0.0, s[FREE] == 1.0, k0[0], k1[0], dip, peak, pn_hi)
     row[DEFERRED] = 0.0

@@ -39,6 +39,11 @@ from .model import (
 
 MAX_STUCK_EVENTS = 8  # zero-length events in a row before a cell is declared stuck
 
+# What a revolution folds into its statistics row (run_revolution's ``stats``).
+NO_STATS = 0  # detachments alone (a label's p)
+DUTY_STATS = 1  # … the time separated and ε's interior minima (the grazing flag) too
+ALL_STATS = 2  # every REV_* column: ε's extremes, Pn's largest value, the touch
+
 
 class Trace(NamedTuple):
     """Recorder of an orbit for figures; length-0 arrays record nothing.
@@ -110,12 +115,13 @@ def record_event(rec, t, x, contact, which):
 
 
 @hot
-def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
+def run_revolution(x, f, p, opt, w, mode, row, stats, step_limit, rec):
     """Integrate one cam revolution from θ = 0 to 2π, in place on x.
 
     Steps end on every cam phase boundary and every contact event; with the
     variational part, Φ starts at I, so x[2:6] ends as the Jacobian of the
-    one-revolution map. Fills the revolution's statistics in ``row``; a row wider than
+    one-revolution map. Fills the revolution's statistics in ``row``, those ``stats``
+    names (NO_STATS, DUTY_STATS, ALL_STATS); a row wider than
     N_REV_STATS (the chain's) keeps the steps whose extrema need the dense output for
     deferred.refine_deferred instead of refining them. Fails with STEP_LIMIT once the
     workspace has counted more than step_limit steps.
@@ -148,7 +154,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                 return STEP_LIMIT
             t_prev = t
             contact = mode[1]
-            if want_stats and not fresh:
+            if stats != NO_STATS and not fresh:
                 k0 = contact_kinematics(t, x, f, p, mode)
             if rec is not None:
                 rec.prev[0] = x[0]
@@ -160,11 +166,12 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                 stuck = 0
                 if rec is not None:
                     record_step(rec, opt.method, w, t_prev, t, x, p, mode)
-                if want_stats:
+                if stats != NO_STATS:
                     k1 = contact_kinematics(t, x, f, p, mode)
                     h = t - t_prev
                     free = released(contact, p)
-                    dense, pn_hi = step_models(h, mode, k0, k1)
+                    extremes = stats == ALL_STATS
+                    dense, pn_hi = step_models(h, mode, k0, k1, extremes)
                     if not dense:
                         add_step_stats(row, h, free, k0[0], k1[0], math.nan, math.nan, pn_hi)
                     elif defer_step(
@@ -174,7 +181,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                         add_step_stats(row, h, free, k0[0], k1[0], math.nan, math.nan, pn_hi)
                     else:
                         dip, peak, pn_hi = step_extremes(
-                            model.rhs, opt.method, w, t_prev, h, p, mode, k0, k1
+                            model.rhs, opt.method, w, t_prev, h, p, mode, k0, k1, extremes
                         )
                         add_step_stats(row, h, free, k0[0], k1[0], dip, peak, pn_hi)
                     k0 = k1
