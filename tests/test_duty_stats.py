@@ -75,6 +75,6 @@ def test_a_duty_cycle_map_refines_the_dips_alone_with_the_same_numbers():
         assert got.tobytes() == full_work.revs[window, column].tobytes(), column
     assert np.isfinite(full_work.revs[window, REV_GRAZE]).any()  # a dip was refined
     # its transient revolutions (not refined) kept fewer steps: no maxima, no Pn peaks
-    kept_full = full_work.revs[: k - m, DEFERRED].sum()
-    kept_duty = duty_work.revs[: k - m, DEFERRED].sum()
+    kept_full = full_work.kept[: k - m, DEFERRED].sum()
+    kept_duty = duty_work.kept[: k - m, DEFERRED].sum()
     assert 0 < kept_duty < kept_full
