@@ -1,6 +1,6 @@
 """The chain's deferred extrema (campar.core.deferred) are the extrema refined at once.
 
-The reference is the same chain with rows of kept steps too narrow to keep one, where every
+The reference is the same chain with statistics rows of N_REV_STATS columns, where every
 step's extremum is refined on the dense output as the step is taken (extrema.step_extremes,
 checked against SciPy in test_extrema): every output of every cell, bit for bit, for the
 paper's law and others — a law that keeps the impact velocity, another cam law, each
@@ -12,7 +12,7 @@ same outputs, dips and time separated as the map that refines every extremum.
 import numpy as np
 import pytest
 
-from campar.core.analysis import REV_EPS_MIN, REV_GRAZE, REV_T_FREE
+from campar.core.analysis import N_REV_STATS, REV_EPS_MIN, REV_GRAZE, REV_T_FREE
 from campar.core.deferred import DEFER_COLUMNS, DEFERRED
 from campar.core.kernel import OUT_EXTREMA, OUT_STATS, chain_compiled, make_chain_work
 from campar.core.model import kernel_law, start_chain
@@ -40,8 +40,8 @@ def job_of(model=None, integrator=None, outputs=("label", "dc", "eps", "pn", "mu
 
 
 def run(job, deferring):
-    """(outputs, chain work) of the job's chain 0, with rows of kept steps (deferring) or
-    with no room for a kept step (each extremum refined at once)."""
+    """(outputs, chain work) of the job's chain 0, statistics rows wide (deferring) or
+    of N_REV_STATS columns (each extremum refined at once)."""
     par = chain_parameters(job, 0)
     cs = cell_settings(job)
     out = allocate_outputs(len(par["omega"]), cs.output_bits, job.n_sections)
@@ -49,7 +49,7 @@ def run(job, deferring):
     law = kernel_law(job.law(0))
     cw = make_chain_work(cs)
     if not deferring:
-        cw = cw._replace(kept=np.zeros((cw.kept.shape[0], 0)))
+        cw = cw._replace(revs=np.zeros((cw.revs.shape[0], N_REV_STATS)))
     cw.revolution[:] = revolution_link(solver, cs, cw.w6, law=law)
     start_chain(law)
     args = [par[name] for name in ("omega", "zeta", "f0", "mu_kn", "mu_cn")]
@@ -75,14 +75,14 @@ def test_deferred_extrema_are_the_extrema_refined_at_once(case):
     job = job_of(model, integrator)
     deferred, cw = run(job, True)
     at_once, narrow = run(job, False)
-    assert cw.kept.shape[1] == DEFER_COLUMNS
+    assert cw.revs.shape[1] == DEFER_COLUMNS
     for name, values in deferred._asdict().items():
         assert values.tobytes() == getattr(at_once, name).tobytes(), name
     assert np.isfinite(deferred.eps_min).all() and np.isfinite(deferred.pn_max).all()
     assert (deferred.eps_min < 0.0).any()  # some cells fly: dips were refined
     # steps were deferred (some are left in transient revolutions' rows, or DOP853
     # evaluated the field to prepare the windows' dense outputs); the narrow chain none
-    assert (cw.kept[:, DEFERRED] > 0).any() or cw.refine.counts[2] > 0
+    assert (cw.revs[:, DEFERRED] > 0).any() or cw.refine.counts[2] > 0
     if integrator.get("method", "dop853") == "dop853":
         assert cw.refine.counts[2] > 0
     assert narrow.refine.counts[2] == 0
@@ -93,7 +93,7 @@ def test_a_map_without_statistics_defers_and_refines_nothing():
     out, cw = run(job, True)
     assert (out.n > 0).any()
     assert np.isnan(out.dc).all() and np.isnan(out.eps_min).all()
-    assert not cw.kept[:, DEFERRED].any()
+    assert not cw.revs[:, DEFERRED].any()
     assert not cw.refine.counts.any()
 
 
@@ -122,6 +122,6 @@ def test_a_duty_cycle_map_refines_the_dips_alone_with_the_same_numbers():
         assert got.tobytes() == full_work.revs[window, column].tobytes(), column
     assert np.isfinite(full_work.revs[window, REV_GRAZE]).any()  # a dip was refined
     # its transient revolutions (not refined) kept fewer steps: no maxima, no Pn peaks
-    kept_full = full_work.kept[: k - m, DEFERRED].sum()
-    kept_duty = duty_work.kept[: k - m, DEFERRED].sum()
+    kept_full = full_work.revs[: k - m, DEFERRED].sum()
+    kept_duty = duty_work.revs[: k - m, DEFERRED].sum()
     assert 0 < kept_duty < kept_full

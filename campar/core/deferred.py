@@ -6,31 +6,28 @@ verdict reads nothing of ε's and Pn's extremes (only section points, Jacobians 
 log-stretch). So the chain's revolutions do not refine an extremum on the dense output
 while they run: a step whose models see one (extrema.step_models) folds only its end
 values into the revolution's statistics and keeps what its refinement needs in the
-revolution's row of kept steps (kernel.ChainWork.kept) — its start, size, mode, the contact law's
+revolution's row, after the statistics — its start, size, mode, the contact law's
 impact velocity, the end values and rates, and the two state components of the step's
 stages (or of its dense output, where the event search has prepared it already).
 ``refine_deferred`` redoes exactly what extrema.step_extremes would have done then, in
 a work buffer of its own, for the window's revolutions only: the same numbers, on a
 fraction of the steps.
 
-The kept steps have an array of their own, beside the statistics rows: the transient's
-verdicts read the statistics of many revolutions (the log-stretch), and rows as wide as
-the kept steps spread them over pages. A row of kept steps narrower than DEFER_COLUMNS
-(shooting's, the tracer's) keeps nothing; neither does a step that finds its row's
-slots full: it is refined at once. Refining changes the order in
+A row of N_REV_STATS columns (shooting, the tracer) defers nothing; neither does a step
+that finds its row's slots full: it is refined at once. Refining changes the order in
 which interior extremes reach a row only then, which can matter only to REV_TOUCH
 between two extremes of equal |ε|, and the chain reports no REV_TOUCH.
 """
 
 from . import dop853, model
-from .analysis import add_step_stats
+from .analysis import N_REV_STATS, add_step_stats
 from .contact import impact_velocity, note_impact
 from .extrema import step_extremes
 from .integrator import CTRL_DENSE
 from .jit import hot
 from .model import N_STATE
 
-DEFERRED = 0  # column of a row of kept steps: steps kept so far in the revolution
+DEFERRED = N_REV_STATS  # column of a chain's row: steps deferred so far in the revolution
 SLOTS = 16  # steps a revolution defers at most (a revolution holds a few extrema)
 KEPT_STAGES = dop853.N_STAGES + 1  # stage rows every method's dense output is built from
 
@@ -48,26 +45,26 @@ Y_NEW = Y_OLD + N_STATE
 STAGES = Y_NEW + N_STATE  # KEPT_STAGES rows of N_STATE components (or the coefficients)
 SLOT = STAGES + KEPT_STAGES * N_STATE
 
-DEFER_COLUMNS = 1 + SLOTS * SLOT  # width of a chain's row of kept steps
+DEFER_COLUMNS = N_REV_STATS + 1 + SLOTS * SLOT  # width of a chain's statistics row
 
 
 @hot
-def clear_deferred(kept):
-    if kept.shape[0] >= DEFER_COLUMNS:
-        kept[DEFERRED] = 0.0
+def clear_deferred(row):
+    if row.shape[0] > N_REV_STATS:
+        row[DEFERRED] = 0.0
 
 
 @hot
-def defer_step(kept, w, t0, h, mode, free, impact, k0, k1):
+def defer_step(row, w, t0, h, mode, free, impact, k0, k1):
     """Keep the step just accepted (its StepWork w: y_old, y_new, K, F, ctrl) for
     refine_deferred, with the kinematics k0, k1 at its ends (model.contact_kinematics);
-    False when the row of kept steps has no slot left (a narrower one has none)."""
-    if kept.shape[0] < DEFER_COLUMNS:
+    False when the row has no slot left (a row of N_REV_STATS columns has none)."""
+    if row.shape[0] < DEFER_COLUMNS:
         return False
-    count = int(kept[DEFERRED])
+    count = int(row[DEFERRED])
     if count >= SLOTS:
         return False
-    s = kept[1 + count * SLOT : 1 + (count + 1) * SLOT]
+    s = row[N_REV_STATS + 1 + count * SLOT : N_REV_STATS + 1 + (count + 1) * SLOT]
     s[T0] = t0
     s[H] = h
     s[MODE0] = mode[0]
@@ -89,23 +86,23 @@ def defer_step(kept, w, t0, h, mode, free, impact, k0, k1):
     for r in range(rows):
         for i in range(N_STATE):
             s[STAGES + r * N_STATE + i] = w.F[r, i] if prepared else w.K[r, i]
-    kept[DEFERRED] = count + 1
+    row[DEFERRED] = count + 1
     return True
 
 
 @hot
-def refine_deferred(row, kept, w, mode, p, method, extremes):
-    """Refine the steps the revolution of ``row`` kept (``kept``) and fold their extremes into
+def refine_deferred(row, w, mode, p, method, extremes):
+    """Refine the steps the revolution of ``row`` deferred and fold their extremes into
     its statistics, in the steps' order (``extremes``: as extrema.step_extremes's); w
     (N_STATE components) and mode are scratch. The
     contact law's impact velocity is the step's while it is refined, then the cell's
     again."""
-    if kept.shape[0] < DEFER_COLUMNS:
+    if row.shape[0] < DEFER_COLUMNS:
         return
-    count = int(kept[DEFERRED])
-    impact = impact_velocity(p.contact)
+    count = int(row[DEFERRED])
+    kept = impact_velocity(p.contact)
     for k in range(count):
-        s = kept[1 + k * SLOT : 1 + (k + 1) * SLOT]
+        s = row[N_REV_STATS + 1 + k * SLOT : N_REV_STATS + 1 + (k + 1) * SLOT]
         mode[0] = int(s[MODE0])
         mode[1] = int(s[MODE1])
         note_impact(p.contact, s[IMPACT])
@@ -128,5 +125,5 @@ def refine_deferred(row, kept, w, mode, p, method, extremes):
         )
         # the step's time and end values are in the row already (h 0 adds nothing)
         add_step_stats(row, 0.0, s[FREE] == 1.0, k0[0], k1[0], dip, peak, pn_hi)
-    kept[DEFERRED] = 0.0
-    note_impact(p.contact, impact)
+    row[DEFERRED] = 0.0
+    note_impact(p.contact, kept)

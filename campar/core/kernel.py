@@ -23,7 +23,6 @@ from numba import njit, typeof
 
 from . import model
 from .analysis import (
-    N_REV_STATS,
     cycle_jacobian,
     distinct_period,
     exponent_window,
@@ -147,8 +146,7 @@ class ChainWork(NamedTuple):
     xs: np.ndarray  # (R+1, 2) section points
     jac: np.ndarray  # (R, 4) one-revolution Jacobians
     est: np.ndarray  # (n_max, n_max, 3) cycle estimates by period (assess_revolution)
-    revs: np.ndarray  # (R, N_REV_STATS) statistics of each revolution
-    kept: np.ndarray  # (R, deferred.DEFER_COLUMNS) the steps each keeps for its extrema
+    revs: np.ndarray  # (R, deferred.DEFER_COLUMNS): statistics, then the deferred steps
     u: np.ndarray  # tangent vector for the Lyapunov exponent
     x_start: np.ndarray  # (2,) the start of the current cell
     prev: np.ndarray  # (3, 2) final states of the last three cells, newest first
@@ -172,8 +170,7 @@ def make_chain_work(cs) -> ChainWork:
         xs=np.zeros((rows + 1, 2)),
         jac=np.zeros((rows, 4)),
         est=np.full((cs.n_max, cs.n_max, 3), -1.0),
-        revs=np.zeros((rows, N_REV_STATS)),
-        kept=np.zeros((rows, DEFER_COLUMNS)),
+        revs=np.zeros((rows, DEFER_COLUMNS)),
         u=np.array([1.0, 0.0]),
         x_start=np.empty(2),
         prev=np.empty((3, 2)),
@@ -224,7 +221,7 @@ def record_window(out, i, cw, first, count, period, p, method, extremes):
     deferred extrema refined first (campar.core.deferred; ``extremes``: all of them, else
     ε's minima alone)."""
     for j in range(first, first + count):
-        refine_deferred(cw.revs[j], cw.kept[j], cw.refine, cw.refine_mode, p, method, extremes)
+        refine_deferred(cw.revs[j], cw.refine, cw.refine_mode, p, method, extremes)
     t_free, detach, eps_min, eps_max, pn_max, stretch, graze = window_stats(cw.revs, first, count)
     out.p[i] = int(detach + 0.5)
     out.dc[i] = t_free / (count * period)

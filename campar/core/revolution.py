@@ -115,14 +115,14 @@ def record_event(rec, t, x, contact, which):
 
 
 @hot
-def run_revolution(x, f, p, opt, w, mode, row, kept, stats, step_limit, rec):
+def run_revolution(x, f, p, opt, w, mode, row, stats, step_limit, rec):
     """Integrate one cam revolution from θ = 0 to 2π, in place on x.
 
     Steps end on every cam phase boundary and every contact event; with the
     variational part, Φ starts at I, so x[2:6] ends as the Jacobian of the
     one-revolution map. Fills the revolution's statistics in ``row``, those ``stats``
-    names (NO_STATS, DUTY_STATS, ALL_STATS); a row ``kept`` of deferred.DEFER_COLUMNS
-    (the chain's) keeps the steps whose extrema need the dense output for
+    names (NO_STATS, DUTY_STATS, ALL_STATS); a row wider than
+    N_REV_STATS (the chain's) keeps the steps whose extrema need the dense output for
     deferred.refine_deferred instead of refining them. Fails with STEP_LIMIT once the
     workspace has counted more than step_limit steps.
     Records the orbit into ``rec`` unless it is None: numba then prunes every
@@ -134,7 +134,7 @@ def run_revolution(x, f, p, opt, w, mode, row, kept, stats, step_limit, rec):
         x[4] = 0.0
         x[5] = 1.0
     reset_revolution_stats(row)
-    clear_deferred(kept)
+    clear_deferred(row)
     mode[0] = RISE
     eps, deps = gap(0.0, x, p, mode[0])  # not RISE: numba would compile a variant for the literal
     mode[1] = contact_mode(eps, deps, p)
@@ -175,7 +175,7 @@ def run_revolution(x, f, p, opt, w, mode, row, kept, stats, step_limit, rec):
                     if not dense:
                         add_step_stats(row, h, free, k0[0], k1[0], math.nan, math.nan, pn_hi)
                     elif defer_step(
-                        kept, w, t_prev, h, mode, free, impact_velocity(p.contact), k0, k1
+                        row, w, t_prev, h, mode, free, impact_velocity(p.contact), k0, k1
                     ):
                         pn_hi = max(k0[3], k1[3])
                         add_step_stats(row, h, free, k0[0], k1[0], math.nan, math.nan, pn_hi)

@@ -31,9 +31,7 @@ from numba.extending import intrinsic
 from .model import PAPER_LAW, kernel_law, make_params
 from .revolution import run_revolution, scale_solver_options
 
-VECTOR = types.Array(
-    types.float64, 1, "C"
-)  # the state, its derivative, a statistics row, kept steps
+VECTOR = types.Array(types.float64, 1, "C")  # the state, its derivative, a statistics row
 MODE = types.Array(types.int64, 1, "C")
 
 
@@ -58,7 +56,6 @@ def revolution_args(solver, cs, work, recorder=types.none, law=PAPER_LAW) -> tup
         options,
         typeof(work),
         MODE,
-        VECTOR,
         VECTOR,
         types.int64,
         types.int64,
@@ -98,13 +95,11 @@ def revolution_link(solver, cs, work, recorder=types.none, law=PAPER_LAW) -> np.
 
 
 @intrinsic
-def call_revolution(typingctx, link, x, f, p, opt, w, mode, row, kept, stats, step_limit, rec):
-    """run_revolution(x, f, p, opt, w, mode, row, kept, stats, step_limit, rec) through
+def call_revolution(typingctx, link, x, f, p, opt, w, mode, row, stats, step_limit, rec):
+    """run_revolution(x, f, p, opt, w, mode, row, stats, step_limit, rec) through
     ``link`` (revolution_link): its status. Literal arguments are passed as their plain
     types, the ones revolution_args names."""
-    args = tuple(
-        types.unliteral(a) for a in (x, f, p, opt, w, mode, row, kept, stats, step_limit, rec)
-    )
+    args = tuple(types.unliteral(a) for a in (x, f, p, opt, w, mode, row, stats, step_limit, rec))
     expected = fingerprint(args)
 
     def codegen(context, builder, signature, llargs):

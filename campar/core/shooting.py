@@ -184,8 +184,7 @@ def shoot_compiled(
     steps0 = w.counts[0]
     for k in range(n):
         limit = w.counts[0] + w.counts[1] + max_steps
-        # the row as its own kept steps: too narrow to keep one, every extremum refined at once
-        status = call_revolution(link, x, f, p, opt, w, mode, row, row, ALL_STATS, limit, None)
+        status = call_revolution(link, x, f, p, opt, w, mode, row, ALL_STATS, limit, None)
         if status != OK:
             return status
         if not (math.isfinite(x[0]) and math.isfinite(x[1])):

@@ -42,7 +42,7 @@ def step_revolution(cw, k, variational, p, opt, cs, stats, step_budget):
     x[1] = cw.xs[k, 1]
     limit = w.counts[0] + w.counts[1] + (step_budget - spend(cw))
     status = call_revolution(
-        cw.revolution, x, f, p, opt, w, cw.mode, cw.revs[k], cw.kept[k], stats, limit, None
+        cw.revolution, x, f, p, opt, w, cw.mode, cw.revs[k], stats, limit, None
     )
     if status != OK:
         return status
