@@ -463,7 +463,7 @@ def run_job(
             opened = {}
             with share_outcome(comm, opened):
                 store = open_store(path, job, overwrite=overwrite)
-                opened["text"] = direct_path(store)
+                opened["text"] = direct_path(store) if workers_write_tiles(job, store, comm) else ""
             if comm is not None:
                 lane = ThreadLane(job, f"rank 0 {where}", True, halted, share, tile_work)
             with store, share_outcome(comm):
@@ -471,6 +471,15 @@ def run_job(
         finally:
             if loader is not None:  # nothing of the run goes on once it returns or raises
                 loader.join()
+
+
+def workers_write_tiles(job: Job, store, comm) -> bool:
+    """Whether the workers are to write their own tiles where the store lets them
+    (``wire.direct_path``): unless the job has no more tiles pending than workers. Each
+    of them then computes about one tile, and the master writes a few tiles for less than
+    a worker's import of the store's backend costs (zarr's: about a tenth of a second of
+    CPU, after its tile, on the run's critical path; benchmarks/RESULTS.md)."""
+    return comm is None or len(pending_tiles(job, store.done)) > comm.Get_size() - 1
 
 
 def load_beside(job: Job) -> threading.Thread | None:
