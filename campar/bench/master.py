@@ -80,7 +80,6 @@ def serve(job_path: str, store: str, seconds: float, report: str) -> None:
     kernel_free.run_tile = stand_in_tile(seconds)
     kernel_free.load_kernel = lambda job, share: None  # a worker's lane preloads the kernel
     kernel_free.compile_kernel = lambda job, share: None  # rank 0 compiles before its store opens
-    kernel_free.kernel_cached = lambda job: True  # a serial run loads beside its store
     kernel_free.located_cache_dir = lambda: "no cache"  # where the ranks of a node compile
     sys.modules["campar.sweep.tile"] = kernel_free
     from campar.sweep import runner

@@ -11,7 +11,7 @@ from statistics import NormalDist
 
 import numpy as np
 
-from ..core import numba_internals, split_compile
+from ..core import split_compile
 from ..core.integrator import DOP853, DP54, RK4, SolverOptions, method_tag
 from ..core.jit import collector_paused
 from ..core.jitcache import ensure_fresh_cache
@@ -24,16 +24,12 @@ from ..core.kernel import (
     OUT_STATS,
     CellOutputs,
     CellSettings,
-    chain_compiled,
     chain_loaded,
     chain_signature,
     compile_chain,
-    make_chain_work,
     run_chain,
 )
 from ..core.model import N_STATE
-from ..core.revolution import run_revolution
-from ..core.revolution_call import revolution_args
 from ..core.tracer import compile_tracer
 from .laws import kernel_law
 from .model import Model
@@ -149,32 +145,6 @@ def compile_cells(spec, law, bits: int, n_sections: int, share=None, trace: bool
     with _COMPILING:
         if not chain_loaded(solver, law):
             _compile(spec, law, bits, n_sections, solver, share, trace)
-
-
-def chain_cached(spec, law, bits: int, n_sections: int) -> bool:
-    """Whether loading the chain of ``spec`` and ``law`` (``compile_cells``) compiles
-    nothing: this process holds it, or numba's on-disk cache names both it and the
-    revolution it calls. Only their small helpers are loaded to tell (as
-    ``compile_cells`` loads them first); False where the cache cannot be asked. A runner
-    loads a cached chain on a thread of its own while it opens the store; a cold compile
-    runs before any other thread starts, so that it may fork its helper (split_compile)."""
-    ensure_fresh_cache()
-    solver = solver_options(spec)
-    if chain_loaded(solver, law):
-        return True
-    settings = cell_settings(spec, bits)
-    out = allocate_outputs(0, settings.output_bits, n_sections)
-    x_init = np.array([spec.initial.y, spec.initial.v])
-    work = make_chain_work(settings)
-    found = (
-        numba_internals.cache_indexes(
-            chain_compiled, chain_signature(law, x_init, solver, settings, out)
-        ),
-        numba_internals.cache_indexes(
-            run_revolution, revolution_args(solver, settings, work.w6, law=law)
-        ),
-    )
-    return all(answer is True for answer in found)
 
 
 def _compile(spec, law, bits, n_sections, solver, share, trace) -> None:

@@ -56,7 +56,7 @@ from .plan import Tile, auto_tile_rows, pending_tiles, plan_tiles
 from .progress import Progress, peak_rss_mb, setup_logging  # noqa: F401 (the CLI's)
 from .signals import Signals, early_interruption
 from .store import open_store, read_store, takes_direct_writes
-from .tile import compile_kernel, kernel_cached, load_kernel, located_cache_dir, run_tile
+from .tile import compile_kernel, load_kernel, located_cache_dir, run_tile
 from .wire import (
     BACKOFF_SECONDS,
     TILES_HELD,
@@ -425,52 +425,45 @@ def run_job(
         check_budget(job, max_store=max_store, max_memory=max_memory)
     with Signals() as signals:
         comm = mpi_world()
-        loader = load_beside(job) if comm is None and tile_work is None else None
-        try:
-            if job.tiles.rows == "auto":  # every rank the same number (rank 0's), then the budget
-                job = job.with_tile_rows(agreed_tile_rows(job, path, comm, overwrite))
-                check_budget(job, max_store=max_store, max_memory=max_memory)
-            where = f"on {socket.gethostname()}"
-            share = None if comm is None else cache_sharers(comm, str(located_cache_dir()))
+        if job.tiles.rows == "auto":  # every rank the same number (rank 0's), then the budget
+            job = job.with_tile_rows(agreed_tile_rows(job, path, comm, overwrite))
+            check_budget(job, max_store=max_store, max_memory=max_memory)
+        where = f"on {socket.gethostname()}"
+        share = None if comm is None else cache_sharers(comm, str(located_cache_dir()))
 
-            def halted() -> bool:  # a lane starts no tile once a stop signal came
-                return signals.count > 0
+        def halted() -> bool:  # a lane starts no tile once a stop signal came
+            return signals.count > 0
 
-            if comm is not None and comm.Get_rank() > 0:
-                # The worker's lane loads the kernel while rank 0 opens the store (in rank 0's
-                # own process the two would take turns on the GIL).
-                lane = ThreadLane(
-                    job, f"rank {comm.Get_rank()} {where}", True, halted, share, tile_work
-                )
-                direct = receive_outcome(comm)  # of opening the store: where to write, if at all
-                work(comm, job, signals, lane, direct)
-                receive_outcome(comm)  # of the run
-                return RunSummary("worker", {})
-            # Serial: loaded from numba's cache beside the store's opening (``load_beside``),
-            # or compiled before the store opens and before the lane's thread starts: the
-            # process then has one thread (zarr starts one of its own when the store opens),
-            # so a cold compile may fork a helper (campar.core.split_compile). Either way the
-            # first tile runs at full speed. A store with nothing pending then has loaded the
-            # kernel for nothing (a compile if the cache is cold).
-            # Under MPI every worker waits for the store: rank 0 opens it first, and its lane
-            # loads the kernel as a worker's does (a cold compile split between the ranks of a
-            # node, ``share``) while the master hands out tiles, so the workers start one
-            # kernel load sooner (benchmarks/RESULTS.md, "Start-up").
-            if comm is None and loader is None:
-                (tile_work.load if tile_work else compile_kernel)(job, share)
-            if comm is None:
-                lane = ThreadLane(job, f"rank 0 {where}", halted=halted, tile_work=tile_work)
-            opened = {}
-            with share_outcome(comm, opened):
-                store = open_store(path, job, overwrite=overwrite)
-                opened["text"] = direct_path(store) if workers_write_tiles(job, store, comm) else ""
-            if comm is not None:
-                lane = ThreadLane(job, f"rank 0 {where}", True, halted, share, tile_work)
-            with store, share_outcome(comm):
-                return run_master(job, store, signals, comm, grace, lane, bool(opened["text"]))
-        finally:
-            if loader is not None:  # nothing of the run goes on once it returns or raises
-                loader.join()
+        if comm is not None and comm.Get_rank() > 0:
+            # The worker's lane loads the kernel while rank 0 opens the store (in rank 0's
+            # own process the two would take turns on the GIL).
+            lane = ThreadLane(
+                job, f"rank {comm.Get_rank()} {where}", True, halted, share, tile_work
+            )
+            direct = receive_outcome(comm)  # of opening the store: where to write, if at all
+            work(comm, job, signals, lane, direct)
+            receive_outcome(comm)  # of the run
+            return RunSummary("worker", {})
+        # Serial: compiled (or loaded) before the store opens and before the lane's thread
+        # starts: the process then has one thread (zarr starts one of its own when the
+        # store opens), so a cold compile may fork a helper (campar.core.split_compile),
+        # and the first tile runs at full speed. A store with nothing pending then has
+        # loaded the kernel for nothing (a compile if the cache is cold).
+        # Under MPI every worker waits for the store: rank 0 opens it first, and its lane
+        # loads the kernel as a worker's does (a cold compile split between the ranks of a
+        # node, ``share``) while the master hands out tiles, so the workers start one
+        # kernel load sooner (benchmarks/RESULTS.md, "Start-up").
+        if comm is None:
+            (tile_work.load if tile_work else compile_kernel)(job, share)
+            lane = ThreadLane(job, f"rank 0 {where}", halted=halted, tile_work=tile_work)
+        opened = {}
+        with share_outcome(comm, opened):
+            store = open_store(path, job, overwrite=overwrite)
+            opened["text"] = direct_path(store) if workers_write_tiles(job, store, comm) else ""
+        if comm is not None:
+            lane = ThreadLane(job, f"rank 0 {where}", True, halted, share, tile_work)
+        with store, share_outcome(comm):
+            return run_master(job, store, signals, comm, grace, lane, bool(opened["text"]))
 
 
 def workers_write_tiles(job: Job, store, comm) -> bool:
@@ -480,27 +473,6 @@ def workers_write_tiles(job: Job, store, comm) -> bool:
     a worker's import of the store's backend costs (zarr's: about a tenth of a second of
     CPU, after its tile, on the run's critical path; benchmarks/RESULTS.md)."""
     return comm is None or len(pending_tiles(job, store.done)) > comm.Get_size() - 1
-
-
-def load_beside(job: Job) -> threading.Thread | None:
-    """A serial run's kernel, loaded from numba's cache on a thread of its own from now on
-    (``tile.kernel_cached``): much of a load is LLVM's, which leaves the GIL free, so the
-    run's main thread imports the store's backend and opens the store meanwhile, on the
-    other core. The first tile waits for the load where it needs the kernel
-    (``compute.compile_cells``). None where the kernel must be compiled: a cold compile
-    runs before any other thread starts (``run_job``)."""
-    if not kernel_cached(job):
-        return None
-
-    def load() -> None:
-        try:
-            compile_kernel(job, None)
-        except Exception:  # the first tile meets the same error and reports it
-            log.debug("loading the kernel beside the store failed", exc_info=True)
-
-    thread = threading.Thread(target=load, daemon=True, name="campar-load")
-    thread.start()
-    return thread
 
 
 # Errors a worker re-raises after the master (by index); others arrive as CamparError.

@@ -109,17 +109,6 @@ def compile_kernel(job: Job, share=None, trace: bool = False) -> None:
     compute.compile_cells(job, job.law(), output_bits(job.outputs), job.n_sections, share, trace)
 
 
-def kernel_cached(job: Job) -> bool:
-    """Whether ``compile_kernel(job)`` would compile nothing (``compute.chain_cached``):
-    the kernel is this process's already or numba's on-disk cache holds it."""
-    ensure_fresh_cache()
-    if job.kind == "curves":
-        raise ValueError(NOT_THE_KERNELS)
-    if job.chains.direction == "both":
-        job = job.one_direction(job.directions[0])
-    return compute.chain_cached(job, job.law(), output_bits(job.outputs), job.n_sections)
-
-
 def census_of(job: Job, par: dict, state: np.ndarray, law) -> dict[str, np.ndarray]:
     """The ``attractors`` census arrays of a chain (``multistable.census_row``); {} if off."""
     if job.attractors is None:
