@@ -10,7 +10,7 @@ import textwrap
 import numpy as np
 import pytest
 from support.jobs import assert_same_map
-from support.processes import CAMPAR, MPIRUN, subprocess_env
+from support.processes import CAMPAR, MPIRUN, subprocess_env, tree_env
 
 import campar.sweep.runner as runner
 from campar.sweep.store import read_store
@@ -43,7 +43,9 @@ def test_asking_for_a_missing_store_imports_no_backend(tmp_path):
         print(sorted(m for m in ("zarr", "h5py") if m in sys.modules))
         """
     )
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=tree_env()
+    )
     assert done.returncode == 0, done.stderr
     assert done.stdout.split()[-1] == "[]"
 
