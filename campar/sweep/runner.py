@@ -7,7 +7,8 @@ writes a tile's arrays depends on the backend (``Store.direct_writes``): into a
 Zarr store every worker writes its own tiles' chunks (on a thread of its own,
 while its lane computes the next tile) and the master only commits them
 (checksum, then ``done``: a fraction of writing it, docs/scaling.md); into
-HDF5 (serial h5py) the master writes every tile. ``CAMPAR_WRITER=master``
+HDF5 (serial h5py) the master writes every tile, as it does a job's with no
+more tiles pending than workers (``workers_write_tiles``). ``CAMPAR_WRITER=master``
 makes the master write Zarr tiles too (the single-writer path, for comparison).
 The kernel's ``run_chain`` releases the GIL, so the master's compute thread
 keeps a core busy while its main thread does every MPI call, store write and
