@@ -40,9 +40,18 @@ def cell_at(path, row: int, col: int, layer: int = 0):
 
 
 def cell_report(path, row: int, col: int, layer: int = 0) -> dict:
-    """What the page's cell panel shows: ``cell_at``'s numbers and its orbit, JSON-ready."""
-    result = cell_at(path, row, col, layer)
+    """What the page's cell panel shows: ``cell_at``'s numbers and its orbit, JSON-ready;
+    ``kernel_note`` where another kernel computed the store (its values need not come back)."""
+    from ..core.version import KERNEL_VERSION
+
+    stored = stored_model_cell(path, row, col, layer)
+    result = stored.simulate(trace=True)
     data = result.to_dict()
+    if not stored.current_kernel:
+        data["kernel_note"] = (
+            f"computed with kernel version {KERNEL_VERSION}; the store was computed by "
+            f"{stored.kernel or 'an earlier one'}: its values need not come back bit for bit"
+        )
     trace = result.trace
     if trace is not None:
         k = max(1, len(trace.t) // TRACE_POINTS)
@@ -53,7 +62,7 @@ def cell_report(path, row: int, col: int, layer: int = 0) -> dict:
         data["trace"]["events"] = {
             name: _finite(trace.events_named(name)) for name in ("impact", "detachment")
         }
-    data["cell"] = {"row": row, "col": col, "layer": layer}
+    data["cell"] = {"row": row, "col": col, "layer": layer, "kernel": stored.kernel}
     return data
 
 
