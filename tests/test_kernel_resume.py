@@ -104,13 +104,15 @@ def test_status_verify_and_dry_run_say_which_kernel_computed_the_store(
     assert as_it_was(other) == before
 
 
-def test_the_explorers_cell_panel_says_the_store_is_another_kernels(tmp_path, monkeypatch):
+def test_the_explorer_says_the_store_is_another_kernels(tmp_path, monkeypatch):
     """A real (tiny) map computed while the kernel called itself another version: the cell
-    computed again in the panel is said to come from another kernel than the store's."""
+    computed again in the panel, and a row's line, are said to come from another kernel
+    than the store's."""
     from support.jobs import plane_job
 
     import campar
     from campar.explore.cells import cell_report
+    from campar.explore.lines import line_report
 
     path = tmp_path / "map.zarr"
     data = plane_job("panel", (4.0, 3.0, 3), ("mu_cn", 0.8, 0.8, 1), outputs=["label"])
@@ -121,9 +123,11 @@ def test_the_explorers_cell_panel_says_the_store_is_another_kernels(tmp_path, mo
     assert report["cell"]["kernel"] == str(OTHER)
     note = report["kernel_note"]
     assert f"kernel version {KERNEL_VERSION}" in note and f"computed by {OTHER}" in note
+    assert line_report(path, "row", 0, 0, None, None, None)["kernel_note"] == note
     same = tmp_path / "same.zarr"
     campar.run({**data, "store": str(same)})
     assert "kernel_note" not in cell_report(same, 0, 1)
+    assert "kernel_note" not in line_report(same, "row", 0, 0, None, None, None)
 
 
 @pytest.mark.process
