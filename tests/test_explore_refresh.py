@@ -28,10 +28,11 @@ from campar.sweep.runner import run_job
 from campar.sweep.store import open_store, read_store
 from campar.views.plot.labels import NOT_COMPUTED
 
-# 4 rows × 8 cells, one row a tile: tile i is row i.
+# 4 rows × 8 cells, one row a tile: tile i is row i; labels 1-1, 1-2, 2-1, 2-2 and chaos
+# (no chattering cell: the page names those by the palette's classes, campar.open by p).
 JOB = plane_job(
     "refresh",
-    (6.0, 1.0, 8),
+    (4.5, 1.5, 8),
     ("mu_cn", 0.9, 0.6, 4),
     classify={"window_revolutions": 16},
     outputs=["label", "dc"],
@@ -172,7 +173,7 @@ def test_a_tile_masked_on_a_later_read_leaves_the_legend(pristine, tmp_path, mon
     source = MapSource(path)
     source.scan()
     assert source.stride == 2 and legend(source) == counted(opened_labels(path))
-    (chunk,) = (path / "dc").glob("c.3.*")
+    (chunk,) = (path / "kind").glob("c.3.*")  # an array the labels are drawn from
     chunk.write_bytes(chunk.read_bytes()[:-3] + b"xyz")
     drawn(source)  # a close view: reads the tiles, finds tile 3 changed
     assert set(source.damage) == {3}
