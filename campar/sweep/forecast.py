@@ -179,8 +179,9 @@ def writers_are_workers(path) -> bool:
 
 def stored_state(job: Job, path) -> tuple[Job | None, list | None, str | None]:
     """(the stored job, its done flags, None) if ``path`` is a store of ``job`` (by its
-    digest, tiles.rows aside: ``auto`` keeps a store's layout) that a run resumes; (None, None, which kernel
-    computed it) for one another kernel computed (a run refuses it); else (None,) * 3."""
+    digest, tiles.rows aside: ``auto`` keeps a store's layout) that a run resumes; (None,
+    None, which kernel computed it) for one another kernel computed (a run refuses it);
+    else (None,) * 3."""
     from .store import other_kernel, read_store
 
     # No store, a damaged one or another job's: the run decides (refuses, or repairs).
