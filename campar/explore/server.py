@@ -131,8 +131,9 @@ class Explorer:
                     source.refresh()
                 source.problem = None
             except Exception as exc:  # the page shows the store as it was; the server goes on
-                if source.problem is None:
-                    log.warning("watching %s: %s", source.path, exc, exc_info=True)
+                if source.problem is None:  # a campar error says itself in one line
+                    trace = not isinstance(exc, CamparError)
+                    log.warning("watching %s: %s", source.path, exc, exc_info=trace)
                 source.problem = f"the store cannot be read now ({type(exc).__name__}: {exc})"
             if self._stop.wait(seconds):
                 return
