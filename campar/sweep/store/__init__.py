@@ -272,8 +272,10 @@ def adopt_store(path: str | Path) -> Verification:
 
 def takes_direct_writes(path: str | Path) -> bool:
     """Whether the store at ``path`` (by its backend) lets workers write their own tiles
-    (``Store.direct_writes``), before it is opened."""
-    return _STORES[_backend(Path(path))].direct_writes
+    (``Store.direct_writes``), known from its name before it is opened and before its
+    backend is imported: a Zarr store does. Under MPI rank 0 decides a job's tile rows
+    with it, and the workers wait for that before they load the kernel."""
+    return backend_name(path) == "zarr"
 
 
 class TileWriter:
@@ -311,9 +313,10 @@ def read_store(path: str | Path) -> StoreReader:
     """Open a store read-only (no lock; safe while a run writes it). StoreDamaged if its
     metadata cannot be read or disagrees with itself; StoreIOError if the system refuses."""
     path = Path(path)
-    backend, real = _backend(path), real_path(path)
-    if not real.exists():
+    real = real_path(path)
+    if not real.exists():  # said before the backend is imported (a run asks, to resume)
         raise StoreError(f"no store at {path}")
+    backend = _backend(path)
     try:
         attrs = backend.read_attrs(real)
         if attrs is None:
