@@ -57,7 +57,9 @@ from ._schema import (
     check_tile_arrays,
     fill_value,
     job_differences,
+    other_kernel,
     store_arrays,
+    stored_kernel,
     tile_shape,
     upgraded_attrs,
 )
@@ -84,8 +86,10 @@ __all__ = [
     "job_differences",
     "lock_path",
     "open_store",
+    "other_kernel",
     "read_store",
     "store_arrays",
+    "stored_kernel",
     "tile_checksum",
     "tile_shape",
     "upgraded_attrs",
@@ -129,11 +133,12 @@ def open_store(path: str | Path, job: Job, *, overwrite: bool = False) -> Store:
     """Open the store of a run: create it, or resume it if it holds the same job.
 
     Raises StoreLocked if another live run holds it (through whatever alias),
-    StoreMismatch if it holds a different job (untouched, unless ``overwrite``
-    replaces it), StoreError if ``path`` is something other than a campar store
-    (never replaced), StoreDamaged if its metadata is, StoreIOError if the
-    system refuses a read or write. Committed tiles are verified first; the
-    damaged ones are made pending (``Store.done`` is unset for them).
+    StoreMismatch if it holds a different job or was computed by another kernel
+    version (untouched, unless ``overwrite`` replaces it), StoreError if ``path``
+    is something other than a campar store (never replaced), StoreDamaged if its
+    metadata is, StoreIOError if the system refuses a read or write. Committed
+    tiles are verified first; the damaged ones are made pending (``Store.done`` is
+    unset for them).
     """
     path = Path(path)
     backend, real = _backend(path), real_path(path)
