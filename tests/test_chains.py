@@ -91,16 +91,10 @@ def test_continue_gives_the_same_tile_in_a_process_that_computed_no_other():
 @pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
 @pytest.mark.process
 def test_a_continued_map_under_mpirun_equals_the_serial_one(write_job):
-    from support.processes import CAMPAR, subprocess_env
+    from support.processes import run_campar_mpi
 
     path, job = write_job(name="cont", chains={"start": "continue"})
-    result = subprocess.run(
-        [str(MPIRUN), "-n", "2", *CAMPAR, "run", str(path)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=subprocess_env(),
-    )
+    result = run_campar_mpi(2, "run", path)
     assert result.returncode == 0, result.stderr
     with read_store(job.store) as reader:
         assert reader.attrs["job"]["chains"]["start"] == "continue"

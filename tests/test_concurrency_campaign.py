@@ -20,7 +20,8 @@ import pytest
 import yaml
 from support.cli import call_campar
 from support.jobs import SLOW, SMALL_JOB, assert_same_map, merge, reference_arrays
-from test_snapshot import COMPARED, MPIRUN, start_run
+from support.processes import BACKENDS_AND_RANKS
+from test_snapshot import COMPARED, start_run
 
 import campar
 from campar.errors import StoreError, StoreLocked
@@ -65,18 +66,8 @@ def read_once(store, final_tiles: dict, counts) -> None:
 @pytest.mark.process
 @pytest.mark.slow
 @pytest.mark.timeout(900)  # two runs of the same job on a loaded machine
-@pytest.mark.parametrize(
-    "suffix, ranks",
-    [
-        (".zarr", 1),
-        (".h5", 1),
-        pytest.param(".zarr", 2, marks=pytest.mark.mpi),
-        pytest.param(".h5", 2, marks=pytest.mark.mpi),
-    ],
-)
+@pytest.mark.parametrize("suffix, ranks", BACKENDS_AND_RANKS)
 def test_two_writers_of_one_store_never_corrupt_it(tmp_path, suffix, ranks, capsys):
-    if ranks > 1 and not MPIRUN.exists():
-        pytest.skip(f"no mpirun at {MPIRUN}")
     store = tmp_path / f"two{suffix}"
     job_file = tmp_path / "two.yaml"
     job_file.write_text(yaml.safe_dump({**JOB, "store": str(store)}, sort_keys=False))

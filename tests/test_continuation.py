@@ -9,7 +9,7 @@ agreeing estimates must be one SciPy confirms.
 
 import numpy as np
 import pytest
-from support.jobs import reference_case
+from support.jobs import plane_job, reference_case
 
 from campar import simulate_point
 from campar.bench import scipy_shooting
@@ -26,16 +26,14 @@ from campar.sweep.tile import run_tile
 def chain(extrapolate: int):
     """One continuation chain along ω from 3 to 1 at the base parameters (μcn 0.8)."""
     job = Job.from_dict(
-        {
-            "name": "chain",
-            "sweep": {
-                "omega": {"from": 3.0, "to": 1.0, "points": 81},
-                "mu_cn": {"from": 0.8, "to": 0.8, "points": 1},
-            },
-            "fixed": {"zeta": 0.2, "mu_kn": 0.8, "f0": 0.5},
-            "transient": {"extrapolate": extrapolate},
-            "outputs": ["label", "dc", "lyapunov"],
-        }
+        plane_job(
+            "chain",
+            (3.0, 1.0, 81),
+            ("mu_cn", 0.8, 0.8, 1),
+            fixed={"zeta": 0.2, "mu_kn": 0.8, "f0": 0.5},
+            transient={"extrapolate": extrapolate},
+            outputs=["label", "dc", "lyapunov"],
+        )
     )
     (tile,) = plan_tiles(job)
     return job, {name: values[0] for name, values in run_tile(job, tile).items()}

@@ -4,17 +4,20 @@ The reference is the same chain with statistics rows of N_REV_STATS columns, whe
 step's extremum is refined on the dense output as the step is taken (extrema.step_extremes,
 checked against SciPy in test_extrema): every output of every cell, bit for bit, for the
 paper's law and others — a law that keeps the impact velocity, another cam law, each
-integrator — on chains that reach cycles and non-periodic motions.
+integrator — on chains that reach cycles and non-periodic motions. A map that stores the
+duty cycle but no extremum keeps and refines ε's dips alone (revolution.DUTY_STATS): the
+same outputs, dips and time separated as the map that refines every extremum.
 """
 
 import numpy as np
 import pytest
 
-from campar.core.analysis import N_REV_STATS
+from campar.core.analysis import N_REV_STATS, REV_EPS_MIN, REV_GRAZE, REV_T_FREE
 from campar.core.deferred import DEFER_COLUMNS, DEFERRED
-from campar.core.kernel import chain_compiled, make_chain_work
+from campar.core.kernel import OUT_EXTREMA, OUT_STATS, chain_compiled, make_chain_work
 from campar.core.model import kernel_law, start_chain
 from campar.core.revolution_call import revolution_link
+from campar.model.compute import output_bits
 from campar.sweep.job import Job
 from campar.sweep.plan import chain_parameters
 from campar.sweep.tile import allocate_outputs, cell_settings, chain_starts, solver_options
@@ -92,3 +95,33 @@ def test_a_map_without_statistics_defers_and_refines_nothing():
     assert np.isnan(out.dc).all() and np.isnan(out.eps_min).all()
     assert not cw.revs[:, DEFERRED].any()
     assert not cw.refine.counts.any()
+
+
+def test_output_bits_ask_for_extrema_only_with_eps_pn_or_separation():
+    assert output_bits(("label", "dc")) == OUT_STATS
+    for name in ("eps", "pn", "separation"):
+        assert output_bits(("label", name)) == OUT_STATS | OUT_EXTREMA
+    assert output_bits(("label", "multipliers")) & (OUT_STATS | OUT_EXTREMA) == 0
+
+
+def test_a_duty_cycle_map_refines_the_dips_alone_with_the_same_numbers():
+    full, full_work = run(job_of(), True)
+    duty, duty_work = run(job_of(outputs=("label", "dc", "multipliers")), True)
+    assert (full.p > 0).any() and (full.p == 0).any()  # cells that fly and cells that push
+    for name in ("n", "p", "kind", "status", "flags", "dc", "state", "revolutions", "steps"):
+        assert getattr(duty, name).tobytes() == getattr(full, name).tobytes(), name
+    assert duty.multipliers.tobytes() == full.multipliers.tobytes()
+    for name in ("eps_min", "eps_max", "pn_max"):  # not stored, not all refined
+        assert np.isnan(getattr(duty, name)).all() and np.isfinite(getattr(full, name)).all()
+    # the last cell's window: its dips refined alike
+    k, m = full.revolutions[-1], full.n[-1]
+    assert m > 0
+    window = slice(k - m, k)
+    for column in (REV_GRAZE, REV_EPS_MIN, REV_T_FREE):
+        got = duty_work.revs[window, column]
+        assert got.tobytes() == full_work.revs[window, column].tobytes(), column
+    assert np.isfinite(full_work.revs[window, REV_GRAZE]).any()  # a dip was refined
+    # its transient revolutions (not refined) kept fewer steps: no maxima, no Pn peaks
+    kept_full = full_work.revs[: k - m, DEFERRED].sum()
+    kept_duty = duty_work.revs[: k - m, DEFERRED].sum()
+    assert 0 < kept_duty < kept_full

@@ -21,6 +21,7 @@ from support.damage import (
     small_disk,
     synthetic_store,
 )
+from support.jobs import plane_job
 from support.processes import CAMPAR, MPIRUN, start_campar, tree_env, wait_until_guarded
 from test_store import fake_tile, make_job
 
@@ -310,28 +311,12 @@ def test_a_single_point_axis_may_have_from_equal_to():
 
 
 def test_a_job_too_large_is_refused_with_the_estimate_and_the_option_raises_the_limit():
-    huge = Job.from_dict(
-        {
-            "name": "huge",
-            "sweep": {
-                "omega": {"from": 6, "to": 0.02, "points": 100_000},
-                "mu_cn": {"from": 0.99, "to": 0.5, "points": 100_000},
-            },
-        }
-    )
+    huge = Job.from_dict(plane_job("huge", (6, 0.02, 100_000), ("mu_cn", 0.99, 0.5, 100_000)))
     with pytest.raises(JobError, match=r"store would hold up to 670\.6 GiB.*--max-store 671G"):
         check_budget(huge)
     assert check_budget(huge, max_store=parse_size("671G")).cells == 10**10
-    wide = Job.from_dict(
-        {
-            "name": "wide",
-            "tiles": {"rows": 4000},
-            "sweep": {
-                "omega": {"from": 6, "to": 0.02, "points": 100_000},
-                "mu_cn": {"from": 0.99, "to": 0.5, "points": 4000},
-            },
-        }
-    )
+    wide = plane_job("wide", (6, 0.02, 100_000), ("mu_cn", 0.99, 0.5, 4000), tiles={"rows": 4000})
+    wide = Job.from_dict(wide)
     with pytest.raises(JobError, match="each rank would need about .*--max-memory"):
         check_budget(wide, max_store=DEFAULT_MAX_STORE * 100)
     assert estimate(make_job()).store_bytes < 10_000

@@ -17,7 +17,7 @@ import pytest
 from campar.bench.scipy_model import Model, extremes
 from campar.core.cam import PAPER_ANGLES, phase_bounds, phased_cam, tabulated_cam
 from campar.core.contact import contact_law
-from campar.core.kernel import CONVERGED, OUT_STATS, run_chain
+from campar.core.kernel import CONVERGED, OUT_EXTREMA, OUT_STATS, run_chain
 from campar.core.model import LAW_CLAMP, PAPER_LAW, Law
 from campar.model.cam_table import periodic_spline
 from campar.sweep.job import load_job
@@ -33,7 +33,7 @@ TABLE_LIFT = 0.5 * (1.0 - np.cos(TABLE_THETA))
 
 def defaults():
     job = load_job("jobs/smoke.yaml")  # the job defaults: DOP853, rtol 1e-7
-    settings = cell_settings(job)._replace(transient=CONVERGED, output_bits=OUT_STATS)
+    settings = cell_settings(job)._replace(transient=CONVERGED, output_bits=OUT_STATS | OUT_EXTREMA)
     return solver_options(job), settings
 
 
@@ -41,7 +41,7 @@ def run_cells(law, omegas, f0, mu_kn, mu_cn, x0=(0.0, 0.0)):
     """A chain of cells along ``omegas`` from x0; its outputs."""
     solver, settings = defaults()
     n = len(omegas)
-    out = allocate_outputs(n, OUT_STATS, 0)
+    out = allocate_outputs(n, OUT_STATS | OUT_EXTREMA, 0)
 
     def column(v):
         return np.full(n, float(v))

@@ -5,6 +5,7 @@ import math
 
 import pytest
 import yaml
+from support.jobs import plane_job
 
 import campar.cli
 import campar.views.point
@@ -260,16 +261,8 @@ def test_a_cell_job_holds_the_model_and_its_digest_is_that_of_a_job_file():
     model = Model.build(omega=2.0, mu_kn=0.9)
     job = cell_job(model)
     assert job.cell_model(0, 0) == model
-    same = Job.from_dict(
-        {
-            "name": "cell",
-            "sweep": {
-                "omega": {"from": 2.0, "to": 2.0, "points": 1},
-                "f0": {"from": 0.5, "to": 0.5, "points": 1},
-            },
-            "fixed": {"mu_kn": 0.9, "mu_cn": 0.8, "zeta": 0.2},
-        }
-    )
+    fixed = {"mu_kn": 0.9, "mu_cn": 0.8, "zeta": 0.2}
+    same = Job.from_dict(plane_job("cell", (2.0, 2.0, 1), ("f0", 0.5, 0.5, 1), fixed=fixed))
     assert job.digest() == same.digest()
 
 

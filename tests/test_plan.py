@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from support.jobs import plane_job
 
 from campar.sweep.job import Job
 from campar.sweep.plan import (
@@ -105,16 +106,7 @@ def test_pending_tiles_are_the_unset_ones_in_index_order(job, data):
 
 
 def test_a_done_mask_of_another_job_is_refused():
-    job = Job.from_dict(
-        {
-            "name": "x",
-            "sweep": {
-                "omega": {"from": 6, "to": 1, "points": 3},
-                "mu_cn": {"from": 0.9, "to": 0.5, "points": 10},
-            },
-            "tiles": {"rows": 4},
-        }
-    )
+    job = Job.from_dict(plane_job("x", (6, 1, 3), ("mu_cn", 0.9, 0.5, 10), tiles={"rows": 4}))
     assert len(plan_tiles(job)) == 3  # ⌈10 / 4⌉
     for shape in [(2,), (4,), (3, 1)]:
         with pytest.raises(ValueError, match="the job has 3 tiles"):

@@ -14,8 +14,9 @@ from support.damage import synthetic_store
 from test_store import fake_tile, make_job
 
 import campar
+import campar.sweep.store._schema as schema
 from campar.cli import main
-from campar.errors import StoreDamaged, StoreError
+from campar.errors import StoreDamaged, StoreError, StoreMismatch
 from campar.sweep.plan import plan_tiles
 from campar.sweep.store import _hdf5, adopt_store, open_store, read_store, verify_store
 from campar.sweep.store._root import ZARR_FILE, Root, RootDamaged
@@ -181,7 +182,9 @@ def test_an_hdf5_record_covers_checkpointed_tiles_and_the_journal_the_rest(tmp_p
 
 
 @pytest.mark.parametrize("suffix", [".zarr", ".h5"])
-def test_a_store_of_the_current_main_is_refused_until_adopted(tmp_path, suffix, capsys):
+def test_a_store_of_the_current_main_is_refused_until_adopted(
+    tmp_path, suffix, capsys, monkeypatch
+):
     path = tmp_path / f"old{suffix}"
     source = MAIN_STORES / f"written-by-b09eab1{suffix}"
     shutil.copytree(source, path) if source.is_dir() else shutil.copy(source, path)
@@ -191,14 +194,21 @@ def test_a_store_of_the_current_main_is_refused_until_adopted(tmp_path, suffix, 
         assert len(err) == 1 and "verify --adopt" in err[0], err
     with pytest.raises(StoreError, match="no root record"):
         campar.open(path)
-    with pytest.raises(StoreError, match="no root record"):
+    with pytest.raises(StoreMismatch, match="an earlier kernel"):  # said from its attributes
         resume(path)
+    with monkeypatch.context() as patch:  # were its kernel this campar's: no root record
+        patch.setattr(schema, "other_kernel", lambda attrs: None)
+        with pytest.raises(StoreError, match="no root record"):
+            resume(path)
     assert main(["verify", "--adopt", str(path)]) == 0
     assert "adopted" in capsys.readouterr().out
     assert_holds(path, WRITTEN)
     with pytest.raises(StoreError, match="nothing to adopt"):
         adopt_store(path)
-    assert resume(path) == list(WRITTEN)
+    # adopted, it is read; an earlier kernel computed it (it records none): still not resumed
+    with pytest.raises(StoreMismatch, match="an earlier kernel"):
+        resume(path)
+    assert_holds(path, WRITTEN)
 
 
 def test_adoption_leaves_damaged_tiles_pending(tmp_path, capsys):

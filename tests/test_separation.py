@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 import yaml
 from support.cli import call_campar
+from support.jobs import plane_job
 
 import campar
 from campar.bench.scipy_model import Model, integrate
@@ -13,14 +14,9 @@ from campar.sweep.plan import Tile, chain_parameters
 from campar.sweep.separation import OMEGA_TOL
 from campar.sweep.tile import allocate_outputs, cell_settings, run_tile, solver_options
 
-ROW = {
-    "name": "row",
-    "sweep": {
-        "omega": {"from": 3.0, "to": 0.1, "points": 59},
-        "mu_cn": {"from": 0.8, "to": 0.8, "points": 1},
-    },
-    "outputs": ["label", "eps", "pn", "separation"],
-}
+ROW = plane_job(
+    "row", (3.0, 0.1, 59), ("mu_cn", 0.8, 0.8, 1), outputs=["label", "eps", "pn", "separation"]
+)
 
 
 def one_cell(job, omega, state):

@@ -15,12 +15,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from support.processes import BACKENDS_AND_RANKS, MPIRUN
 
 import campar
 from campar.errors import StoreError
 from campar.sweep.plan import plan_tiles
 
-MPIRUN = Path(sys.executable).parent / "mpirun"
 JOB = {
     "name": "snapshot",
     "sweep": {
@@ -78,18 +78,8 @@ def read_during(proc: subprocess.Popen, store: Path, n_tiles: int, timeout: floa
 
 @pytest.mark.process
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    "suffix, ranks",
-    [
-        (".zarr", 1),
-        (".h5", 1),
-        pytest.param(".zarr", 2, marks=pytest.mark.mpi),
-        pytest.param(".h5", 2, marks=pytest.mark.mpi),
-    ],
-)
+@pytest.mark.parametrize("suffix, ranks", BACKENDS_AND_RANKS)
 def test_reads_during_a_run_are_snapshots_of_the_finished_store(tmp_path, suffix, ranks):
-    if ranks > 1 and not MPIRUN.exists():
-        pytest.skip(f"no mpirun at {MPIRUN}")
     store = tmp_path / f"snapshot{suffix}"
     job_file = tmp_path / "snapshot.yaml"
     job_file.write_text(yaml.safe_dump({**JOB, "store": str(store)}, sort_keys=False))

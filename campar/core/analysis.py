@@ -242,6 +242,19 @@ def slow_cycle_period(xs, jac, k, first, n_max, reach, margin):
     reach a non-periodic verdict may be a cycle the budget did not reach; within a
     narrow one the motion has settled on it.
     """
+    return stable_cycle_period(xs, jac, k, first, n_max, reach, False, margin)
+
+
+@hot
+def stable_cycle_period(xs, jac, k, first, n_max, reach, returning, margin):
+    """The smallest n ≤ n_max (section points after ``first``) whose DP^n over the last n
+    revolutions is stable and whose one-Newton-step fixed point lies within ``reach`` of
+    x_k; with ``returning`` only where |x_k − x_{k−n}| ≤ reach too, and only where a
+    multiplier lies within ``margin`` of the unit circle (math.inf: any); 0: none.
+
+    The search of ``stable_cycle_nearby`` and ``slow_cycle_period``: DP^n is built one
+    revolution's Jacobian at a time as n grows.
+    """
     avail = min(n_max, k - first)
     if avail < 1:
         return 0
@@ -249,10 +262,12 @@ def slow_cycle_period(xs, jac, k, first, n_max, reach, margin):
     for n in range(1, avail + 1):
         if n > 1:
             m = mat2_mul(m, jacobian_at(jac, k - n))
+        if returning and max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1])) > reach:
+            continue
         if not spectral_radius(m) < 1.0:
             continue
         _, _, dist_now, _ = newton_fixed_point(xs[k, 0], xs[k, 1], xs[k - n, 0], xs[k - n, 1], m)
-        if dist_now <= reach and near_unit_circle(m, margin):
+        if dist_now <= reach and (margin == math.inf or near_unit_circle(m, margin)):
             return n
     return 0
 
@@ -432,20 +447,7 @@ def stable_cycle_nearby(xs, jac, k, base, n_max, reach):
     |x_k − x_{k−n}| ≤ reach whose DP^n over the last n revolutions is stable and whose
     one-Newton-step fixed point lies within reach of x_k: a stable cycle the motion may be
     settling on, as assess_revolution's jumps on agreeing estimates read it; 0: none."""
-    avail = min(n_max, k - base)
-    if avail < 1:
-        return 0
-    m = jacobian_at(jac, k - 1)
-    for n in range(1, avail + 1):
-        if n > 1:
-            m = mat2_mul(m, jacobian_at(jac, k - n))
-        r = max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1]))
-        if r > reach or not spectral_radius(m) < 1.0:
-            continue
-        _, _, dist_now, _ = newton_fixed_point(xs[k, 0], xs[k, 1], xs[k - n, 0], xs[k - n, 1], m)
-        if dist_now <= reach:
-            return n
-    return 0
+    return stable_cycle_period(xs, jac, k, base, n_max, reach, True, math.inf)
 
 
 @hot

@@ -38,7 +38,7 @@ MODE0 = 2
 MODE1 = 3
 FREE = 4
 IMPACT = 5
-ENDS = 6  # e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1
+ENDS = 6  # model.contact_kinematics at the step's start (5 numbers), then at its end
 PREPARED = 16  # 1: the dense output's coefficients (dop853.INTERPOLATOR_POWER rows) follow
 Y_OLD = 17
 Y_NEW = Y_OLD + N_STATE
@@ -55,32 +55,10 @@ def clear_deferred(row):
 
 
 @hot
-def defer_step(
-    row,
-    y_old,
-    y_new,
-    K,
-    F,
-    ctrl,
-    t0,
-    h,
-    mode,
-    free,
-    impact,
-    e0,
-    de0,
-    dde0,
-    e1,
-    de1,
-    dde1,
-    pn0,
-    dpn0,
-    pn1,
-    dpn1,
-):
-    """Keep the step just accepted (y_old, y_new, K, F, ctrl of its StepWork) for
-    refine_deferred; False when the row has no slot left (a row of N_REV_STATS columns
-    has none)."""
+def defer_step(row, w, t0, h, mode, free, impact, k0, k1):
+    """Keep the step just accepted (its StepWork w: y_old, y_new, K, F, ctrl) for
+    refine_deferred, with the kinematics k0, k1 at its ends (model.contact_kinematics);
+    False when the row has no slot left (a row of N_REV_STATS columns has none)."""
     if row.shape[0] < DEFER_COLUMNS:
         return False
     count = int(row[DEFERRED])
@@ -93,27 +71,30 @@ def defer_step(
     s[MODE1] = mode[1]
     s[FREE] = 1.0 if free else 0.0
     s[IMPACT] = impact
-    for j, value in enumerate((e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1)):
+    for j, value in enumerate(k0):
         s[ENDS + j] = value
+    for j, value in enumerate(k1):
+        s[ENDS + len(k0) + j] = value
     for i in range(N_STATE):
-        s[Y_OLD + i] = y_old[i]
-        s[Y_NEW + i] = y_new[i]
+        s[Y_OLD + i] = w.y_old[i]
+        s[Y_NEW + i] = w.y_new[i]
     # the event search may have prepared the dense output already, from the integrator's
     # own step size: keep its coefficients, not a preparation from t0 and h
-    prepared = ctrl[CTRL_DENSE] == 1.0
+    prepared = w.ctrl[CTRL_DENSE] == 1.0
     s[PREPARED] = 1.0 if prepared else 0.0
     rows = dop853.INTERPOLATOR_POWER if prepared else KEPT_STAGES
     for r in range(rows):
         for i in range(N_STATE):
-            s[STAGES + r * N_STATE + i] = F[r, i] if prepared else K[r, i]
+            s[STAGES + r * N_STATE + i] = w.F[r, i] if prepared else w.K[r, i]
     row[DEFERRED] = count + 1
     return True
 
 
 @hot
-def refine_deferred(row, w, mode, p, method):
+def refine_deferred(row, w, mode, p, method, extremes):
     """Refine the steps the revolution of ``row`` deferred and fold their extremes into
-    its statistics, in the steps' order; w (N_STATE components) and mode are scratch. The
+    its statistics, in the steps' order (``extremes``: as extrema.step_extremes's); w
+    (N_STATE components) and mode are scratch. The
     contact law's impact velocity is the step's while it is refined, then the cell's
     again."""
     if row.shape[0] < DEFER_COLUMNS:
@@ -137,28 +118,12 @@ def refine_deferred(row, w, mode, p, method):
                 else:
                     w.K[r, i] = s[STAGES + r * N_STATE + i]
         w.ctrl[CTRL_DENSE] = 1.0 if prepared else 0.0
-        e0 = s[ENDS]
-        e1 = s[ENDS + 3]
+        k0 = (s[ENDS], s[ENDS + 1], s[ENDS + 2], s[ENDS + 3], s[ENDS + 4])
+        k1 = (s[ENDS + 5], s[ENDS + 6], s[ENDS + 7], s[ENDS + 8], s[ENDS + 9])
         dip, peak, pn_hi = step_extremes(
-            model.rhs,
-            method,
-            w,
-            s[T0],
-            s[H],
-            p,
-            mode,
-            e0,
-            s[ENDS + 1],
-            s[ENDS + 2],
-            e1,
-            s[ENDS + 4],
-            s[ENDS + 5],
-            s[ENDS + 6],
-            s[ENDS + 7],
-            s[ENDS + 8],
-            s[ENDS + 9],
+            model.rhs, method, w, s[T0], s[H], p, mode, k0, k1, extremes
         )
         # the step's time and end values are in the row already (h 0 adds nothing)
-        add_step_stats(row, 0.0, s[FREE] == 1.0, e0, e1, dip, peak, pn_hi)
+        add_step_stats(row, 0.0, s[FREE] == 1.0, k0[0], k1[0], dip, peak, pn_hi)
     row[DEFERRED] = 0.0
     note_impact(p.contact, kept)

@@ -136,13 +136,21 @@ def force_peak(rhs, method, w, t0, h, p, mode, guess):
 
 
 @hot
-def step_models(h, mode, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
+def step_models(h, mode, k0, k1, extremes):
     """(reads, pn_hi): whether step_extremes reads the step's dense output (the models see
     an interior extremum of ε, or a peak of Pn the end rates bracket), and where it does
     not, the largest Pn step_extremes returns (its ε has no interior extremum then).
-    Cheap, for every step: step_extremes is called only where ``reads``."""
+    k0, k1: model.contact_kinematics at the step's ends. Without ``extremes`` only ε's
+    minima are looked for (step_extremes's). Cheap, for every step: step_extremes is
+    called only where ``reads``."""
+    e0, de0, _, pn0, dpn0 = k0
+    e1, de1, _, pn1, dpn1 = k1
+    # step_extremes finds a minimum exactly where this cubic has one (quintic_extremum
+    # starts from the cubic's)
     if hermite_extremum(e0, de0 * h, e1, de1 * h, MINIMUM)[0] > 0.0:
         return True, 0.0
+    if not extremes:
+        return False, 0.0
     if hermite_extremum(e0, de0 * h, e1, de1 * h, MAXIMUM)[0] > 0.0:
         return True, 0.0
     pn_hi = max(pn0, pn1)
@@ -156,12 +164,13 @@ def step_models(h, mode, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1):
 
 
 @hot
-def step_extremes(
-    rhs, method, w, t0, h, p, mode, e0, de0, dde0, e1, de1, dde1, pn0, dpn0, pn1, dpn1
-):
+def step_extremes(rhs, method, w, t0, h, p, mode, k0, k1, extremes):
     """ε's interior minimum and maximum (NaN: none) and Pn's largest value over the step
-    just accepted from t0 (size h), from the values and rates at its ends (model.kinematics)
-    and its dense output."""
+    just accepted from t0 (size h), from the values and rates at its ends (k0, k1:
+    model.contact_kinematics, ε with two rates and Pn with one) and its dense output.
+    Without ``extremes``, ε's minimum alone (the maximum NaN, Pn the ends' larger)."""
+    e0, de0, dde0, pn0, dpn0 = k0
+    e1, de1, dde1, pn1, dpn1 = k1
     h2 = h * h
     dip = math.nan
     peak = math.nan
@@ -171,13 +180,15 @@ def step_extremes(
         th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MINIMUM)
         if th > 0.0:
             dip = val
+    pn_hi = max(pn0, pn1)
+    if not extremes:
+        return dip, peak, pn_hi
     th, val = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MAXIMUM)
     if th > 0.0:
         peak = val
         th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MAXIMUM)
         if th > 0.0:
             peak = val
-    pn_hi = max(pn0, pn1)
     if mode[1] == PUSH:
         th, val = hermite_extremum(pn0, dpn0 * h, pn1, dpn1 * h, MAXIMUM)
         if th > 0.0:

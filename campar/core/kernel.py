@@ -60,15 +60,16 @@ from .model import (
     make_params,
     start_chain,
 )
-from .revolution import scale_solver_options
+from .revolution import ALL_STATS, DUTY_STATS, NO_STATS, scale_solver_options
 from .revolution_call import revolution_link
 from .transient import CONVERGED, FIXED, spend, transient_converged, transient_fixed  # noqa: F401 (FIXED: tile)
 
 # Output selection bits: a label-only map computes none of these.
-OUT_STATS = 1  # duty cycle, ε extremes, Pn max
+OUT_STATS = 1  # duty cycle (and the grazing flag: ε's dips on the dense output)
 OUT_SECTIONS = 2  # σn points of the steady motion
 OUT_MULTIPLIERS = 4  # Floquet multipliers of periodic cells
 OUT_LYAPUNOV = 8  # largest Lyapunov exponent
+OUT_EXTREMA = 16  # ε extremes, Pn max (with OUT_STATS)
 
 SLOW_MARGIN = 0.02  # a multiplier this close to the unit circle marks a slow cell
 SLOW_REACH = 0.1  # … and, for a non-periodic cell, a stable cycle estimate this close
@@ -180,6 +181,18 @@ def make_chain_work(cs) -> ChainWork:
 
 
 @inlined
+def cell_stats(bits):
+    """What the revolutions of a cell computing the outputs ``bits`` fold into their
+    statistics (campar.core.revolution's NO_STATS, DUTY_STATS, ALL_STATS): a map that stores
+    no extremum refines only the dips its grazing flag reads."""
+    if bits & OUT_EXTREMA:
+        return ALL_STATS
+    if bits & OUT_STATS:
+        return DUTY_STATS
+    return NO_STATS
+
+
+@inlined
 def fail_cell(out, i, status, k, steps):
     out.n[i] = 0
     out.p[i] = 0
@@ -203,11 +216,12 @@ def fail_cell(out, i, status, k, steps):
 
 
 @inlined
-def record_window(out, i, cw, first, count, period, p, method):
+def record_window(out, i, cw, first, count, period, p, method, extremes):
     """Statistics of revolutions first … first+count−1 into the outputs of cell i, their
-    deferred extrema refined first (campar.core.deferred)."""
+    deferred extrema refined first (campar.core.deferred; ``extremes``: all of them, else
+    ε's minima alone)."""
     for j in range(first, first + count):
-        refine_deferred(cw.revs[j], cw.refine, cw.refine_mode, p, method)
+        refine_deferred(cw.revs[j], cw.refine, cw.refine_mode, p, method, extremes)
     t_free, detach, eps_min, eps_max, pn_max, stretch, graze = window_stats(cw.revs, first, count)
     out.p[i] = int(detach + 0.5)
     out.dc[i] = t_free / (count * period)
@@ -230,7 +244,7 @@ def record_sections(out, i, cw, last, count):
 def run_cell(x_start, p, opt, cs, cw, out, i):
     """Compute cell i from x_start; returns (status, index of the final state in xs)."""
     period_time = TWO_PI / p.omega
-    want_stats = (cs.output_bits & OUT_STATS) != 0
+    stats = cell_stats(cs.output_bits)
     c2 = cw.w2.counts
     c6 = cw.w6.counts
     steps0 = c2[0] + c6[0]
@@ -241,16 +255,14 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     cw.u[1] = 0.0
     flags = 0
     if cs.transient == CONVERGED:
-        status, k, n, base, jumps, escapes = transient_converged(
-            cw, p, opt, cs, want_stats, step_budget
-        )
+        status, k, n, base, jumps, escapes = transient_converged(cw, p, opt, cs, stats, step_budget)
         if jumps > escapes:
             flags |= FLAG_NEWTON
         if escapes > 0:
             flags |= FLAG_ESCAPED
         variational_from = 0
     else:
-        status, k, n = transient_fixed(cw, p, opt, cs, want_stats, step_budget)
+        status, k, n = transient_fixed(cw, p, opt, cs, stats, step_budget)
         base = cs.max_revolutions
         variational_from = cs.max_revolutions
     steps = c2[0] + c6[0] - steps0
@@ -277,7 +289,9 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
         m = distinct_period(cw.xs, k, n, cs.period_tol)
         if cs.transient == CONVERGED:  # (the paper's recipe keeps its plain repeat test)
             m = stable_subperiod(cw.xs, cw.jac, k, m, PERIOD_REACH)
-        _, graze = record_window(out, i, cw, k - m, m, period_time, p, opt.method)
+        _, graze = record_window(
+            out, i, cw, k - m, m, period_time, p, opt.method, stats == ALL_STATS
+        )
         if graze < GRAZE_TOL:
             flags |= FLAG_GRAZING
         out.n[i] = m
@@ -308,7 +322,9 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
         else:
             count = max(min(cs.window_revolutions, k - variational_from), 1)
             first = k - count
-        stretch, _ = record_window(out, i, cw, first, count, period_time, p, opt.method)
+        stretch, _ = record_window(
+            out, i, cw, first, count, period_time, p, opt.method, stats == ALL_STATS
+        )
         out.n[i] = 0
         out.kind[i] = nonperiodic_kind(stretch, cs.lyap_tol)
         if slow_cycle_period(cw.xs, cw.jac, k, k - count, cs.n_max, SLOW_REACH, SLOW_MARGIN):
@@ -319,8 +335,9 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
             fill(out.multipliers[i], np.nan)
         if out.sections.shape[0] > 0:
             record_sections(out, i, cw, k, min(k, out.sections.shape[1]))
-    if not want_stats:
+    if stats == NO_STATS:
         out.dc[i] = np.nan
+    if stats != ALL_STATS:  # not asked for: ε's extremes are not all refined
         out.eps_min[i] = np.nan
         out.eps_max[i] = np.nan
         out.pn_max[i] = np.nan

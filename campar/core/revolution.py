@@ -39,6 +39,11 @@ from .model import (
 
 MAX_STUCK_EVENTS = 8  # zero-length events in a row before a cell is declared stuck
 
+# What a revolution folds into its statistics row (run_revolution's ``stats``).
+NO_STATS = 0  # detachments alone (a label's p)
+DUTY_STATS = 1  # … the time separated and ε's interior minima (the grazing flag) too
+ALL_STATS = 2  # every REV_* column: ε's extremes, Pn's largest value, the touch
+
 
 class Trace(NamedTuple):
     """Recorder of an orbit for figures; length-0 arrays record nothing.
@@ -110,12 +115,13 @@ def record_event(rec, t, x, contact, which):
 
 
 @hot
-def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
+def run_revolution(x, f, p, opt, w, mode, row, stats, step_limit, rec):
     """Integrate one cam revolution from θ = 0 to 2π, in place on x.
 
     Steps end on every cam phase boundary and every contact event; with the
     variational part, Φ starts at I, so x[2:6] ends as the Jacobian of the
-    one-revolution map. Fills the revolution's statistics in ``row``; a row wider than
+    one-revolution map. Fills the revolution's statistics in ``row``, those ``stats``
+    names (NO_STATS, DUTY_STATS, ALL_STATS); a row wider than
     N_REV_STATS (the chain's) keeps the steps whose extrema need the dense output for
     deferred.refine_deferred instead of refining them. Fails with STEP_LIMIT once the
     workspace has counted more than step_limit steps.
@@ -133,7 +139,7 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
     eps, deps = gap(0.0, x, p, mode[0])  # not RISE: numba would compile a variant for the literal
     mode[1] = contact_mode(eps, deps, p)
     t = 0.0
-    e0 = de0 = dde0 = pn0 = dpn0 = 0.0
+    k0 = (0.0, 0.0, 0.0, 0.0, 0.0)  # model.contact_kinematics at t in this mode (when fresh)
     if rec is not None:
         record_sample(rec, t, x[0], x[1], p, mode)
     for phase in range(N_PHASES):
@@ -142,14 +148,14 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
         model.rhs(t, x, p, mode, f)
         w.counts[2] += 1
         stuck = 0
-        fresh = False  # e0 … dpn0 hold the kinematics at t in this mode
+        fresh = False  # k0 holds the kinematics at t in this mode
         while t < t_end:
             if w.counts[0] + w.counts[1] > step_limit:
                 return STEP_LIMIT
             t_prev = t
             contact = mode[1]
-            if want_stats and not fresh:
-                e0, de0, dde0, pn0, dpn0 = contact_kinematics(t, x, f, p, mode)
+            if stats != NO_STATS and not fresh:
+                k0 = contact_kinematics(t, x, f, p, mode)
             if rec is not None:
                 rec.prev[0] = x[0]
                 rec.prev[1] = x[1]
@@ -160,59 +166,25 @@ def run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
                 stuck = 0
                 if rec is not None:
                     record_step(rec, opt.method, w, t_prev, t, x, p, mode)
-                if want_stats:
-                    e1, de1, dde1, pn1, dpn1 = contact_kinematics(t, x, f, p, mode)
+                if stats != NO_STATS:
+                    k1 = contact_kinematics(t, x, f, p, mode)
                     h = t - t_prev
                     free = released(contact, p)
-                    dense, pn_hi = step_models(h, mode, e0, de0, e1, de1, pn0, dpn0, pn1, dpn1)
+                    extremes = stats == ALL_STATS
+                    dense, pn_hi = step_models(h, mode, k0, k1, extremes)
                     if not dense:
-                        add_step_stats(row, h, free, e0, e1, math.nan, math.nan, pn_hi)
+                        add_step_stats(row, h, free, k0[0], k1[0], math.nan, math.nan, pn_hi)
                     elif defer_step(
-                        row,
-                        w.y_old,
-                        w.y_new,
-                        w.K,
-                        w.F,
-                        w.ctrl,
-                        t_prev,
-                        h,
-                        mode,
-                        free,
-                        impact_velocity(p.contact),
-                        e0,
-                        de0,
-                        dde0,
-                        e1,
-                        de1,
-                        dde1,
-                        pn0,
-                        dpn0,
-                        pn1,
-                        dpn1,
+                        row, w, t_prev, h, mode, free, impact_velocity(p.contact), k0, k1
                     ):
-                        add_step_stats(row, h, free, e0, e1, math.nan, math.nan, max(pn0, pn1))
+                        pn_hi = max(k0[3], k1[3])
+                        add_step_stats(row, h, free, k0[0], k1[0], math.nan, math.nan, pn_hi)
                     else:
                         dip, peak, pn_hi = step_extremes(
-                            model.rhs,
-                            opt.method,
-                            w,
-                            t_prev,
-                            h,
-                            p,
-                            mode,
-                            e0,
-                            de0,
-                            dde0,
-                            e1,
-                            de1,
-                            dde1,
-                            pn0,
-                            dpn0,
-                            pn1,
-                            dpn1,
+                            model.rhs, opt.method, w, t_prev, h, p, mode, k0, k1, extremes
                         )
-                        add_step_stats(row, h, free, e0, e1, dip, peak, pn_hi)
-                    e0, de0, dde0, pn0, dpn0 = e1, de1, dde1, pn1, dpn1
+                        add_step_stats(row, h, free, k0[0], k1[0], dip, peak, pn_hi)
+                    k0 = k1
                     fresh = True
             elif which >= 0:
                 stuck += 1

@@ -57,7 +57,7 @@ def revolution_args(solver, cs, work, recorder=types.none, law=PAPER_LAW) -> tup
         typeof(work),
         MODE,
         VECTOR,
-        types.boolean,
+        types.int64,
         types.int64,
         recorder,
     )
@@ -95,13 +95,11 @@ def revolution_link(solver, cs, work, recorder=types.none, law=PAPER_LAW) -> np.
 
 
 @intrinsic
-def call_revolution(typingctx, link, x, f, p, opt, w, mode, row, want_stats, step_limit, rec):
-    """run_revolution(x, f, p, opt, w, mode, row, want_stats, step_limit, rec) through
+def call_revolution(typingctx, link, x, f, p, opt, w, mode, row, stats, step_limit, rec):
+    """run_revolution(x, f, p, opt, w, mode, row, stats, step_limit, rec) through
     ``link`` (revolution_link): its status. Literal arguments are passed as their plain
     types, the ones revolution_args names."""
-    args = tuple(
-        types.unliteral(a) for a in (x, f, p, opt, w, mode, row, want_stats, step_limit, rec)
-    )
+    args = tuple(types.unliteral(a) for a in (x, f, p, opt, w, mode, row, stats, step_limit, rec))
     expected = fingerprint(args)
 
     def codegen(context, builder, signature, llargs):

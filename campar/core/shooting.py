@@ -41,7 +41,7 @@ from .model import (
     make_params,
     start_chain,
 )
-from .revolution import scale_solver_options
+from .revolution import ALL_STATS, scale_solver_options
 from .revolution_call import call_revolution, revolution_link
 
 LINK = types.Array(types.int64, 1, "C")  # revolution_link's [address, fingerprint]
@@ -184,7 +184,7 @@ def shoot_compiled(
     steps0 = w.counts[0]
     for k in range(n):
         limit = w.counts[0] + w.counts[1] + max_steps
-        status = call_revolution(link, x, f, p, opt, w, mode, row, True, limit, None)
+        status = call_revolution(link, x, f, p, opt, w, mode, row, ALL_STATS, limit, None)
         if status != OK:
             return status
         if not (math.isfinite(x[0]) and math.isfinite(x[1])):

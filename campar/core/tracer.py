@@ -23,7 +23,7 @@ from .model import (
     make_params,
     start_chain,
 )
-from .revolution import make_trace, scale_solver_options
+from .revolution import NO_STATS, make_trace, scale_solver_options
 from .revolution_call import call_revolution, revolution_link
 
 LINK = types.Array(types.int64, 1, "C")  # revolution_link's [address, fingerprint]
@@ -92,7 +92,7 @@ def trace_compiled(
     model.rhs(0.0, x, p, mode, f)
     w.ctrl[CTRL_H] = initial_step(model.rhs, 0.0, x, f, p, mode, solver.rtol, solver.atol, 2, 0.1)
     for _ in range(revolutions):
-        status = call_revolution(link, x, f, p, opt, w, mode, row, False, cs.max_steps, rec)
+        status = call_revolution(link, x, f, p, opt, w, mode, row, NO_STATS, cs.max_steps, rec)
         if status != OK:
             return status, x[0], x[1]
     return OK, x[0], x[1]

@@ -32,7 +32,7 @@ FIXED = 1  # a fixed number of revolutions, then a read window (the paper's reci
 
 
 @inlined
-def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
+def step_revolution(cw, k, variational, p, opt, cs, stats, step_budget):
     """Revolution k+1 from xs[k]: fills xs[k+1], jac[k] (if variational), revs[k]."""
     if variational:
         x, f, w = cw.x6, cw.f6, cw.w6
@@ -42,7 +42,7 @@ def step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget):
     x[1] = cw.xs[k, 1]
     limit = w.counts[0] + w.counts[1] + (step_budget - spend(cw))
     status = call_revolution(
-        cw.revolution, x, f, p, opt, w, cw.mode, cw.revs[k], want_stats, limit, None
+        cw.revolution, x, f, p, opt, w, cw.mode, cw.revs[k], stats, limit, None
     )
     if status != OK:
         return status
@@ -69,7 +69,7 @@ def share_step_size(src, dst):
 
 
 @inlined
-def transient_converged(cw, p, opt, cs, want_stats, step_budget):
+def transient_converged(cw, p, opt, cs, stats, step_budget):
     """Revolutions until assess_revolution accepts a cycle or the budget ends.
 
     From revolution cs.chaos_after on (0: never), a motion whose largest Lyapunov
@@ -101,7 +101,7 @@ def transient_converged(cw, p, opt, cs, want_stats, step_budget):
         for b in range(cw.est.shape[1]):
             cw.est[a, b, 0] = -1.0
     while k < cs.max_revolutions:
-        status = step_revolution(cw, k, True, p, opt, cs, want_stats, step_budget)
+        status = step_revolution(cw, k, True, p, opt, cs, stats, step_budget)
         if status != OK:
             return status, k, 0, base, jumps, escapes
         k += 1
@@ -181,7 +181,7 @@ def nonperiodic_verdict(cw, k, base, sighted, cs):
 
 
 @inlined
-def transient_fixed(cw, p, opt, cs, want_stats, step_budget):
+def transient_fixed(cw, p, opt, cs, stats, step_budget):
     """cs.max_revolutions plain revolutions, then a window with variational equations.
 
     Returns (status, k, period) with the period from the plain repeat test.
@@ -192,7 +192,7 @@ def transient_fixed(cw, p, opt, cs, want_stats, step_budget):
         variational = k >= cs.max_revolutions
         if k == cs.max_revolutions:
             share_step_size(cw.w2, cw.w6)
-        status = step_revolution(cw, k, variational, p, opt, cs, want_stats, step_budget)
+        status = step_revolution(cw, k, variational, p, opt, cs, stats, step_budget)
         if status != OK:
             return status, k, 0
         k += 1

@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from ..core.version import KERNEL_VERSION
 from ..errors import CamparError
 
 TRACE_POINTS = 4000  # samples of an orbit sent to the page (every k-th of the trace)
@@ -40,9 +41,13 @@ def cell_at(path, row: int, col: int, layer: int = 0):
 
 
 def cell_report(path, row: int, col: int, layer: int = 0) -> dict:
-    """What the page's cell panel shows: ``cell_at``'s numbers and its orbit, JSON-ready."""
-    result = cell_at(path, row, col, layer)
+    """What the page's cell panel shows: ``cell_at``'s numbers and its orbit, JSON-ready;
+    ``kernel_note`` where another kernel computed the store (its values need not come back)."""
+    stored = stored_model_cell(path, row, col, layer)
+    result = stored.simulate(trace=True)
     data = result.to_dict()
+    if not stored.current_kernel:
+        data["kernel_note"] = _kernel_note(stored.kernel)
     trace = result.trace
     if trace is not None:
         k = max(1, len(trace.t) // TRACE_POINTS)
@@ -53,8 +58,25 @@ def cell_report(path, row: int, col: int, layer: int = 0) -> dict:
         data["trace"]["events"] = {
             name: _finite(trace.events_named(name)) for name in ("impact", "detachment")
         }
-    data["cell"] = {"row": row, "col": col, "layer": layer}
+    data["cell"] = {"row": row, "col": col, "layer": layer, "kernel": stored.kernel}
     return data
+
+
+def kernel_note(path) -> str | None:
+    """What the page says of a store another kernel version computed (its cells computed
+    again need not come back bit for bit); None for one this campar's kernel computed."""
+    from ..sweep.store import read_store, stored_kernel
+
+    with read_store(path) as reader:
+        kernel = stored_kernel(reader.attrs)
+    return None if kernel == str(KERNEL_VERSION) else _kernel_note(kernel)
+
+
+def _kernel_note(kernel: str | None) -> str:
+    return (
+        f"computed with kernel version {KERNEL_VERSION}; the store was computed by "
+        f"{kernel or 'an earlier one'}: its values need not come back bit for bit"
+    )
 
 
 def attractors_report(path, row: int, col: int, count: int) -> dict:

@@ -169,9 +169,16 @@ def _diagram(drawn: str, values: dict, cells: dict, chatter: int) -> dict:
 
 
 def line_report(path, along: str, row: int, col: int, row2: int, col2: int, points) -> dict:
-    """The worker's line action: a row, a column or a segment (``along``)."""
+    """The worker's line action: a row, a column or a segment (``along``); with
+    ``kernel_note`` where another kernel computed the store (a row's cells need not be
+    the map's then)."""
+    from .cells import kernel_note
+
     if along == "row":
-        return row_line(path, row)
-    if along == "column":
-        return column_line(path, col)
-    return segment_line(path, (row, col), (row2, col2), points)
+        data = row_line(path, row)
+    elif along == "column":
+        data = column_line(path, col)
+    else:
+        data = segment_line(path, (row, col), (row2, col2), points)
+    note = kernel_note(path)
+    return data if note is None else {**data, "kernel_note": note}

@@ -120,13 +120,23 @@ class Explorer:
             self.zoom_runner.stop()
 
     def _watch(self, source: MapSource, seconds: float = REFRESH_SECONDS) -> None:
-        try:
-            source.scan()
-            while not self._stop.wait(seconds):
-                if source.status()["verified"] + len(source.damage) < len(source.tiles):
+        """Scan the store, then look at it again every ``seconds`` while a tile is not
+        shown (pending, or masked as damaged: a run may complete or repair it). A look
+        that fails (a store being repaired or replaced) is said once and tried again."""
+        while True:
+            try:
+                if not source.scanned:
+                    source.scan()
+                elif source.status()["verified"] < len(source.tiles):
                     source.refresh()
-        except Exception:  # the page shows the store as it was; the server goes on
-            log.exception("watching %s", source.path)
+                source.problem = None
+            except Exception as exc:  # the page shows the store as it was; the server goes on
+                if source.problem is None:  # a campar error says itself in one line
+                    trace = not isinstance(exc, CamparError)
+                    log.warning("watching %s: %s", source.path, exc, exc_info=trace)
+                source.problem = f"the store cannot be read now ({type(exc).__name__}: {exc})"
+            if self._stop.wait(seconds):
+                return
 
     # -- answers ---------------------------------------------------------------------------
 

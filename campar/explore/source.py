@@ -8,6 +8,9 @@ keeps a field under MOSAIC_CELLS cells: a 400 × 400 map is kept whole, a 4000 �
 one at s = 2. A damaged tile is masked — its cells read as not computed, as
 ``campar.open`` reads them — and named in ``status()``. Tiles a run commits later are
 verified and taken in by ``refresh()`` as they come; a tile not yet committed is pending.
+A masked tile is looked at again whenever the store's commits have changed since
+(``StoreReader.commit_mark``): a run that repairs it makes it pending, then commits it
+anew, and the tile is shown once it verifies — without a restart of the explorer.
 Tiles are taken in through the store's snapshot read (``check_tiles`` on a
 ``read_store`` reader, as ``campar.open`` reads): the tiles its root record holds
 committed, each verified whole against the record's checksum — so a tile is drawn whole
@@ -103,6 +106,7 @@ class MapSource:
         self.damage: dict[int, str] = {}
         self.categories: dict[str, list[str]] = {}
         self.counts: dict[tuple[str, int], Counter] = {}
+        self._tile_counts: dict[tuple[str, int], Counter] = {}  # (field, tile) → its share
         self.mosaic: dict[tuple[str, int], np.ndarray] = {}
         for field in self.fields.values():
             for layer in range(self.layers):
@@ -121,48 +125,84 @@ class MapSource:
         self._digests: dict[tuple[str, int], bytes] = {}  # (array, tile) → as verified
         self._cache_bytes = 0
         self._open_reader = None
+        self._mark = None  # the store's commit mark as last taken in (``commit_mark``)
         self.scanned = False
+        self.problem: str | None = None  # why the last look at the store failed, if it did
 
     # -- taking tiles in -----------------------------------------------------------------
 
     def scan(self) -> None:
         """Verify every committed tile and take the intact ones in (streaming)."""
         with read_store(self.path) as reader:
+            mark = reader.commit_mark()
             report = verify_store(reader, lambda check: self._ingest(check.tile, check.arrays))
         with self._lock:
             for index, why in report.damaged.items():
-                self.state[index] = DAMAGED
-                self.damage[index] = why
+                self._mark_damaged(index, why)
+            self._mark = mark
             self.scanned = True
 
     def refresh(self) -> int:
-        """Verify and take in the tiles committed since the last look; how many."""
+        """Verify and take in the tiles committed since the last look and, if the store's
+        commits changed since (``commit_mark``), look again at the masked ones: pending if
+        a repair made them so, shown once they verify; how many tiles changed state."""
         with read_store(self.path) as reader:
+            mark = reader.commit_mark()
+            changed = mark != self._mark
+            with self._lock:
+                pending, masked = self.state == PENDING, self.state == DAMAGED
+            if not changed and not _newly_committed(reader, pending):
+                return 0  # nothing committed since: no tile flag read
             done, flag_problems = reader.tile_flags()
             done[list(flag_problems)] = True  # committed, its flag damaged: check_tiles says
-            new = np.flatnonzero(done & (self.state == PENDING)).tolist()
-            if not new:
-                return 0
-            with self._lock:  # a reader opened before these tiles does not see them
-                self._close_reader()
-            for check in check_tiles(reader, only=new):
-                if check.problem:
-                    self._mark_damaged(check.tile.index, check.problem)
-                else:
-                    self._ingest(check.tile, check.arrays)
-        return len(new)
+            again = masked & changed
+            new = np.flatnonzero(done & (pending | again)).tolist()
+            gone = np.flatnonzero(again & ~done).tolist()  # pending again: a run repairs it
+            for index in gone:
+                self._mark_pending(index)
+            if new:
+                with self._lock:  # a reader opened before these tiles does not see them
+                    self._close_reader()
+                for check in check_tiles(reader, only=new):
+                    if check.problem:
+                        self._mark_damaged(check.tile.index, check.problem)
+                    else:
+                        self._ingest(check.tile, check.arrays)
+            self._mark = mark
+        return len(new) + len(gone)
 
     def _mark_damaged(self, index: int, why: str) -> None:
         """A tile that failed its check: named in ``status()``, its cells masked."""
+        with self._lock:
+            self._mask(index)
+            self.state[index] = DAMAGED
+            self.damage[index] = why
+
+    def _mark_pending(self, index: int) -> None:
+        """A tile the store holds pending again (a run repairs it): masked, not damaged."""
+        with self._lock:
+            self._mask(index)
+            self.state[index] = PENDING
+            self.damage.pop(index, None)
+
+    def _mask(self, index: int) -> None:
+        """Draw the tile's cells as not computed, take them out of the legend's counts and
+        forget what was read of it (a tile taken in again is read and digested anew)."""
         tile = self.tiles[index]
         s = self.stride
         at = slice(-(-tile.row_start // s), -(-tile.row_stop // s))
-        with self._lock:
-            self.state[index] = DAMAGED
-            self.damage[index] = why
-            for (name, layer), mosaic in self.mosaic.items():
-                if layer == (tile.layer or 0):
-                    mosaic[at] = PENDING_CELL if self.fields[name].categorical else np.nan
+        layer = tile.layer or 0
+        for (name, which), mosaic in self.mosaic.items():
+            if which != layer:
+                continue
+            mosaic[at] = PENDING_CELL if self.fields[name].categorical else np.nan
+            counted = self._tile_counts.pop((name, index), None)
+            if counted:
+                self.counts[name, layer] -= counted
+        for key in [k for k in self._cache if k[1] == index]:
+            self._cache_bytes -= self._cache.pop(key).nbytes
+        for key in [k for k in self._digests if k[1] == index]:
+            del self._digests[key]
 
     def _ingest(self, tile, arrays: dict) -> None:
         layer = tile.layer or 0
@@ -172,6 +212,8 @@ class MapSource:
         at = slice(first // s, first // s + len(range(first, tile.row_stop, s)))
         chatter = self.job.classify.chatter_p
         with self._lock:
+            if self.state[tile.index] != PENDING:  # taken in before (a scan looked again)
+                self._mask(tile.index)
             for field in self.fields.values():
                 if field.categorical:
                     codes, names = categories(field, arrays, chatter)
@@ -179,13 +221,16 @@ class MapSource:
                     ids = np.array([_category_id(known, name) for name in names], np.int16)
                     values = ids[codes]
                     counts = np.bincount(codes.ravel(), minlength=len(names)).tolist()
-                    self.counts[field.name, layer].update(dict(zip(names, counts, strict=True)))
+                    counted = Counter(dict(zip(names, counts, strict=True)))
+                    self.counts[field.name, layer].update(counted)
+                    self._tile_counts[field.name, tile.index] = counted
                 else:
                     values = numeric(field, arrays)
                 self.mosaic[field.name, layer][at] = values[rows, ::s]
             for name in self._read_names & arrays.keys():
                 self._digests[name, tile.index] = _digest(arrays[name])
             self.state[tile.index] = VERIFIED
+            self.damage.pop(tile.index, None)
 
     # -- reading -------------------------------------------------------------------------
 
@@ -329,6 +374,7 @@ class MapSource:
                 "verified": int((self.state == VERIFIED).sum()),
                 "damaged": {str(i): why for i, why in sorted(self.damage.items())},
                 "scanned": self.scanned,
+                "problem": self.problem,
             }
 
     def legend(self, field: Field, layer: int = 0) -> list[tuple[str, int]]:
@@ -362,6 +408,12 @@ def stored_cell(path, row: int, col: int, layer: int = 0) -> tuple:
     if check.problem:
         raise StoreDamaged(f"tile {tile.index} of {path} is damaged: {check.problem}")
     return job, {name: a[row - tile.row_start, col] for name, a in check.arrays.items()}
+
+
+def _newly_committed(reader, pending: np.ndarray) -> bool:
+    """Whether the reader's snapshot holds a tile committed that ``pending`` says is not
+    (True without a sound root record: only the tile flags can tell then)."""
+    return reader.root is None or bool((reader.committed_tiles() & pending).any())
 
 
 def _digest(a: np.ndarray) -> bytes:

@@ -18,6 +18,7 @@ from ..core.jitcache import ensure_fresh_cache
 from ..core.kernel import (
     CONVERGED,
     FIXED,
+    OUT_EXTREMA,
     OUT_LYAPUNOV,
     OUT_MULTIPLIERS,
     OUT_SECTIONS,
@@ -45,6 +46,8 @@ def output_bits(outputs) -> int:
     bits = 0
     if any(name in outputs for name in ("dc", "eps", "pn", "separation")):
         bits |= OUT_STATS
+    if any(name in outputs for name in ("eps", "pn", "separation")):
+        bits |= OUT_EXTREMA
     if "sections" in outputs:
         bits |= OUT_SECTIONS
     if "multipliers" in outputs:

@@ -95,7 +95,7 @@ def forecast(
     """The plan and cost of ``campar run`` of ``job`` into ``store`` (default: the job's)
     on ``ranks`` ranks, computing nothing and writing nothing; ``tile_work`` as run_job's."""
     path = store or job.store
-    stored, done = stored_state(job, path) if path and not overwrite else (None, None)
+    stored, done, kernel = stored_state(job, path) if path and not overwrite else (None,) * 3
     if job.tiles.rows == "auto":
         if stored is not None:
             job = job.with_tile_rows(stored.tiles.rows)
@@ -113,6 +113,8 @@ def forecast(
         state = "new"
     elif overwrite:
         state = "replaced: --overwrite"
+    elif kernel is not None:
+        state = f"holds this job, {kernel}: a run refuses it unless --overwrite"
     else:
         state = "not a readable store of this job: a run refuses it unless --overwrite"
     done = done or [False] * len(tiles)
@@ -175,16 +177,21 @@ def writers_are_workers(path) -> bool:
     return takes_direct_writes(path) and os.environ.get("CAMPAR_WRITER") != "master"
 
 
-def stored_state(job: Job, path) -> tuple[Job | None, list | None]:
-    """(the stored job, its done flags) if ``path`` is a store of ``job`` (tiles.rows
-    aside: ``auto`` keeps a store's layout), else (None, None)."""
-    from .store import read_store
+def stored_state(job: Job, path) -> tuple[Job | None, list | None, str | None]:
+    """(the stored job, its done flags, None) if ``path`` is a store of ``job`` (by its
+    digest, tiles.rows aside: ``auto`` keeps a store's layout) that a run resumes; (None,
+    None, which kernel computed it) for one another kernel computed (a run refuses it);
+    else (None,) * 3."""
+    from .store import other_kernel, read_store
 
     # No store, a damaged one or another job's: the run decides (refuses, or repairs).
     with contextlib.suppress(Exception), read_store(path) as reader:
-        if reader.job.with_tile_rows(1) == job.with_tile_rows(1):
-            return reader.job, reader.done.tolist()
-    return None, None
+        if reader.job.with_tile_rows(1).digest() == job.with_tile_rows(1).digest():
+            kernel = other_kernel(reader.attrs)
+            if kernel is not None:
+                return None, None, kernel
+            return reader.job, reader.done.tolist(), None
+    return None, None, None
 
 
 def stored_runs(path) -> list[dict]:

@@ -22,10 +22,11 @@ import numpy as np
 
 from .. import __version__
 from ..core.codes import KIND_NAMES, Kind, cell_label, status_message
+from ..core.version import KERNEL_VERSION
 from .attractor_sets import attractor_sets
 from .curves_job import CURVE_TYPES
 from .job import DIRECTIONS
-from .store import adopt_store, read_store, verify_store
+from .store import adopt_store, other_kernel, read_store, stored_kernel, verify_store
 
 log = logging.getLogger("campar.run")
 
@@ -251,7 +252,22 @@ def describe(reader, max_labels: int = 12) -> str:
         )
     else:
         lines.append("runs    none logged")
+    lines.append(kernel_line(reader.attrs))
     return "\n".join(lines)
+
+
+def kernel_line(attrs: dict) -> str:
+    """The ``kernel`` line of ``campar status`` and ``verify``: the version of the kernel
+    that computed the store and, where it is not this campar's, what that entails."""
+    found = stored_kernel(attrs)
+    if other_kernel(attrs) is None:
+        return f"kernel  version {found} (this campar's)"
+    which = f"version {found}" if found else "an earlier one (the store records no version)"
+    return (
+        f"kernel  {which}, not this campar's ({KERNEL_VERSION}): `campar run` does not resume "
+        "it (--overwrite recomputes it), `campar point --from` recomputes its cells only "
+        "with --recompute"
+    )
 
 
 def _damage(damaged: dict[int, str], shown: int = 8) -> str:
@@ -295,7 +311,7 @@ def verify_report(path) -> tuple[str, bool]:
     start = time.monotonic()
     with read_store(path) as reader:
         report = verify_store(reader)
-        job = reader.job
+        job, attrs = reader.job, reader.attrs
     seconds = time.monotonic() - start
     committed, damaged = len(report.committed), len(report.damaged)
     how = "checksums" if report.checksums else "readability only (a format without checksums)"
@@ -314,6 +330,7 @@ def verify_report(path) -> tuple[str, bool]:
         *(f"  {line}" for line in report.lines()),
     ]
     lines += [f"note    {note}" for note in report.notes]
+    lines.append(kernel_line(attrs))
     if report.root_digest:
         lines.append(f"root    {report.root_digest} (the root record's digest)")
     if not report.clean:

@@ -7,7 +7,8 @@ writes a tile's arrays depends on the backend (``Store.direct_writes``): into a
 Zarr store every worker writes its own tiles' chunks (on a thread of its own,
 while its lane computes the next tile) and the master only commits them
 (checksum, then ``done``: a fraction of writing it, docs/scaling.md); into
-HDF5 (serial h5py) the master writes every tile. ``CAMPAR_WRITER=master``
+HDF5 (serial h5py) the master writes every tile, as it does a job's with no
+more tiles pending than workers (``workers_write_tiles``). ``CAMPAR_WRITER=master``
 makes the master write Zarr tiles too (the single-writer path, for comparison).
 The kernel's ``run_chain`` releases the GIL, so the master's compute thread
 keeps a core busy while its main thread does every MPI call, store write and
@@ -459,11 +460,20 @@ def run_job(
         opened = {}
         with share_outcome(comm, opened):
             store = open_store(path, job, overwrite=overwrite)
-            opened["text"] = direct_path(store)
+            opened["text"] = direct_path(store) if workers_write_tiles(job, store, comm) else ""
         if comm is not None:
             lane = ThreadLane(job, f"rank 0 {where}", True, halted, share, tile_work)
         with store, share_outcome(comm):
             return run_master(job, store, signals, comm, grace, lane, bool(opened["text"]))
+
+
+def workers_write_tiles(job: Job, store, comm) -> bool:
+    """Whether the workers are to write their own tiles where the store lets them
+    (``wire.direct_path``): unless the job has no more tiles pending than workers. Each
+    of them then computes about one tile, and the master writes a few tiles for less than
+    a worker's import of the store's backend costs (zarr's: about a tenth of a second of
+    CPU, after its tile, on the run's critical path; benchmarks/RESULTS.md)."""
+    return comm is None or len(pending_tiles(job, store.done)) > comm.Get_size() - 1
 
 
 # Errors a worker re-raises after the master (by index); others arrive as CamparError.

@@ -11,16 +11,37 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from support.stores import assert_same_store, stored
 
 CAMPAR = [sys.executable, "-m", "campar.cli"]
 MPIRUN = Path(sys.executable).parent / "mpirun"
+NEEDS_MPIRUN = pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}")
+# (suffix, ranks) of a test that runs into each backend, in one process and under
+# ``mpirun -n 2`` (marked mpi, skipped where there is no mpirun).
+BACKENDS_AND_RANKS = [
+    (".zarr", 1),
+    (".h5", 1),
+    *(pytest.param(s, 2, marks=[pytest.mark.mpi, NEEDS_MPIRUN]) for s in (".zarr", ".h5")),
+]
 
 
 def run_campar(*args, timeout=300, **kwargs) -> subprocess.CompletedProcess:
     """``campar ARGS`` in a child process, its output captured as text."""
     return subprocess.run(
         [*CAMPAR, *map(str, args)], capture_output=True, text=True, timeout=timeout, **kwargs
+    )
+
+
+def run_campar_mpi(ranks: int, *args, timeout=300) -> subprocess.CompletedProcess:
+    """``mpirun -n RANKS campar ARGS``, its output captured as text."""
+    return subprocess.run(
+        [str(MPIRUN), "-n", str(ranks), *CAMPAR, *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=subprocess_env(),
     )
 
 
@@ -148,13 +169,7 @@ def assert_mpirun_store_equals(job_data: dict, tmp_path: Path, serial: Path) -> 
     parallel = tmp_path / f"mpi{serial.suffix}"
     job_file = tmp_path / f"mpi{serial.suffix}.json"
     job_file.write_text(json.dumps({**job_data, "store": str(parallel)}))
-    result = subprocess.run(
-        [str(MPIRUN), "-n", "2", *CAMPAR, "run", str(job_file)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=subprocess_env(),
-    )
+    result = run_campar_mpi(2, "run", job_file)
     assert result.returncode == 0, result.stderr
     with read_store(parallel) as reader:
         assert reader.attrs["runs"][-1]["ranks"] == 2

@@ -338,6 +338,12 @@ async function computeCell(store, cell) {
     `duty cycle ${fmt(report.dc)}, ε min ${fmt(report.eps_min)}, ε max ${fmt(report.eps_max)}, ` +
     `Pn max ${fmt(report.pn_max)}<br>multipliers ${mult || "—"}<br>` +
     `${report.revolutions} revolutions, ${report.steps} steps, computed in ${report.seconds} s`;
+  if (report.kernel_note) { // another kernel computed the store: said as text, never as markup
+    const note = document.createElement("div");
+    note.className = "error";
+    note.textContent = report.kernel_note;
+    $("cell-numbers").appendChild(note);
+  }
   drawOrbit(report);
 }
 
@@ -439,8 +445,10 @@ function showStatus(status) {
   let text = `tiles ${status.verified}/${status.tiles} verified`;
   if (damaged) text += `, ${damaged} damaged (masked: ${Object.entries(status.damaged)[0].join(": ")})`;
   if (!status.scanned) text += ", verifying …";
+  if (status.problem) text += `; ${status.problem}`;
   $("status").textContent = text;
-  $("status").className = damaged ? "error" : "";
+  $("status").className = damaged || status.problem ? "error" : "";
+  if (status.verified < status.tiles) watchStores(); // tiles to come, or masked ones to look at
 }
 
 function showError(message) {
@@ -489,7 +497,8 @@ function watchStores() {
   watching = setInterval(async () => {
     let stores;
     try { stores = await api("stores"); } catch (error) { return; }
-    const busy = stores.some((s) => !s.status.scanned || s.status.verified + Object.keys(s.status.damaged).length < s.status.tiles);
+    // a masked (damaged) tile keeps the page watching: a run may repair it
+    const busy = stores.some((s) => !s.status.scanned || s.status.verified < s.status.tiles);
     const changed = JSON.stringify(stores.map((s) => s.status)) !== JSON.stringify(state.stores.map((s) => s.status));
     state.stores = stores;
     if (changed) for (const v of activeViews()) v.draw();

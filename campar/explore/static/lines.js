@@ -42,7 +42,8 @@ async function drawLine(store, along, a, b) {
   state.line.data = data;
   state.line.branch = null;
   $("line-head").textContent = `${lineTitle(state.line)}: σn points y over ${SYMBOL[data.x] || data.x}, ` +
-    `${data.points.length} points; label changes dashed (${data.changes.length})`;
+    `${data.points.length} points; label changes dashed (${data.changes.length})` +
+    (data.kernel_note ? `; ${data.kernel_note}` : "");
   drawLinePlot();
 }
 

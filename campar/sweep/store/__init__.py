@@ -57,7 +57,9 @@ from ._schema import (
     check_tile_arrays,
     fill_value,
     job_differences,
+    other_kernel,
     store_arrays,
+    stored_kernel,
     tile_shape,
     upgraded_attrs,
 )
@@ -84,8 +86,10 @@ __all__ = [
     "job_differences",
     "lock_path",
     "open_store",
+    "other_kernel",
     "read_store",
     "store_arrays",
+    "stored_kernel",
     "tile_checksum",
     "tile_shape",
     "upgraded_attrs",
@@ -129,11 +133,12 @@ def open_store(path: str | Path, job: Job, *, overwrite: bool = False) -> Store:
     """Open the store of a run: create it, or resume it if it holds the same job.
 
     Raises StoreLocked if another live run holds it (through whatever alias),
-    StoreMismatch if it holds a different job (untouched, unless ``overwrite``
-    replaces it), StoreError if ``path`` is something other than a campar store
-    (never replaced), StoreDamaged if its metadata is, StoreIOError if the
-    system refuses a read or write. Committed tiles are verified first; the
-    damaged ones are made pending (``Store.done`` is unset for them).
+    StoreMismatch if it holds a different job or was computed by another kernel
+    version (untouched, unless ``overwrite`` replaces it), StoreError if ``path``
+    is something other than a campar store (never replaced), StoreDamaged if its
+    metadata is, StoreIOError if the system refuses a read or write. Committed
+    tiles are verified first; the damaged ones are made pending (``Store.done`` is
+    unset for them).
     """
     path = Path(path)
     backend, real = _backend(path), real_path(path)
@@ -267,8 +272,10 @@ def adopt_store(path: str | Path) -> Verification:
 
 def takes_direct_writes(path: str | Path) -> bool:
     """Whether the store at ``path`` (by its backend) lets workers write their own tiles
-    (``Store.direct_writes``), before it is opened."""
-    return _STORES[_backend(Path(path))].direct_writes
+    (``Store.direct_writes``), known from its name before it is opened and before its
+    backend is imported: a Zarr store does. Under MPI rank 0 decides a job's tile rows
+    with it, and the workers wait for that before they load the kernel."""
+    return backend_name(path) == "zarr"
 
 
 class TileWriter:
@@ -306,9 +313,10 @@ def read_store(path: str | Path) -> StoreReader:
     """Open a store read-only (no lock; safe while a run writes it). StoreDamaged if its
     metadata cannot be read or disagrees with itself; StoreIOError if the system refuses."""
     path = Path(path)
-    backend, real = _backend(path), real_path(path)
-    if not real.exists():
+    real = real_path(path)
+    if not real.exists():  # said before the backend is imported (a run asks, to resume)
         raise StoreError(f"no store at {path}")
+    backend = _backend(path)
     try:
         attrs = backend.read_attrs(real)
         if attrs is None:

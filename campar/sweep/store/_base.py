@@ -135,6 +135,20 @@ class StoreReader(ABC):
         committed[list(self._outside_root())] = True
         return committed
 
+    def commit_mark(self) -> tuple:
+        """What changes whenever a tile is committed or made pending again (a repair) and
+        whenever a run is logged: the root record as read (its digest, commit lines and
+        chain), the tiles committed outside it (a journal), the number of runs logged. Equal
+        marks of two readers: no tile changed between them (a repair and a recomputation in
+        between end in another run logged). Cheap: read from the record and the attributes,
+        no tile flag. Without a sound record: the runs logged alone."""
+        runs = self.attrs.get("runs")
+        logged = len(runs) if isinstance(runs, list) else repr(runs)
+        if self.root is None:
+            return (None, logged)
+        outside = tuple(sorted(self._outside_root().items()))
+        return (self.root.digest, self.root.lines, self.root.chain, outside, logged)
+
     def _check_layout(self) -> None:
         """StoreDamaged unless the arrays are as the stored job says (backends call this
         once their file is open); ``array_shapes`` from then on."""

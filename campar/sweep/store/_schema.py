@@ -382,8 +382,27 @@ def _show(value) -> str:
     return json.dumps(value) if isinstance(value, (str, list, dict)) else str(value)
 
 
+def stored_kernel(attrs: dict) -> str | None:
+    """The version of the numerical kernel that computed a store (``versions.kernel``, as
+    text); None for a store that records none (written before stores recorded it)."""
+    versions = attrs.get("versions")
+    kernel = versions.get("kernel") if isinstance(versions, dict) else None
+    return None if kernel is None else str(kernel)
+
+
+def other_kernel(attrs: dict) -> str | None:
+    """Which kernel computed a store, said against this campar's, if another one did (its
+    cells would not reproduce, nor join this kernel's in one map); None if this one did."""
+    found = stored_kernel(attrs)
+    if found == str(KERNEL_VERSION):
+        return None
+    which = f"kernel version {found}" if found else "an earlier kernel (it records no version)"
+    return f"computed by {which}, this campar's is kernel version {KERNEL_VERSION}"
+
+
 def check_same_job(path, attrs: dict, job: Job) -> None:
-    """Raise StoreMismatch unless the store at ``path`` was made by ``job`` in this format."""
+    """Raise StoreMismatch unless the store at ``path`` was made by ``job`` in this format
+    and by this campar's kernel (a resume would mix two kernels' numbers in one map)."""
     found = attrs.get("campar_store")
     if found != FORMAT:
         raise StoreMismatch(
@@ -392,6 +411,13 @@ def check_same_job(path, attrs: dict, job: Job) -> None:
             "it is), or use --overwrite to recompute it in place"
         )
     if attrs.get("job_hash") == job.digest():
+        kernel = other_kernel(attrs)
+        if kernel is not None:
+            raise StoreMismatch(
+                f"{path} was {kernel}: resuming it would mix two kernels' numbers in one "
+                "map; run the job into another --store path (this one is left as it is), or "
+                "use --overwrite to recompute it in place"
+            )
         return
     diffs = job_differences(attrs.get("job", {}), job) or ["(the job hashes differ)"]
     if len(diffs) == 1 and diffs[0].startswith("model.cam.table_sha256:"):
