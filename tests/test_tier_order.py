@@ -15,7 +15,7 @@ class Item:
     def __init__(self, name: str, *markers: str) -> None:
         module, _, self.name = name.partition("::")
         self.path = Path(module)
-        self.marks = [pytest.Mark(m, (), {}) for m in markers]
+        self.marks = [getattr(pytest.mark, m).mark for m in markers]
 
     def iter_markers(self):
         return iter(self.marks)
