@@ -177,10 +177,9 @@ def leave(code: int) -> None:
     """End the program now with ``code``, its work done and its store closed: what the
     interpreter's exit would do that matters — log handlers flushed and closed, MPI
     finalized where a one-rank run initialized it, the standard streams flushed — then
-    ``os._exit``, without
-    tearing down every module and object the program built (numba's compiled code, zarr's
-    event loop and threads, idle by now), the larger part of a run's exit
-    (benchmarks/RESULTS.md, "Start-up")."""
+    ``os._exit``, without tearing down every module and object the program built
+    (numba's compiled code, zarr's event loop and threads, idle by now), the larger part
+    of a run's exit (benchmarks/RESULTS.md, "Start-up")."""
     import logging
 
     logging.shutdown()

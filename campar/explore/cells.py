@@ -65,11 +65,11 @@ def cell_report(path, row: int, col: int, layer: int = 0) -> dict:
 def kernel_note(path) -> str | None:
     """What the page says of a store another kernel version computed (its cells computed
     again need not come back bit for bit); None for one this campar's kernel computed."""
-    from ..sweep.store import read_store, stored_kernel
+    from ..sweep.store import other_kernel, read_store, stored_kernel
 
     with read_store(path) as reader:
-        kernel = stored_kernel(reader.attrs)
-    return None if kernel == str(KERNEL_VERSION) else _kernel_note(kernel)
+        attrs = reader.attrs
+    return None if other_kernel(attrs) is None else _kernel_note(stored_kernel(attrs))
 
 
 def _kernel_note(kernel: str | None) -> str:

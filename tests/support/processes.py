@@ -27,22 +27,22 @@ BACKENDS_AND_RANKS = [
 ]
 
 
-def run_campar(*args, timeout=300, **kwargs) -> subprocess.CompletedProcess:
-    """``campar ARGS`` in a child process, its output captured as text."""
+def run_campar(*args, launcher=(), timeout=300, **kwargs) -> subprocess.CompletedProcess:
+    """``campar ARGS`` (under ``launcher``, e.g. mpirun -n 2) in a child process, its
+    output captured as text."""
     return subprocess.run(
-        [*CAMPAR, *map(str, args)], capture_output=True, text=True, timeout=timeout, **kwargs
+        [*map(str, launcher), *CAMPAR, *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        **kwargs,
     )
 
 
 def run_campar_mpi(ranks: int, *args, timeout=300) -> subprocess.CompletedProcess:
     """``mpirun -n RANKS campar ARGS``, its output captured as text."""
-    return subprocess.run(
-        [str(MPIRUN), "-n", str(ranks), *CAMPAR, *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        env=subprocess_env(),
-    )
+    launcher = (MPIRUN, "-n", ranks)
+    return run_campar(*args, launcher=launcher, timeout=timeout, env=subprocess_env())
 
 
 def subprocess_env() -> dict:
