@@ -166,8 +166,8 @@ def observed() -> bool:
 def alone() -> bool:
     """Whether the program may leave at once: no tracer or profiler watches it and it is no
     rank of a parallel run — under mpirun the ranks end through the interpreter's exit,
-    which finalizes MPI after every rank's last message (a rank gone at once was seen to
-    take a three-rank run down with it)."""
+    which finalizes MPI after every rank's last message (a rank gone at once can take the
+    other ranks' run down with it)."""
     mpi = sys.modules.get("mpi4py.MPI")
     parallel = mpi is not None and mpi.Is_initialized() and mpi.COMM_WORLD.Get_size() > 1
     return not observed() and not parallel
