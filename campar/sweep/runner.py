@@ -117,7 +117,8 @@ class ThreadLane:
         # queue.Queue, not SimpleQueue: CPython 3.11's SimpleQueue.get(timeout) can block
         # for good when a signal interrupts it (measured), which would deafen the master.
         self._outbox = queue.Queue()
-        threading.Thread(target=self._loop, daemon=True, name="campar-compute").start()
+        self._thread = threading.Thread(target=self._loop, daemon=True, name="campar-compute")
+        self._thread.start()
 
     def start(self, tile: Tile) -> None:
         """Compute ``tile`` after those the lane holds."""
@@ -145,11 +146,14 @@ class ThreadLane:
         self.shortest_tile = min(self.shortest_tile, out.seconds)
         return out
 
-    def close(self) -> None:
-        # Queued tiles are dropped; one in progress is abandoned (the daemon thread dies
-        # with the process).
+    def close(self, wait: bool = False) -> None:
+        """Drop the queued tiles and end the thread; one in progress is abandoned (the
+        daemon thread dies with the process) unless ``wait``: then the thread's work
+        (a tile, or the kernel load) ends first."""
         self.withdraw()
         self._put(None)
+        if wait:
+            self._thread.join()
 
     def _put(self, tile: Tile | None) -> None:
         with self._changed:
@@ -441,7 +445,13 @@ def run_job(
             lane = ThreadLane(
                 job, f"rank {comm.Get_rank()} {where}", True, halted, share, tile_work
             )
-            direct = receive_outcome(comm)  # of opening the store: where to write, if at all
+            try:  # of opening the store: where to write, if at all
+                direct = receive_outcome(comm)
+            except BaseException:
+                # A refusal: the process ends once the kernel load is over, never during it
+                # (a daemon thread inside llvmlite at the interpreter's exit can crash it).
+                lane.close(wait=True)
+                raise
             work(comm, job, signals, lane, direct)
             receive_outcome(comm)  # of the run
             return RunSummary("worker", {})
