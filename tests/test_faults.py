@@ -22,6 +22,7 @@ from collections import Counter
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 import yaml
@@ -44,6 +45,7 @@ from campar.errors import StoreDamaged
 from campar.sweep.plan import plan_tiles
 from campar.sweep.store import _h5guard, read_store, verify_store
 from campar.sweep.store import _hdf5 as h5
+from campar.sweep.store._h5layout import USERBLOCK
 
 ROUNDS = int(os.environ.get("CAMPAR_FAULT_ROUNDS", "1"))
 BACKENDS = [".zarr", ".h5"]
@@ -119,28 +121,54 @@ def test_writers_killed_at_random_moments_lose_no_committed_tile(tmp_path, suffi
 # -- stores damaged at random places (quick: a few per backend; slow: many) ---------------
 
 
-# What a Zarr round damages, in turn: each kind of damage on each class of a tile's files (a
-# cell array's chunk, its checksum, its done flag); which tile and which array are drawn at
-# random. (An HDF5 store is one file: the place in it is drawn at random.)
+# What a round damages, in turn: each kind of damage on each class of a store's bytes; the
+# rest (which tile, which array, which byte) is drawn at random. Zarr: a tile's files (a cell
+# array's chunk, its checksum, its done flag). HDF5, one file (a deleted file is no store):
+# the user block (campar's seal), HDF5's own structures (superblock, object headers, heaps,
+# B-trees, free space), a tile's chunk (of a cell array, the checksum or the done flag).
+# A damaged journal entry: test_integrity.py.
 ZARR_TURNS = [(how, files) for how in DAMAGE for files in ("cells", "checksum", "done")]
+HDF5_TURNS = [
+    (how, part) for how in ("truncate", "flip", "zero") for part in ("seal", "hdf5", "chunk")
+]
+
+
+def turns(path: Path) -> list[tuple[str, str]]:
+    return ZARR_TURNS if path.suffix == ".zarr" else HDF5_TURNS
+
+
+def hdf5_offset(path: Path, part: str, rng: np.random.Generator) -> int:
+    """A random byte of ``part`` of an intact HDF5 store file (see ``HDF5_TURNS``)."""
+    if part == "seal":
+        return int(rng.integers(0, USERBLOCK))
+    spans = []  # where HDF5 keeps the datasets' values: [start, stop) in the file
+    with h5py.File(path, "r") as f:
+        for dataset in f.values():
+            if dataset.chunks:
+                chunks = map(dataset.id.get_chunk_info, range(dataset.id.get_num_chunks()))
+                spans += [(c.byte_offset, c.byte_offset + c.size) for c in chunks]
+    if part == "chunk":
+        start, stop = spans[int(rng.integers(len(spans)))]
+        return int(rng.integers(start, stop))
+    while True:  # values are a few per cent of the file
+        at = int(rng.integers(USERBLOCK, path.stat().st_size))
+        if not any(start <= at < stop for start, stop in spans):
+            return at
 
 
 def damage_at_random(path: Path, job, rng: np.random.Generator, turn: int):
-    """Damage one random committed tile's chunk (Zarr: as ``ZARR_TURNS[turn]`` says), or the
-    file or a journal entry at a random place (HDF5). Returns (what was done or None if
-    nothing changed, the tile hit)."""
+    """Damage the store as ``turns(path)[turn]`` says, at a random place of that kind.
+    Returns (what was done or None if nothing changed, the tile hit or None)."""
+    how, where = turns(path)[turn % len(turns(path))]
     if path.suffix == ".zarr":
-        how, where = ZARR_TURNS[turn % len(ZARR_TURNS)]
         index = int(rng.integers(len(plan_tiles(job))))
         *cells, checksum, done = zarr_chunks(path, job, index)
         files = {"cells": cells, "checksum": [checksum], "done": [done]}[where]
         return damage_file(files[int(rng.integers(len(files)))], how, rng), index
-    how = str(rng.choice(DAMAGE))
-    entries = list(h5.journal_entries(path).values())
-    target = entries[int(rng.integers(len(entries)))] if entries and rng.random() < 0.3 else path
-    if target == path and how == "delete":
-        how = "truncate"  # a store file deleted is no store: nothing to detect
-    return damage_file(target, how, rng), None
+    what = None
+    while what is None:  # zeros written over zeros change nothing: another place
+        what = damage_file(path, how, rng, at=hdf5_offset(path, where, rng))
+    return f"{what} ({where})", None
 
 
 def damage_and_repair(path: Path, rounds: int, seed: int) -> dict:
@@ -149,8 +177,7 @@ def damage_and_repair(path: Path, rounds: int, seed: int) -> dict:
     job = make_job()
     rng = np.random.default_rng(seed)
     counts = {"damaged": 0, "detected": 0, "repaired": 0, "refused": 0}
-    # Zarr: every turn once in as many rounds, from a random one
-    start = int(rng.integers(len(ZARR_TURNS))) if path.suffix == ".zarr" else 0
+    start = int(rng.integers(len(turns(path))))  # every turn once in as many rounds
     for turn in range(start, start + rounds):
         if path.exists():
             finish(path, job)
@@ -193,10 +220,10 @@ def test_random_damage_is_detected_and_repaired(tmp_path, suffix):
 @pytest.mark.process  # HDF5: a damaged sealed file is rescued in the guard's child process
 @pytest.mark.parametrize("suffix", BACKENDS)
 def test_many_random_damages_are_detected_and_repaired(tmp_path, suffix):
-    # Zarr: every kind of damage on every class of a tile's files once; HDF5: an HDF5 round
-    # starts rescue processes (~1 s each): this count keeps the suite within its minutes.
-    # CAMPAR_FAULT_ROUNDS scales both (benchmarks/RESULTS.md: the long runs)
-    rounds = (len(ZARR_TURNS) if suffix == ".zarr" else 15) * ROUNDS
+    # Every kind of damage on every class of the store's bytes once (an HDF5 round starts up
+    # to four rescue processes, ~1 s each). CAMPAR_FAULT_ROUNDS scales it
+    # (benchmarks/RESULTS.md: the long runs)
+    rounds = len(ZARR_TURNS if suffix == ".zarr" else HDF5_TURNS) * ROUNDS
     counts = damage_and_repair(tmp_path / f"d{suffix}", rounds, seed=11 + len(suffix))
     assert counts["detected"] == counts["damaged"]
     assert counts["repaired"] >= 0.9 * counts["damaged"]  # HDF5 metadata damage may be refused

@@ -59,9 +59,11 @@ def zarr_chunks(path: Path, job: Job, index: int) -> list[Path]:
     return found
 
 
-def damage_file(target: Path, how: str, rng: np.random.Generator) -> str | None:
-    """Damage one file as a failing disk or a careless hand would; returns what was done
-    (None if the bytes happened not to change)."""
+def damage_file(
+    target: Path, how: str, rng: np.random.Generator, at: int | None = None
+) -> str | None:
+    """Damage one file as a failing disk or a careless hand would, at byte ``at`` (default:
+    drawn at random); returns what was done (None if the bytes happened not to change)."""
     size = target.stat().st_size
     if how == "delete":
         target.unlink()
@@ -69,16 +71,17 @@ def damage_file(target: Path, how: str, rng: np.random.Generator) -> str | None:
         if size == 0:
             return None
         with open(target, "r+b") as fh:
-            fh.truncate(int(rng.integers(0, size)))
+            fh.truncate(int(rng.integers(0, size)) if at is None else at)
     elif how == "flip":
-        offset, bit = int(rng.integers(0, max(size, 1))), int(rng.integers(0, 8))
+        offset = int(rng.integers(0, max(size, 1))) if at is None else at
+        bit = int(rng.integers(0, 8))
         with open(target, "r+b") as fh:
             fh.seek(offset)
             byte = fh.read(1) or b"\0"
             fh.seek(offset)
             fh.write(bytes([byte[0] ^ (1 << bit)]))
     elif how == "zero":
-        offset = int(rng.integers(0, max(size, 1)))
+        offset = int(rng.integers(0, max(size, 1))) if at is None else at
         with open(target, "r+b") as fh:
             fh.seek(offset)
             if not fh.read(4096).strip(b"\0"):
