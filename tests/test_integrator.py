@@ -13,36 +13,29 @@ from campar.core.jit import through_numba
 
 class Omega(NamedTuple):
     w: float
+    dip: float = 0.0  # which event ``crossing`` watches: y = 0 (0.0) or the dip (1.0)
 
 
 @njit
 def oscillator(t, y, p, mode, dy):
-    # y'' = -w² y: y = cos(w t) from (1, 0)
+    # y'' = -w² y: y = cos(w t) from (1, 0); with w = 0, y = t from (0, 1)
     dy[0] = y[1]
     dy[1] = -p.w * p.w * y[0]
 
 
 @njit
-def y_positive(t, y, f, p, mode, g, dg):
-    # event when y crosses zero downward (mode 0) or upward (mode 1)
+def crossing(t, y, f, p, mode, g, dg):
+    # p.dip == 0: y crosses zero downward (mode 0) or upward (mode 1). p.dip == 1:
+    # (y - 1)² − 1e-4, positive but for a dip of width 0.02 around y = 1 (mode 0), and its
+    # negative inside the dip (mode 1): roots at y = 1 ∓ 0.01. One function for both: the
+    # tests of a method share one compilation of the integrator.
     sign = 1.0 if mode[0] == 0 else -1.0
-    g[0] = sign * y[0]
-    dg[0] = sign * f[0]
-    return 1
-
-
-@njit
-def ramp(t, y, p, mode, dy):
-    dy[0] = 1.0  # y = t
-
-
-@njit
-def dip(t, y, f, p, mode, g, dg):
-    # (y - 1)² − 1e-4, positive but for a dip of width 0.02 around y = 1 (mode 0), and
-    # its negative inside the dip (mode 1): roots at y = 1 ∓ 0.01
-    sign = 1.0 if mode[0] == 0 else -1.0
-    g[0] = sign * ((y[0] - 1.0) ** 2 - 1e-4)
-    dg[0] = sign * 2.0 * (y[0] - 1.0) * f[0]
+    if p.dip != 0.0:
+        g[0] = sign * ((y[0] - 1.0) ** 2 - 1e-4)
+        dg[0] = sign * 2.0 * (y[0] - 1.0) * f[0]
+    else:
+        g[0] = sign * y[0]
+        dg[0] = sign * f[0]
     return 1
 
 
@@ -96,7 +89,7 @@ def test_dp54_error_tracks_rtol_on_an_oscillator(rtol):
     p = Omega(2.0)
     # to t = 1 the solution crosses y = 0 once (t = π/4): an event on the way
     y, _, counts = run(
-        oscillator, y_positive, np.array([1.0, 0.0]), 1.0, p, options(rtol=rtol), 10**6
+        oscillator, crossing, np.array([1.0, 0.0]), 1.0, p, options(rtol=rtol), 10**6
     )
     exact = np.array([math.cos(2.0), -2.0 * math.sin(2.0)])
     assert np.max(np.abs(y - exact)) < 10 * rtol
@@ -105,7 +98,7 @@ def test_dp54_error_tracks_rtol_on_an_oscillator(rtol):
 
 def test_events_are_located_on_exact_roots():
     p = Omega(1.5)
-    _, times, _ = run(oscillator, y_positive, np.array([1.0, 0.0]), 10.0, p, options(), 10**6)
+    _, times, _ = run(oscillator, crossing, np.array([1.0, 0.0]), 10.0, p, options(), 10**6)
     roots = (np.arange(len(times)) + 0.5) * math.pi / 1.5
     assert len(times) == 5  # roots of cos(1.5 t) in (0, 10]: (k + 1/2) π / 1.5
     np.testing.assert_allclose(times, roots, atol=1e-9)
@@ -117,18 +110,19 @@ def test_rk4_fixed_step_error_is_fourth_order():
     errs = []
     for h in (0.1, 0.05):
         y, _, _ = run(
-            oscillator, y_positive, np.array([1.0, 0.0]), 1.4, p, options(I.RK4, h_fixed=h), 10**6
+            oscillator, crossing, np.array([1.0, 0.0]), 1.4, p, options(I.RK4, h_fixed=h), 10**6
         )
         errs.append(abs(y[0] - math.cos(1.4)))
     assert 12 < errs[0] / errs[1] < 20
 
 
-@pytest.mark.slow  # compiles the integrator once more, for this test's own field (~5 s)
+@pytest.mark.slow  # compiles the integrator for a field and a method of its own
 def test_two_roots_inside_one_step_are_found():
     # RK4 steps of 0.8 jump over the whole dip of g between y = 0.99 and 1.01: the step
-    # (0.8, 1.6] has g > 0 at both ends; on y = t the roots are t = 1 ∓ 0.01 exactly
-    p = Omega(0.0)
-    _, times, _ = run(ramp, dip, np.array([0.0, 0.0]), 1.6, p, options(I.RK4, h_fixed=0.8), 100)
+    # (0.8, 1.6] has g > 0 at both ends; on y = t (RK4 exact) the roots are t = 1 ∓ 0.01
+    p = Omega(0.0, dip=1.0)
+    y0 = np.array([0.0, 1.0])
+    _, times, _ = run(oscillator, crossing, y0, 1.6, p, options(I.RK4, h_fixed=0.8), 100)
     np.testing.assert_allclose(times, [0.99, 1.01], rtol=0, atol=1e-9)
 
 
