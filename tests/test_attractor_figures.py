@@ -25,7 +25,14 @@ TINY = paper.Size(plane=8, line=60, census=6, zoom=8)
 
 
 @pytest.fixture(scope="module")
-def structure_gallery(tmp_path_factory):
+def stores(tmp_path_factory):
+    """The planes' stores the gallery's figures and the report's section share: the
+    section computes at the gallery's size, so it reuses the clamp's and adds the allow's."""
+    return tmp_path_factory.mktemp("stores")
+
+
+@pytest.fixture(scope="module")
+def structure_gallery(tmp_path_factory, stores):
     """The structure figures of a tiny gallery under the clamp (8 × 8 planes, 6 × 6
     censuses, 8 × 8 zooms), drawn as make_gallery draws them, with the index."""
     from campar.paper import gallery
@@ -35,7 +42,7 @@ def structure_gallery(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp:
         mp.setitem(paper.SIZES, "small", TINY)
         short_curves(mp)
-        g = gallery.Gallery(out / "g", "small", "clamp", out / "stores", log=lambda _: None)
+        g = gallery.Gallery(out / "g", "small", "clamp", stores, log=lambda _: None)
         g.outdir.mkdir()
         draw_structure(g)
         gallery.write_index(g.outdir, "small", "clamp", [g], 0.0)
@@ -105,16 +112,13 @@ def test_zoom_jobs_are_finer_than_their_plane_and_cover_their_window():
 
 # -- the report's numbers against counts from the raw arrays ------------------------------
 
-SMALL = paper.Size(plane=24, line=60, census=12, zoom=8)
-
 
 @pytest.fixture(scope="module")
-def section(tmp_path_factory):
+def section(stores):
     from campar.paper.structure_report import structure_section
 
-    stores = tmp_path_factory.mktemp("stores")
     with pytest.MonkeyPatch.context() as mp:
-        mp.setitem(paper.SIZES, "small", SMALL)
+        mp.setitem(paper.SIZES, "small", TINY)
         short_curves(mp)
         text = "\n".join(structure_section("small", stores, log=lambda _: None))
     return text, stores
