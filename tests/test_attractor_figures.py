@@ -21,7 +21,8 @@ NEW_STEMS = (
     "fig2_omega_f0_curves_zooms",
     "fig4_mu_kn_curves_zooms",
 )
-TINY = paper.Size(plane=8, line=60, census=6, zoom=8)
+TINY = paper.Size(plane=8, line=60, census=6, zoom=5)
+BASIN = 16  # starts per axis of the tiny gallery's basin: both attractors still reached
 
 
 @pytest.fixture(scope="module")
@@ -34,14 +35,16 @@ def stores(tmp_path_factory):
 @pytest.fixture(scope="module")
 def structure_gallery(tmp_path_factory, stores):
     """The structure figures of a tiny gallery under the clamp (8 × 8 planes, 6 × 6
-    censuses, 8 × 8 zooms), drawn as make_gallery draws them, with the index."""
+    censuses, zooms 5 cells across, a 16 × 16 basin, curves of at most 10 points), drawn
+    as make_gallery draws them, with the index."""
     from campar.paper import gallery
     from campar.paper.structure_figures import draw_structure
 
     out = tmp_path_factory.mktemp("structure")
     with pytest.MonkeyPatch.context() as mp:
         mp.setitem(paper.SIZES, "small", TINY)
-        short_curves(mp)
+        mp.setattr(structure, "BASIN_SMALL", BASIN)
+        short_curves(mp, points=10)
         g = gallery.Gallery(out / "g", "small", "clamp", stores, log=lambda _: None)
         g.outdir.mkdir()
         draw_structure(g)
@@ -87,7 +90,7 @@ def test_the_basin_figure_shows_the_bistable_cells_two_attractors(structure_gall
     assert sorted(a.split()[0] for a in meta["attractors"]) == ["1-1", "3-2"]
     job = yaml.safe_load((g.outdir / meta["job"]).read_text())
     assert list(job["sweep"]) == ["y0", "ydot0"] and job["fixed"]["omega"] == 5.8
-    assert job["sweep"]["y0"]["points"] == structure.BASIN_SMALL
+    assert job["sweep"]["y0"]["points"] == BASIN
 
 
 def test_zoom_jobs_are_finer_than_their_plane_and_cover_their_window():
