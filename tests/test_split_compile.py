@@ -139,7 +139,7 @@ def test_a_cold_warm_up_splits_its_compile_and_leaves_nothing_for_a_point_or_a_m
     revolution = point_revolution(tmp_path)
     cold = python_child(COLD_WARM_UP, cache, revolution)
     assert cold["code"] == 0 and "compiled and cached" in cold["said"]
-    # the empty cache does not name the revolution: in_cache reads the cache numba reads
+    # the empty cache does not name the revolution: cache_indexes reads the cache numba reads
     # (NUMBA_CACHE_DIR), whatever the source tree's __pycache__ holds
     assert cold["indexed_before"] is False
     assert cold["forked"] == [True]  # one helper, forked by the warm-up's compile
