@@ -16,7 +16,7 @@ import time
 import pytest
 import yaml
 from support.cli import call_campar
-from support.jobs import SLOW, SMALL_JOB, assert_same_map, merge
+from support.jobs import SLOW, SMALL_JOB, assert_same_map, merge, reference_arrays
 from support.processes import (
     CAMPAR,
     MPIRUN,
@@ -77,8 +77,10 @@ def assert_the_ranks_computed(store, ranks: int, writer: str) -> None:
 @pytest.mark.mpi
 def test_mpi_map_equals_the_serial_one_and_every_rank_computes(write_job):
     path, job = write_job(slow=True)
-    result = run_mpi(2, "run", path)
-    assert result.returncode == 0, result.stderr
+    proc = start_campar("run", path, launcher=mpirun(2))
+    reference_arrays(job)  # the serial map, here while the ranks start and run
+    _, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 0, stderr
     with read_store(job.store) as reader:
         assert_same_map(reader, job)
     assert_the_ranks_computed(job.store, 2, "workers")  # Zarr: each worker writes its tiles
