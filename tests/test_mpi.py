@@ -264,9 +264,10 @@ def fault_runs(tmp_path_factory, warm_numba_cache):
     and mpirun's exit code."""
     folder = tmp_path_factory.mktemp("faults")
     jobs = {}
+    # write_job's slow job, whose serial reference the session may hold already
     for name, data in (("worker", merge(SMALL_JOB, SLOW)), ("tile", SMALL_JOB)):
         path = folder / f"{name}.yaml"
-        data = {**data, "name": name, "store": str(folder / f"{name}.zarr")}
+        data = {**data, "store": str(folder / f"{name}.zarr")}
         path.write_text(yaml.safe_dump(data, sort_keys=False))
         jobs[name] = (path, Job.from_dict(data))
     args = [a for name, (path, _) in jobs.items() for a in (name, path)]
