@@ -32,12 +32,12 @@ from campar.sweep.job import Job
 from campar.sweep.plan import plan_tiles
 from campar.sweep.store import read_store
 
-# 40 tiles of 24 cells, 300 revolutions a cell: commits come fast, and the run lasts the
+# 40 tiles of 12 cells, 300 revolutions a cell: commits come fast, and the run lasts the
 # seconds the second run takes to start.
 JOB = {
     "name": "two",
     "sweep": {
-        "omega": {"from": 6.0, "to": 1.0, "points": 24},
+        "omega": {"from": 6.0, "to": 1.0, "points": 12},
         "mu_cn": {"from": 0.9, "to": 0.6, "points": 40},
     },
     "classify": {"window_revolutions": 16},
