@@ -3,9 +3,9 @@ that fill up, signals at any moment of a run — every resume must end bitwise i
 an uninterrupted run, every damage must be detected, nothing may crash.
 
 Two tiers. The quick one (every CI run) kills writers of synthetic tiles and damages small
-stores a few times per backend. The long one (``-m slow``) kills real ``campar run`` and
-``mpirun -n 2 campar run`` processes many times, damages stores dozens of times per backend
-and fills small disks (tests/test_fault_campaign.py damages any file and checks every
+stores a few times per backend. The long one (``-m slow``) kills and signals real ``campar
+run`` and ``mpirun -n 2 campar run`` processes in turn, damages stores dozens of times per
+backend and fills small disks (tests/test_fault_campaign.py damages any file and checks every
 reader); its counts are printed in lines starting ``FAULTS`` (run with ``-s``):
 
     pytest tests/test_faults.py -m slow -s | grep FAULTS
@@ -18,10 +18,13 @@ import signal
 import subprocess
 import sys
 import time
+from collections import Counter
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from support.damage import (
     DAMAGE,
     assert_synthetic,
@@ -32,10 +35,11 @@ from support.damage import (
     synthetic_store,
     zarr_chunks,
 )
-from support.jobs import assert_same_map
+from support.jobs import SLOW, SMALL_JOB, assert_same_map, merge, reference_arrays
 from support.processes import MPIRUN, kill_tree, subprocess_env, tree_env, wait_until_guarded
 from test_store import make_job
 
+from campar.cli import main
 from campar.errors import StoreDamaged
 from campar.sweep.plan import plan_tiles
 from campar.sweep.store import _h5guard, read_store, verify_store
@@ -115,14 +119,23 @@ def test_writers_killed_at_random_moments_lose_no_committed_tile(tmp_path, suffi
 # -- stores damaged at random places (quick: a few per backend; slow: many) ---------------
 
 
-def damage_at_random(path: Path, job, rng: np.random.Generator) -> tuple[str, int | None]:
-    """Damage one random committed tile's chunk (Zarr), or the file or a journal entry at a
-    random place (HDF5). Returns (what was done or None if nothing changed, the tile hit)."""
-    how = str(rng.choice(DAMAGE))
+# What a Zarr round damages, in turn: each kind of damage on each class of a tile's files (a
+# cell array's chunk, its checksum, its done flag); which tile and which array are drawn at
+# random. (An HDF5 store is one file: the place in it is drawn at random.)
+ZARR_TURNS = [(how, files) for how in DAMAGE for files in ("cells", "checksum", "done")]
+
+
+def damage_at_random(path: Path, job, rng: np.random.Generator, turn: int):
+    """Damage one random committed tile's chunk (Zarr: as ``ZARR_TURNS[turn]`` says), or the
+    file or a journal entry at a random place (HDF5). Returns (what was done or None if
+    nothing changed, the tile hit)."""
     if path.suffix == ".zarr":
+        how, where = ZARR_TURNS[turn % len(ZARR_TURNS)]
         index = int(rng.integers(len(plan_tiles(job))))
-        files = zarr_chunks(path, job, index)
+        *cells, checksum, done = zarr_chunks(path, job, index)
+        files = {"cells": cells, "checksum": [checksum], "done": [done]}[where]
         return damage_file(files[int(rng.integers(len(files)))], how, rng), index
+    how = str(rng.choice(DAMAGE))
     entries = list(h5.journal_entries(path).values())
     target = entries[int(rng.integers(len(entries)))] if entries and rng.random() < 0.3 else path
     if target == path and how == "delete":
@@ -136,12 +149,14 @@ def damage_and_repair(path: Path, rounds: int, seed: int) -> dict:
     job = make_job()
     rng = np.random.default_rng(seed)
     counts = {"damaged": 0, "detected": 0, "repaired": 0, "refused": 0}
-    for _ in range(rounds):
+    # Zarr: every turn once in as many rounds, from a random one
+    start = int(rng.integers(len(ZARR_TURNS))) if path.suffix == ".zarr" else 0
+    for turn in range(start, start + rounds):
         if path.exists():
             finish(path, job)
         else:
             synthetic_store(path, job)
-        what, tile = damage_at_random(path, job, rng)
+        what, tile = damage_at_random(path, job, rng, turn)
         if what is None:
             continue  # zeros written over zeros: no damage
         counts["damaged"] += 1
@@ -178,9 +193,10 @@ def test_random_damage_is_detected_and_repaired(tmp_path, suffix):
 @pytest.mark.process  # HDF5: a damaged sealed file is rescued in the guard's child process
 @pytest.mark.parametrize("suffix", BACKENDS)
 def test_many_random_damages_are_detected_and_repaired(tmp_path, suffix):
-    # an HDF5 round starts rescue processes (~1 s each): these counts keep the suite within
-    # its minutes; CAMPAR_FAULT_ROUNDS scales both (benchmarks/RESULTS.md: the long runs)
-    rounds = (30 if suffix == ".zarr" else 15) * ROUNDS
+    # Zarr: every kind of damage on every class of a tile's files once; HDF5: an HDF5 round
+    # starts rescue processes (~1 s each): this count keeps the suite within its minutes.
+    # CAMPAR_FAULT_ROUNDS scales both (benchmarks/RESULTS.md: the long runs)
+    rounds = (len(ZARR_TURNS) if suffix == ".zarr" else 15) * ROUNDS
     counts = damage_and_repair(tmp_path / f"d{suffix}", rounds, seed=11 + len(suffix))
     assert counts["detected"] == counts["damaged"]
     assert counts["repaired"] >= 0.9 * counts["damaged"]  # HDF5 metadata damage may be refused
@@ -233,106 +249,180 @@ def timed_run(job_file: Path, mpi: bool) -> tuple[float, float]:
     return guarded_after, time.monotonic() - start
 
 
-def interrupt_until_complete(job_file, job, mpi: bool, rng, how: str, timing) -> dict:
-    """Run the job again and again, each run killed (SIGKILL to every process) or signalled
-    (SIGTERM/SIGINT/SIGUSR1 to the process group) at a random moment, until one completes;
-    then the map must equal the uninterrupted one, bit for bit. ``timing``: ``timed_run``'s
-    measure of this job here; every moment is drawn within 1.2 times it, so each run has
-    its chance to commit tiles on a slow machine as on a fast one."""
-    guarded_after, whole = timing
-    counts = {"runs": 0, "interrupted": 0}
-    for _ in range(60):
+@pytest.fixture(scope="session")
+def run_timing(tmp_path_factory):
+    """``run_timing(mpi)``: ``timed_run`` of the campaigns' job in one process or under
+    ``mpirun -n 2``, measured once a session (each campaign's windows scale with it)."""
+    measured = {}
+
+    def timing(mpi: bool) -> dict:
+        if mpi not in measured:
+            folder = tmp_path_factory.mktemp("timed")
+            data = merge(merge(SMALL_JOB, SLOW), {"name": "c", "store": str(folder / "t.zarr")})
+            job_file = folder / "timed.yaml"
+            job_file.write_text(yaml.safe_dump(data, sort_keys=False))
+            guarded_after, whole = timed_run(job_file, mpi)
+            measured[mpi] = {"guarded_after": guarded_after, "whole": whole}
+        return measured[mpi]
+
+    return timing
+
+
+# How a run is interrupted: SIGKILL to every process, or SIGTERM/SIGINT/SIGUSR1 to the group
+HOWS = ("kill", "signal")
+
+
+def interrupt_at(proc: subprocess.Popen, how: str, moment: float, rng) -> tuple[str, str]:
+    """Kill or signal a run ``moment`` seconds from now, unless it ends before; its output."""
+    try:
+        proc.wait(timeout=moment)  # a run that ends before its moment is not waited for
+    except subprocess.TimeoutExpired:
+        if how == "kill":
+            kill_tree(proc.pid)
+        else:
+            sig = [signal.SIGTERM, signal.SIGINT, signal.SIGUSR1][int(rng.integers(3))]
+            os.killpg(proc.pid, sig)
+    return proc.communicate(timeout=300)
+
+
+def interrupt_until_complete(
+    job_file, job, mpi: bool, rng, first: int, timing: dict, most: int = 60
+) -> Counter:
+    """Run the job again and again, the runs killed and signalled in turn (the first as
+    ``HOWS[first]``), each at a random moment, until one completes (after ``most`` runs
+    interrupted, the next is left to complete). ``timing``: ``timed_run``'s measure of this
+    job here; every moment is drawn within 1.2 times it, so each run has its chance to commit
+    tiles on a slow machine as on a fast one (a first run that completes is a timed run: its
+    time replaces the measure). Counts runs and interruptions of each kind."""
+    counts = Counter()
+    for attempt in range(60):
+        how = HOWS[(first + attempt) % 2]
+        start = time.monotonic()
         proc = start_run(job_file, mpi)
-        if how == "kill":  # from the first instant
-            time.sleep(rng.uniform(0.0, 1.2 * whole))
+        if attempt == most:  # the last: left to complete
+            out, err = proc.communicate(timeout=300)
+        elif how == "kill":  # from the first instant
+            out, err = interrupt_at(proc, how, rng.uniform(0.0, 1.2 * timing["whole"]), rng)
         else:  # from campar's first handler on: before it, Python's own start-up
             wait_until_guarded(proc, ranks=2 if mpi else 1)
-            time.sleep(rng.uniform(0.0, 1.2 * (whole - guarded_after)))
-        if proc.poll() is None:
-            if how == "kill":
-                kill_tree(proc.pid)
-            else:
-                sig = [signal.SIGTERM, signal.SIGINT, signal.SIGUSR1][int(rng.integers(3))]
-                os.killpg(proc.pid, sig)
-        out, err = proc.communicate(timeout=300)
+            moment = rng.uniform(0.0, 1.2 * (timing["whole"] - timing["guarded_after"]))
+            out, err = interrupt_at(proc, how, moment, rng)
         counts["runs"] += 1
         bad = [w for w in BAD_WORDS if w in out + err]  # mpirun reports on stdout
         assert not bad, (out + err)[-3000:]
         if proc.returncode == 0:
+            if attempt == 0:
+                timing["whole"] = time.monotonic() - start
             break
-        counts["interrupted"] += 1
+        counts[how] += 1
         allowed = (-signal.SIGKILL, 137, 1) if how == "kill" else (75, 130, 143)
         if how == "kill" and mpi:  # hydra's mpiexec exits 255 when its proxy is killed first
             allowed += (255,)
-        assert proc.returncode in allowed, (proc.returncode, err[-2000:])
+        assert proc.returncode in allowed, (how, proc.returncode, err[-2000:])
     else:
         pytest.fail("60 runs did not complete the map")
-    with read_store(job.store) as reader:
-        assert_same_map(reader, job)
-        assert verify_store(reader).clean
     return counts
 
 
-# The serial cases share the machine with the other tests; those under mpirun get it alone
-UNDER_MPIRUN = pytest.param(True, marks=pytest.mark.mpi)
+# Serial: both backends. Under mpirun (the machine to itself) Zarr alone: its workers write
+# their own tiles and the master commits them, the one writer path mpirun adds; into HDF5
+# the master writes every tile with the serial run's writer (interrupted by the serial HDF5
+# campaign), and the stop (tiles taken back, those in flight collected, exit 75) is the
+# same for both backends. There a campaign interrupts two runs, one of each kind, and lets
+# the third complete; a serial one interrupts four.
+CAMPAIGNS = [
+    pytest.param(".zarr", False, id="zarr-serial"),
+    pytest.param(".h5", False, id="h5-serial"),
+    pytest.param(".zarr", True, id="zarr-mpi", marks=pytest.mark.mpi),
+]
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("mpi", [False, UNDER_MPIRUN], ids=["serial", "mpi"])
-@pytest.mark.parametrize("suffix", BACKENDS)
-@pytest.mark.parametrize("how", ["kill", "signal"])
+@pytest.mark.parametrize(("suffix", "mpi"), CAMPAIGNS)
 @pytest.mark.process
 @pytest.mark.timeout(1200)  # runs again and again until one completes (up to 60)
 def test_runs_interrupted_at_random_moments_resume_bitwise_identical(
-    write_job, tmp_path, suffix, mpi, how
+    write_job, tmp_path, run_timing, suffix, mpi
 ):
     if mpi and not MPIRUN.exists():
         pytest.skip(f"no mpirun at {MPIRUN}")
-    rng = np.random.default_rng([len(suffix), mpi, len(how)])
-    total = {"runs": 0, "interrupted": 0, "campaigns": 0}
-    timing = timed_run(
-        write_job(name="timed", slow=True, store=str(tmp_path / f"t{suffix}"))[0], mpi
-    )
-    for campaign in range(ROUNDS):
+    rng = np.random.default_rng([len(suffix), mpi])
+    timing = run_timing(mpi)
+    # the serial reference, on a thread (the kernel releases the GIL) while the runs start
+    # and wait: it takes no time of its own
+    reference = ThreadPoolExecutor(1).submit(reference_arrays, write_job(name="c", slow=True)[1])
+    total = Counter()
+    # ROUNDS campaigns at least, and more until runs were both killed and signalled
+    for campaign in range(4 * ROUNDS):
+        if campaign >= ROUNDS and all(total[how] for how in HOWS):
+            break
         store = tmp_path / f"c{campaign}{suffix}"
-        job_file, job = write_job(name=f"c{campaign}", slow=True, store=str(store))
-        counts = interrupt_until_complete(job_file, job, mpi, rng, how, timing)
-        total = {k: total[k] + counts.get(k, 1) for k in total}
-    report(kind=how, backend=suffix, mpi=mpi, identical=total["campaigns"], **total)
+        job_file, job = write_job(name="c", slow=True, store=str(store))
+        missing = [i for i, how in enumerate(HOWS) if not total[how]]
+        first = missing[0] if len(missing) == 1 else campaign % 2  # the kind not yet seen
+        most = 2 if mpi else 4
+        total += interrupt_until_complete(job_file, job, mpi, rng, first, timing, most)
+        total["campaigns"] += 1
+        reference.result()
+        with read_store(job.store) as reader:  # equal to the uninterrupted map, bit for bit
+            assert_same_map(reader, job)
+            assert verify_store(reader).clean
+    assert all(total[how] for how in HOWS), f"{total}: runs neither killed nor signalled"
+    report(backend=suffix, mpi=mpi, identical=total["campaigns"], **total)
 
 
 # -- full disks (slow; root only) ------------------------------------------------------------
+
+# tmpfs sizes (kB) where a run meets the full disk at different moments: creating the store,
+# committing a tile or checkpointing, its resume opening the store still full
+DISK_SIZES = (48, 160, 320, 96, 240)
+
+
+def run_on_full_disk(job_file: Path, mpi: bool, capfd) -> tuple[int, str]:
+    """(exit code, stderr) of ``campar run JOB``: under ``mpirun -n 2``, or in this process
+    (a full disk is met by the writer and reported by the command: no process boundary)."""
+    if mpi:
+        proc = start_run(job_file, mpi=True)
+        _, err = proc.communicate(timeout=300)
+        return proc.returncode, err
+    capfd.readouterr()
+    code = main(["run", str(job_file)])
+    return code, capfd.readouterr().err
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("suffix", "mpi"),
     # under mpirun a Zarr store's worker writes its own tiles: its full disk ends the run too
+    # (one size: its run fails mid-way, then its resume at the opening, both under mpirun)
     [*((suffix, False) for suffix in BACKENDS), pytest.param(".zarr", True, marks=pytest.mark.mpi)],
 )
-@pytest.mark.process
+@pytest.mark.process  # mount, and mpirun
 def test_runs_on_a_full_disk_fail_in_one_line_and_resume_identical(
-    write_job, tmp_path, suffix, mpi
+    write_job, tmp_path, monkeypatch, capfd, suffix, mpi
 ):
+    monkeypatch.setattr(h5, "CHECKPOINT_TILES", 1)  # as RUNNER: every tile checkpointed
     disk = tmp_path / "disk"
     counts = {"full": 0, "identical": 0}
-    for size in (48, 160, 320, 96, 240)[: 3 * ROUNDS]:
+    sizes = DISK_SIZES[2 : 2 + ROUNDS] if mpi else DISK_SIZES[: 3 * ROUNDS]
+    for size in sizes:
         with small_disk(disk, size) as resize:
             job_file, job = write_job(name=f"f{size}", store=str(disk / f"f{size}{suffix}"))
             for _ in range(2):  # the first run, then a resume on the still-full disk
-                proc = start_run(job_file, mpi=mpi)
-                _, err = proc.communicate(timeout=300)
+                code, err = run_on_full_disk(job_file, mpi, capfd)
                 assert not [w for w in BAD_WORDS if w in err], err[-3000:]
-                if proc.returncode == 0:
+                if code == 0:
                     break
-                assert proc.returncode == 74, err[-2000:]
+                assert code == 74, err[-2000:]
                 assert "No space left on device" in err.splitlines()[-1]
                 assert leftovers(disk) == [], leftovers(disk)
                 counts["full"] += 1
             resize(16384)
-            assert start_run(job_file, mpi=False).wait(300) == 0
+            assert main(["run", str(job_file)]) == 0  # in this process: the resume
             with read_store(job.store) as reader:
                 assert_same_map(reader, job)
             counts["identical"] += 1
     assert counts["full"] > 0, "no run met the full disk: the sizes no longer test anything"
+    if mpi:
+        assert counts["full"] == 2 * len(sizes), "under mpirun, a run and its resume are full"
     report(kind="full-disk", backend=suffix + (" mpirun -n 2" if mpi else ""), **counts)
