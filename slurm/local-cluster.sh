@@ -120,7 +120,8 @@ AuthType=auth/munge
 CredType=cred/munge
 # A requeued job may start again cred_expire seconds after the requeue
 # (default 120 s); the local node needs far less than that to launch a step.
-AuthInfo=cred_expire=10
+# 5 is the least Slurm takes: below it, it logs "cred_expire invalid" and uses 120.
+AuthInfo=cred_expire=5
 SlurmctldPort=6817
 SlurmdPort=6818
 StateSaveLocation=$CTLD_STATE
@@ -142,9 +143,9 @@ MpiDefault=none
 # Cores are the consumable resource; memory is not tracked.
 SelectType=select/cons_tres
 SelectTypeParameters=CR_Core
-# Schedule often, so that a requeued job starts again within seconds.
+# Schedule every second, so that a requeued job starts again as soon as it may.
 SchedulerType=sched/backfill
-SchedulerParameters=sched_interval=2,bf_interval=2
+SchedulerParameters=sched_interval=1,bf_interval=1
 # A node that went down (e.g. slurmd restarted) comes back by itself.
 ReturnToService=2
 # Trust this file's node description rather than draining on small differences.
@@ -243,7 +244,7 @@ start() {
             show_logs
             die "node not idle after ${TIMEOUT} s (state: '${state}')"
         fi
-        sleep 1
+        sleep 0.2 # the node registers within a second of slurmd's start: look often
     done
 }
 

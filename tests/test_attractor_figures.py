@@ -21,21 +21,33 @@ NEW_STEMS = (
     "fig2_omega_f0_curves_zooms",
     "fig4_mu_kn_curves_zooms",
 )
-TINY = paper.Size(plane=8, line=60, census=6, zoom=8)
+# The zooms' curves seeded from their typed edges alone: seeds typed by shooting the
+# unknown edges have their own tests (test_seed_shooting.py, test_shot_edges.py).
+TINY = paper.Size(plane=8, line=60, census=6, zoom=5, shoot=False)
+BASIN = 16  # starts per axis of the tiny gallery's basin: both attractors still reached
 
 
 @pytest.fixture(scope="module")
-def structure_gallery(tmp_path_factory):
+def stores(tmp_path_factory):
+    """The planes' stores the gallery's figures and the report's section share: the
+    section computes at the gallery's size, so it reuses the clamp's and adds the allow's."""
+    return tmp_path_factory.mktemp("stores")
+
+
+@pytest.fixture(scope="module")
+def structure_gallery(tmp_path_factory, stores):
     """The structure figures of a tiny gallery under the clamp (8 × 8 planes, 6 × 6
-    censuses, 8 × 8 zooms), drawn as make_gallery draws them, with the index."""
+    censuses, zooms 5 cells across, a 16 × 16 basin, curves of at most 10 points, none
+    seeded by shooting), drawn as make_gallery draws them, with the index."""
     from campar.paper import gallery
     from campar.paper.structure_figures import draw_structure
 
     out = tmp_path_factory.mktemp("structure")
     with pytest.MonkeyPatch.context() as mp:
         mp.setitem(paper.SIZES, "small", TINY)
-        short_curves(mp)
-        g = gallery.Gallery(out / "g", "small", "clamp", out / "stores", log=lambda _: None)
+        mp.setattr(structure, "BASIN_SMALL", BASIN)
+        short_curves(mp, points=10)
+        g = gallery.Gallery(out / "g", "small", "clamp", stores, log=lambda _: None)
         g.outdir.mkdir()
         draw_structure(g)
         gallery.write_index(g.outdir, "small", "clamp", [g], 0.0)
@@ -80,7 +92,7 @@ def test_the_basin_figure_shows_the_bistable_cells_two_attractors(structure_gall
     assert sorted(a.split()[0] for a in meta["attractors"]) == ["1-1", "3-2"]
     job = yaml.safe_load((g.outdir / meta["job"]).read_text())
     assert list(job["sweep"]) == ["y0", "ydot0"] and job["fixed"]["omega"] == 5.8
-    assert job["sweep"]["y0"]["points"] == structure.BASIN_SMALL
+    assert job["sweep"]["y0"]["points"] == BASIN
 
 
 def test_zoom_jobs_are_finer_than_their_plane_and_cover_their_window():
@@ -105,16 +117,13 @@ def test_zoom_jobs_are_finer_than_their_plane_and_cover_their_window():
 
 # -- the report's numbers against counts from the raw arrays ------------------------------
 
-SMALL = paper.Size(plane=24, line=60, census=12, zoom=8)
-
 
 @pytest.fixture(scope="module")
-def section(tmp_path_factory):
+def section(stores):
     from campar.paper.structure_report import structure_section
 
-    stores = tmp_path_factory.mktemp("stores")
     with pytest.MonkeyPatch.context() as mp:
-        mp.setitem(paper.SIZES, "small", SMALL)
+        mp.setitem(paper.SIZES, "small", TINY)
         short_curves(mp)
         text = "\n".join(structure_section("small", stores, log=lambda _: None))
     return text, stores

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from campar.bench import BENCHMARKS, peers, precision
+from campar.bench import BENCHMARKS, maps, outputs, peers, precision
 from campar.cli import main
 from campar.core.codes import Flag, Kind
 from campar.sweep.job import DEFAULT_INTEGRATOR, load_job
@@ -30,6 +30,7 @@ HEADERS = {
     "master": ["tiles/s", "capacity tiles/s", "workers", "master"],  # its stand-in kernel too
 }
 REPO = Path(__file__).resolve().parents[1]
+QUICK = {"map": maps.QUICK, "outputs": outputs.QUICK}
 
 
 def test_every_benchmark_is_registered_and_listed(capsys):
@@ -55,9 +56,17 @@ MARKS = {
 }
 
 
+# Smaller than their --quick runs where the size changes no line of the table: map's
+# reference plane (at a tight tolerance, in a child process) 4 × 4 cells instead of 6 × 6,
+# outputs' map one chain of 4 cells instead of two of 6.
+SMALLER = {"map": {"size": 4}, "outputs": {"rows": 1, "omegas": 4}}
+
+
 @pytest.mark.parametrize("name", [pytest.param(n, marks=MARKS.get(n, [])) for n in HEADERS])
 def test_benchmark_runs_tiny_and_prints_its_table(name, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(REPO)  # map and scaling read the planes from jobs/
+    for key, value in SMALLER.get(name, {}).items():
+        monkeypatch.setitem(QUICK[name], key, value)
     extra = {"precision": ["--plot", str(tmp_path / "precision.png")], "map": ["--audit"]}
     assert main(["bench", name, "--quick", *extra.get(name, [])]) == 0
     out = capsys.readouterr().out

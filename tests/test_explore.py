@@ -26,12 +26,23 @@ def store(tmp_path_factory):
     return computed_store(tmp_path_factory, JOB)[0]
 
 
-@pytest.fixture
-def server(store):
+def _serving(store):
     server = serve([store], warm_up=False)
     server.explorer._threads and _scanned(server)
     yield server
-    shutdown(server)
+    shutdown(server)  # up to half a second: serve_forever's poll interval
+
+
+@pytest.fixture(scope="module")
+def server(store):
+    """One server for the tests that only read from it (nothing they ask changes it)."""
+    yield from _serving(store)
+
+
+@pytest.fixture
+def own_server(store):
+    """A server of the test's own, for a test that changes its worker or its stores."""
+    yield from _serving(store)
 
 
 def _scanned(server) -> None:
@@ -229,9 +240,10 @@ def test_bad_arguments_get_one_line(store, capsys):
 
 
 @pytest.mark.process
-def test_a_cell_is_computed_bounded_in_time_and_failures_shown(server, store):
+def test_a_cell_is_computed_bounded_in_time_and_failures_shown(own_server, store):
     """A cell computed in the worker as `campar point --from` computes it; a computation over its
     limit ends with one line and the next one runs; two clients at once."""
+    server = own_server
     ds = campar.open(store)
     args = ["point", "--from", str(store), "--omega", str(float(ds.omega[3]))]
     args += ["--mu-cn", str(float(ds.mu_cn[2])), "--json"]
@@ -274,11 +286,12 @@ def ds_source(server):
 
 
 @pytest.mark.process
-def test_a_zoom_is_computed_by_the_runner_beside_the_map(server, store):
+def test_a_zoom_is_computed_by_the_runner_beside_the_map(own_server, store):
     import time
 
     import yaml
 
+    server = own_server
     server.explorer.zoom_ranks = 1  # the serial runner: no mpirun for a 4 × 4 grid
     query = "/api/zoom?store=0&x0=2&x1=4&y0=0.65&y1=0.85&points=4"
     assert get(server, query)[0] == 404  # a zoom changes something: POST only
@@ -434,7 +447,7 @@ def test_the_continued_curves_are_those_campar_curves_stored(store, tmp_path):
 
     path = tmp_path / "map.zarr"
     shutil.copytree(store, path)
-    assert main(["curves", str(path)]) == 0
+    assert main(["curves", str(path), "--points", "20"]) == 0  # how many: not what is checked
     expected = read_curves(path)
     assert expected  # the map has a PD edge to seed from
     server = serve([path], warm_up=False)

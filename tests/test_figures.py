@@ -260,6 +260,9 @@ def gallery(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp:
         mp.setitem(paper.SIZES, "small", paper.Size(plane=6, line=60))
         mp.setattr(paper, "FIG6_STARTS", 4)
+        # what these tests read (files, sidecars, titles, captions, axes) is the same at any
+        # resolution; rasterising at the gallery's 200 dpi is a large part of its cost
+        mp.setattr(gallery, "PNG_DPI", 40)
         # the attractor-structure figures have their own tests (test_attractor_figures.py)
         mp.setattr(gallery, "draw_structure", lambda g: None)
         mp.setattr(style, "save_figure", saving)

@@ -5,6 +5,7 @@ a wrong rank-to-tile bookkeeping, a garbled buffer or a lost tile fails.
 """
 
 import json
+import logging
 import signal
 import socket
 import subprocess
@@ -13,18 +14,19 @@ import textwrap
 import time
 
 import pytest
+import yaml
 from support.cli import call_campar
-from support.jobs import assert_same_map
+from support.jobs import SLOW, SMALL_JOB, assert_same_map, merge, reference_arrays
 from support.processes import (
     CAMPAR,
     MPIRUN,
     kill_tree,
-    run_campar,
     start_campar,
     subprocess_env,
     wait_for_tiles,
 )
 
+from campar.sweep.job import Job
 from campar.sweep.plan import auto_tile_rows
 from campar.sweep.store import read_store
 
@@ -75,8 +77,10 @@ def assert_the_ranks_computed(store, ranks: int, writer: str) -> None:
 @pytest.mark.mpi
 def test_mpi_map_equals_the_serial_one_and_every_rank_computes(write_job):
     path, job = write_job(slow=True)
-    result = run_mpi(2, "run", path)
-    assert result.returncode == 0, result.stderr
+    proc = start_campar("run", path, launcher=mpirun(2))
+    reference_arrays(job)  # the serial map, here while the ranks start and run
+    _, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 0, stderr
     with read_store(job.store) as reader:
         assert_same_map(reader, job)
     assert_the_ranks_computed(job.store, 2, "workers")  # Zarr: each worker writes its tiles
@@ -226,33 +230,67 @@ def test_one_probe_loop_takes_in_every_waiting_message():
     assert result.returncode == 0, result.stderr
 
 
-def run_with_faults(ranks, job_path, fault) -> subprocess.CompletedProcess:
-    """campar run under mpirun with run_tile replaced by one that raises per ``fault``."""
-    script = textwrap.dedent(f"""
-        import os, sys
-        import campar.sweep.runner as runner
-        from campar.cli import main
-        from campar.sweep.tile import run_tile
-        rank = int(os.environ["PMI_RANK"])
-        def faulty(job, tile):
-            if {fault}:
-                raise RuntimeError(f"injected fault, tile {{tile.index}}")
-            return run_tile(job, tile)
-        runner.run_tile = faulty
-        sys.exit(main(["run", {str(job_path)!r}]))
-    """)
-    return run_mpi(ranks, "-c", script, command=[sys.executable])
+# Two runs in one 3-rank world, run_tile raising by a rule of each run's own: "worker", rank 1
+# fails every tile of a slow job (rank 0 cannot finish alone before rank 1 asks); "tile",
+# tile 4 fails wherever it runs. Each rank's stderr of each run goes to a file of its own;
+# the program exits with the last run's code.
+FAULT_RUNS = textwrap.dedent("""
+    import os, sys
+    import campar.sweep.runner as runner
+    from campar.cli import main
+    from campar.sweep.tile import run_tile
+    rank = int(os.environ["PMI_RANK"])
+    RULES = {"worker": lambda tile: rank == 1, "tile": lambda tile: tile.index == 4}
+    def faulty(job, tile):
+        if rule(tile):
+            raise RuntimeError(f"injected fault, tile {tile.index}")
+        return run_tile(job, tile)
+    runner.run_tile = faulty
+    for name, path in zip(sys.argv[1::2], sys.argv[2::2]):
+        rule = RULES[name]
+        sys.stderr.flush()
+        with open(f"{path}.{rank}.err", "w") as err:
+            os.dup2(err.fileno(), 2)
+        code = main(["run", path])
+        sys.stdout.write(f"{name} {rank} {code}\\n")
+        sys.stdout.flush()
+    sys.exit(code)
+""")
+
+
+@pytest.fixture(scope="module")
+def fault_runs(tmp_path_factory, warm_numba_cache):
+    """{rule: (job, what the ranks said, {rank: exit code})} of the two FAULT_RUNS runs,
+    and mpirun's exit code."""
+    folder = tmp_path_factory.mktemp("faults")
+    jobs = {}
+    # write_job's slow job, whose serial reference the session may hold already
+    for name, data in (("worker", merge(SMALL_JOB, SLOW)), ("tile", SMALL_JOB)):
+        path = folder / f"{name}.yaml"
+        data = {**data, "store": str(folder / f"{name}.zarr")}
+        path.write_text(yaml.safe_dump(data, sort_keys=False))
+        jobs[name] = (path, Job.from_dict(data))
+    args = [a for name, (path, _) in jobs.items() for a in (name, path)]
+    result = run_mpi(3, "-c", FAULT_RUNS, *args, command=[sys.executable])
+    codes = {}
+    for line in result.stdout.splitlines():
+        name, rank, code = line.split()
+        codes.setdefault(name, {})[int(rank)] = int(code)
+    runs = {
+        name: (job, "".join(p.read_text() for p in sorted(folder.glob(f"{name}.yaml.*.err"))))
+        for name, (_, job) in jobs.items()
+    }
+    return {n: (job, said, codes.get(n, {})) for n, (job, said) in runs.items()}, result
 
 
 @slow
 @pytest.mark.process
 @pytest.mark.mpi
-def test_a_worker_that_fails_every_tile_does_not_stop_the_run(write_job):
-    path, job = write_job(slow=True)  # rank 0 cannot finish alone before rank 1 asks
-    result = run_with_faults(2, path, "rank == 1")
-    assert result.returncode == 0, result.stderr
-    assert f"rank 1 on {socket.gethostname()}" in result.stderr
-    assert "injected fault" in result.stderr
+def test_a_worker_that_fails_every_tile_does_not_stop_the_run(fault_runs):
+    (job, said, codes), result = fault_runs[0]["worker"], fault_runs[1]
+    assert codes == {0: 0, 1: 0, 2: 0}, (codes, result.stderr, said)
+    assert f"rank 1 on {socket.gethostname()}" in said
+    assert "injected fault" in said
     with read_store(job.store) as reader:
         assert_same_map(reader, job)
 
@@ -260,14 +298,11 @@ def test_a_worker_that_fails_every_tile_does_not_stop_the_run(write_job):
 @slow
 @pytest.mark.process
 @pytest.mark.mpi
-def test_a_tile_that_fails_on_two_ranks_ends_the_run_with_where(write_job):
-    path, job = write_job()
-    result = run_with_faults(3, path, "tile.index == 4")
-    assert result.returncode == 1, result.stderr
-    assert "tile 4 failed 2×" in result.stderr
-    assert (
-        "injected fault, tile 4" in result.stderr and f"on {socket.gethostname()}" in result.stderr
-    )
+def test_a_tile_that_fails_on_two_ranks_ends_the_run_with_where(fault_runs):
+    (job, said, codes), result = fault_runs[0]["tile"], fault_runs[1]
+    assert result.returncode == 1 and codes[0] == 1, (codes, result.stderr, said)
+    assert "tile 4 failed 2×" in said
+    assert "injected fault, tile 4" in said and f"on {socket.gethostname()}" in said
     with read_store(job.store) as reader:
         assert not reader.done[4] and reader.done.sum() >= 1
     assert last_run(job.store)["outcome"] == "failed"
@@ -275,7 +310,7 @@ def test_a_tile_that_fails_on_two_ranks_ends_the_run_with_where(write_job):
 
 COLD_RUN = textwrap.dedent("""
     import json, sys
-    from campar.core import kernel, revolution
+    from campar.core import integrator, kernel, revolution
     from campar.sweep.job import load_job
     from campar.sweep.runner import run_job
     from campar.sweep.wire import mpi_world
@@ -284,9 +319,12 @@ COLD_RUN = textwrap.dedent("""
     def compiled(dispatcher):  # [loaded from the cache, compiled here]
         stats = dispatcher.stats
         return [sum(stats.cache_hits.values()), sum(stats.cache_misses.values())]
+    typed = [integrator.advance, integrator.step_error, integrator.rk4_step, integrator.error_norm]
     sys.stdout.write(json.dumps({"rank": mpi_world().Get_rank(),
                                  "chain": compiled(kernel.chain_compiled),
-                                 "revolution": compiled(revolution.run_revolution)}) + "\\n")
+                                 "revolution": compiled(revolution.run_revolution),
+                                 "typed": {d.py_func.__name__: len(d.signatures) for d in typed}})
+                     + "\\n")
 """)
 
 
@@ -311,6 +349,12 @@ def test_ranks_of_a_node_split_a_cold_compile_and_load_each_others_half(write_jo
     # rank 0 compiled the chain and loaded rank 1's revolution; rank 1 the other way round
     assert ranks[0]["chain"] == [0, 1] and ranks[0]["revolution"] == [1, 0], ranks
     assert ranks[1]["chain"] == [1, 0] and ranks[1]["revolution"] == [0, 1], ranks
+    # rank 1 typed the integrator under the revolution it compiled, DOP853's step alone:
+    # DP5(4)'s error norm and RK4's step were pruned before typing (integrator.method_tag),
+    # never compiled; rank 0 typed none of it (the chain calls the revolution by address)
+    typed = {"advance": 1, "step_error": 1, "rk4_step": 0, "error_norm": 0}
+    assert ranks[1]["typed"] == typed, ranks
+    assert ranks[0]["typed"] == dict.fromkeys(typed, 0), ranks
     with read_store(job.store) as reader:
         assert_same_map(reader, job)
 
@@ -392,9 +436,9 @@ def test_no_rank_spins_while_waiting(write_job):
 @slow
 @pytest.mark.process
 @pytest.mark.mpi
-def test_auto_tile_rows_are_chosen_for_the_ranks_and_kept_by_a_resume(write_job):
-    grid = {
-        "omega": {"from": 6.0, "to": 1.0, "points": 12},
+def test_auto_tile_rows_are_chosen_for_the_ranks_and_kept_by_a_resume(write_job, capsys, caplog):
+    grid = {  # 24 chains decide the rows; 6 cells a chain keep a tile ~0.1 s
+        "omega": {"from": 6.0, "to": 1.0, "points": 6},
         "mu_cn": {"from": 0.9, "to": 0.6, "points": 24},
     }
     path, job = write_job(
@@ -411,9 +455,10 @@ def test_auto_tile_rows_are_chosen_for_the_ranks_and_kept_by_a_resume(write_job)
     proc.communicate(timeout=60)
     with read_store(job.store) as reader:
         assert reader.job.tiles.rows == three and not reader.done.all()
-    resumed = run_campar("run", path)  # one process now: the store's layout stays
+    caplog.set_level(logging.INFO)  # the run's log lines, in this process
+    resumed = call_campar(capsys, "run", path)  # one rank now: the store's layout stays
     assert resumed.returncode == 0, resumed.stderr
-    assert f"{three}, as the store" in resumed.stderr
+    assert f"tiles.rows {three}, as the store" in caplog.text
     with read_store(job.store) as reader:
         assert reader.job.tiles.rows == three
         assert_same_map(reader, job.with_tile_rows(three))

@@ -19,6 +19,7 @@ from support.jobs import reference_case
 from campar.bench.scipy_model import Model, integrate
 from campar.bench.scipy_peer import scipy_cell
 from campar.paper import continued
+from campar.paper import report as report_module
 from campar.paper import setups as paper
 from campar.paper.claims import average_ranks, rank_correlation
 from campar.paper.report import CLAIMS, build_report, divergence_integral, liouville_bound
@@ -67,12 +68,23 @@ def regenerated(tmp_path_factory):
     depend on them, and a curve seeded on so coarse a map locates its point across a whole
     cell, most of the report's cost; a map's curves are checked in test_map_curves.py,
     the gallery zooms' in test_attractor_figures.py),
-    without the section that evaluates every claim again under the options."""
+    without the section that evaluates every claim again under the options, and with a
+    stand-in for the section on attractor structure (its rows are not claims; its numbers
+    are checked against the raw arrays in test_attractor_figures.py)."""
     stores = tmp_path_factory.mktemp("stores")
     with pytest.MonkeyPatch.context() as patch:
         patch.setitem(paper.SIZES, "small", paper.Size(plane=6, line=60))
         patch.setattr(continued, "map_curves", lambda ev, plane: [])
+        patch.setattr(report_module, "structure_section", lambda size, stores, log: [STRUCTURE])
         return build_report("small", stores=stores, log=lambda _: None, options=False)
+
+
+STRUCTURE = "the section on attractor structure"
+
+
+@pytest.mark.slow  # the report of two tiny planes, computed once a module
+def test_the_report_holds_the_section_on_attractor_structure(regenerated):
+    assert STRUCTURE in regenerated.splitlines()
 
 
 @pytest.fixture

@@ -24,8 +24,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from support.cli import call_campar
 
-# Installs and starts SLURM (apt-get, as root) and runs the smoke job through it: ~70 s,
+# Installs and starts SLURM (apt-get, as root) and runs the smoke job through it: ~30 s,
 # and the install alone may take minutes.
 pytestmark = [pytest.mark.slurm, pytest.mark.slow, pytest.mark.timeout(1200)]
 
@@ -34,9 +35,9 @@ CLUSTER = REPO / "slurm" / "local-cluster.sh"
 SBATCH = REPO / "slurm" / "campar.sbatch"
 DAEMON_LOGS = [Path("/var/log/slurm/slurmctld.log"), Path("/var/log/slurm/slurmd.log")]
 
-POLL = 0.25  # seconds between scontrol/store polls
+POLL = 0.1  # seconds between scontrol/store polls: a signal lands within a tile or two
 # Applied to jobs/smoke.yaml for the interrupted run (and its serial reference).
-JOB_OVERRIDES = {"transient": {"mode": "fixed", "max_revolutions": 300}, "tiles": {"rows": 1}}
+JOB_OVERRIDES = {"transient": {"mode": "fixed", "max_revolutions": 150}, "tiles": {"rows": 1}}
 # Job states in which the job is not finished (it may still run, or run again).
 UNFINISHED = {
     "PENDING",
@@ -201,13 +202,15 @@ def test_srun_pmi2_gives_one_mpi_world(slurm_cluster):
     assert sorted(r.stdout.split("\n")[:2]) == ["0 2", "1 2"], r.stdout
 
 
-def test_smoke_job_interrupted_twice_resumes_bitwise(slurm_cluster, warm_numba_cache, tmp_path):
+def test_smoke_job_interrupted_twice_resumes_bitwise(
+    slurm_cluster, warm_numba_cache, tmp_path, capsys
+):
     venv = _venv()
     campar = venv / "bin" / "campar"
     job = yaml.safe_load((REPO / "jobs" / "smoke.yaml").read_text())
     # The smoke grid, made long enough to be interrupted twice: a fixed transient
-    # gives every cell the same cost (~15 s for one process), one chain per tile
-    # gives 24 tiles, so progress is seen tile by tile.
+    # gives every cell the same cost (a few seconds for one process), one chain per
+    # tile gives 24 tiles, so progress is seen tile by tile.
     job.update(JOB_OVERRIDES)
 
     def job_copy(name):
@@ -226,16 +229,7 @@ def test_smoke_job_interrupted_twice_resumes_bitwise(slurm_cluster, warm_numba_c
     # tree under test, whichever checkout the venv's campar was installed from
     tree = os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH", "")]))
     env = dict(os.environ, PYTHONPATH=tree, CAMPAR_VENV=str(venv))
-    # The reference: one process, no SLURM, computed while the SLURM job runs and waits to
-    # be requeued (the kernel is in the session's warm cache: neither compiles it).
-    serial = subprocess.Popen(
-        [str(campar), "run", str(serial_job)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        cwd=tmp_path,
-        env=env,
-    )
+    serial = None
     try:
         r = _run(
             [
@@ -265,7 +259,7 @@ def test_smoke_job_interrupted_twice_resumes_bitwise(slurm_cluster, warm_numba_c
 
         def requeued(restarts):
             # PENDING again: the attempt before has exited, and a requeued job waits
-            # cred_expire (10 s) before it may start, so the store is still meanwhile.
+            # cred_expire (5 s) before it may start, so the store is still meanwhile.
             info = job_info(jobid)
             ok = info.get("Restarts") == str(restarts) and info.get("JobState") == "PENDING"
             return info if ok else None
@@ -280,6 +274,16 @@ def test_smoke_job_interrupted_twice_resumes_bitwise(slurm_cluster, warm_numba_c
         wait_for("the job to requeue itself after USR1", lambda: requeued(1), 90)
         assert "job step ended with exit code 75" in out.read_text(), (
             "campar run did not exit 75 on SIGUSR1"
+        )
+        # The reference: one process, no SLURM, computed while the job waits to start
+        # again with the cores idle (the kernel is in the session's warm cache).
+        serial = subprocess.Popen(
+            [str(campar), "run", str(serial_job)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=tmp_path,
+            env=env,
         )
 
         # 2. As an admin or preemption does it: SIGTERM to everything, SLURM requeues.
@@ -309,7 +313,7 @@ def test_smoke_job_interrupted_twice_resumes_bitwise(slurm_cluster, warm_numba_c
         steps = re.findall(r"job step ended with exit code (\d+)", log)
         assert steps == ["75", "75", "0"], steps
         assert tiles_done(slurm_store) == (total, total)
-        r = _run([campar, "status", slurm_store], env=env)  # what slurm/README.md points users to
+        r = call_campar(capsys, "status", slurm_store)  # what slurm/README.md points users to
         assert r.returncode == 0 and f"{total}/{total}" in r.stdout, r.stdout + r.stderr
 
         stdout, stderr = serial.communicate(timeout=600)
@@ -327,6 +331,6 @@ def test_smoke_job_interrupted_twice_resumes_bitwise(slurm_cluster, warm_numba_c
     finally:
         if jobid and job_info(jobid).get("JobState") in UNFINISHED:
             _run(["scancel", jobid])
-        if serial.poll() is None:
+        if serial is not None and serial.poll() is None:
             serial.kill()
             serial.communicate()

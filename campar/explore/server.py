@@ -545,7 +545,8 @@ def serve(paths, host: str = "127.0.0.1", port: int = 0, cell_seconds=None, warm
     explorer = Explorer(paths, cell_seconds)
     server = ExploreServer(explorer, host, port)
     explorer.start(warm_up)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
+    # A short poll: ``shutdown`` waits for the loop's next turn.
+    threading.Thread(target=server.serve_forever, args=(0.05,), daemon=True).start()
     return server
 
 
