@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from support.cli import call_campar
 from support.jobs import assert_same_map, reference_arrays
-from support.processes import kill_tree, run_campar, start_campar, wait_for_tiles
+from support.processes import kill_tree, start_campar, wait_for_tiles
 
 import campar.sweep.runner as runner
 import campar.sweep.wire as wire
@@ -278,7 +278,9 @@ def test_status_of_a_missing_store_exits_3(capsys, tmp_path):
 @pytest.mark.slow  # ~4 s each; the store suite kills writers quickly, per backend
 @pytest.mark.parametrize("suffix", [".zarr", ".h5"])
 @pytest.mark.process
-def test_sigkill_mid_run_then_resume_gives_the_same_map(write_job, tmp_path, suffix):
+def test_sigkill_mid_run_then_resume_gives_the_same_map(
+    write_job, tmp_path, suffix, capsys, caplog
+):
     path, job = write_job(slow=True, store=str(tmp_path / f"slow{suffix}"))
     proc = start_campar("run", path)
     wait_for_tiles(job.store, 2, proc)
@@ -286,16 +288,16 @@ def test_sigkill_mid_run_then_resume_gives_the_same_map(write_job, tmp_path, suf
     proc.communicate(timeout=60)
     done = tiles_done(job.store)
     assert 2 <= sum(done) < 6, done
-    resumed = run_campar("run", path)
+    resumed = call_campar(capsys, "run", path)  # the resume: no process boundary under test
     assert resumed.returncode == 0, resumed.stderr
-    assert "stale lock" in resumed.stderr
+    assert "stale lock" in caplog.text
     with read_store(job.store) as reader:
         assert_same_map(reader, job)
         assert reader.attrs["runs"][-1]["tiles"] == 6 - sum(done)
 
 
 @pytest.mark.process
-def test_sigterm_exits_75_and_the_same_command_resumes(write_job):
+def test_sigterm_exits_75_and_the_same_command_resumes(write_job, capsys):
     path, job = write_job(slow=True)
     proc = start_campar("run", path)
     wait_for_tiles(job.store, 1, proc)
@@ -304,7 +306,7 @@ def test_sigterm_exits_75_and_the_same_command_resumes(write_job):
     assert proc.returncode == 75, stderr
     assert "SIGTERM" in stderr and "run the same command again" in stderr
     assert 1 <= sum(tiles_done(job.store)) < 6
-    resumed = run_campar("run", path)
+    resumed = call_campar(capsys, "run", path)  # the resume: no process boundary under test
     assert resumed.returncode == 0, resumed.stderr
     with read_store(job.store) as reader:
         assert_same_map(reader, job)
@@ -313,14 +315,15 @@ def test_sigterm_exits_75_and_the_same_command_resumes(write_job):
 
 @pytest.mark.slow  # ~4 s; the store suite checks the lock of another process in 0.5 s
 @pytest.mark.process
-def test_a_concurrent_run_is_refused_with_host_and_pid(write_job):
+def test_a_concurrent_run_is_refused_with_host_and_pid(write_job, capsys):
     # 24 tiles: the first run is still busy when the second has started (with 6 it once
-    # finished them all first, on a loaded machine); SIGTERM ends it either way
+    # finished them all first, on a loaded machine); SIGTERM ends it either way. The
+    # second run is this process's: the refusal is the lock's, no process boundary.
     path, job = write_job(slow=True, sweep={"mu_cn": {"points": 24}})
     first = start_campar("run", path)
     try:
         wait_for_tiles(job.store, 1, first)
-        second = run_campar("run", path)
+        second = call_campar(capsys, "run", path)
         assert second.returncode == 3
         assert f"pid {first.pid} on host {socket.gethostname()}" in second.stderr
     finally:

@@ -146,7 +146,7 @@ def plausible_tile(job: Job, tile, rng: np.random.Generator) -> dict[str, np.nda
 
 
 def plausible_store(path: Path, points: int) -> Job:
-    """A points × points store of ``plausible_tile``s (4000: 16 million cells, ~20 s)."""
+    """A points × points store of ``plausible_tile``s."""
     job = Job.from_dict(
         {
             "name": "big",
@@ -161,24 +161,3 @@ def plausible_store(path: Path, points: int) -> Job:
         for tile in plan_tiles(job):
             store.write_tile(tile, plausible_tile(job, tile, rng))
     return job
-
-
-def peak_rss_mb(*args: str) -> float:
-    """Peak memory (MB) of ``campar ARGS``, measured by a fresh process that runs it."""
-    import sys
-
-    probe = (
-        "import resource, subprocess, sys\n"
-        "done = subprocess.run([sys.executable, '-m', 'campar.cli', *sys.argv[1:]],"
-        " capture_output=True)\n"
-        "assert done.returncode == 0, done.stderr.decode()\n"
-        "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)"
-    )
-    out = subprocess.run(
-        [sys.executable, "-c", probe, *args],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        check=True,
-    )
-    return int(out.stdout) / 1024

@@ -105,10 +105,11 @@ class Verification:
 
 
 def check_tiles(
-    reader, batch_bytes: int = BATCH_BYTES, only: Collection[int] | None = None
+    reader, batch_bytes: int | None = None, only: Collection[int] | None = None
 ) -> Iterator[TileCheck]:
     """Every committed tile of ``reader``'s store (of ``only``'s tile indices, if given),
-    read back and verified against the reader's snapshot, in index order."""
+    read back and verified against the reader's snapshot, in index order, in batches of
+    about ``batch_bytes`` (``BATCH_BYTES``, read at the call: a test bounds it smaller)."""
     job = reader.job
     tiles = plan_tiles(job)
     if only is not None:
@@ -118,7 +119,7 @@ def check_tiles(
     sums, sum_problems = reader.tile_checksums()
     committed = [t for t in tiles if done[t.index] or t.index in flag_problems]
     row_bytes = sum(_row_bytes(reader, name) for name in reader.names)
-    rows_per_batch = max(1, batch_bytes // max(row_bytes, 1))
+    rows_per_batch = max(1, (batch_bytes or BATCH_BYTES) // max(row_bytes, 1))
     for batch in _batches(committed, rows_per_batch):
         for tile, arrays, problem in _read_batch(reader, batch):
             if tile.index in flag_problems:
