@@ -172,7 +172,7 @@ def test_an_interrupted_basin_resumes_bitwise_and_both_backends_open_alike(
         xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())
 
 
-@pytest.mark.slow  # the quick tier's MPI run is tests/test_mpi.py's
+@pytest.mark.slow  # the basin fixture's serial reference, then mpirun
 @pytest.mark.process
 @pytest.mark.mpi
 def test_a_basin_under_mpirun_equals_the_serial_one(basin, tmp_path):

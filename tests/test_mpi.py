@@ -34,8 +34,8 @@ pytestmark = [
     pytest.mark.mpi,
     pytest.mark.skipif(not MPIRUN.exists(), reason=f"no mpirun at {MPIRUN}"),
 ]
-# Each test starts mpirun (2–5 s): the quick tier keeps one real 2-rank run of a map,
-# the faults, signals and refusals under MPI run in the full tier.
+# Each test starts mpirun (2–5 s), so every one is in the `mpi` tier; those that start it
+# several times or compile are `slow` too.
 slow = pytest.mark.slow
 
 
