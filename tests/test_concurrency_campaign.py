@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 import yaml
 from support.cli import call_campar
-from support.jobs import assert_same_map, reference_arrays
+from support.jobs import SMALL_JOB, assert_same_map, merge, reference_arrays
 from support.processes import BACKENDS_AND_RANKS, MPIRUN
 
 import campar
@@ -34,16 +34,14 @@ from campar.sweep.store import read_store
 
 # 40 tiles of 12 cells, 300 revolutions a cell: commits come fast, and the run lasts the
 # seconds the second run takes to start.
-JOB = {
-    "name": "two",
-    "sweep": {
-        "omega": {"from": 6.0, "to": 1.0, "points": 12},
-        "mu_cn": {"from": 0.9, "to": 0.6, "points": 40},
+JOB = merge(
+    SMALL_JOB,
+    {
+        "name": "two",
+        "sweep": {"mu_cn": {"points": 40}},
+        "transient": {"mode": "fixed", "max_revolutions": 300},
     },
-    "classify": {"window_revolutions": 16},
-    "transient": {"mode": "fixed", "max_revolutions": 300},
-    "tiles": {"rows": 1},
-}
+)
 COMPARED = ("kind", "status", "n", "p", "dc", "label")  # codes, a float, and the derived text
 
 

@@ -30,7 +30,7 @@ def _serving(store):
     server = serve([store], warm_up=False)
     server.explorer._threads and _scanned(server)
     yield server
-    shutdown(server)  # up to half a second: serve_forever's poll interval
+    shutdown(server)
 
 
 @pytest.fixture(scope="module")
