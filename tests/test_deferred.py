@@ -6,14 +6,31 @@ checked against SciPy in test_extrema): every output of every cell, bit for bit,
 paper's law and others — a law that keeps the impact velocity, another cam law, each
 integrator — on chains that reach cycles and non-periodic motions. A map that stores the
 duty cycle but no extremum keeps and refines ε's dips alone (revolution.DUTY_STATS): the
-same outputs, dips and time separated as the map that refines every extremum.
+same outputs, dips and time separated as the map that refines every extremum. A
+non-periodic cell's window (64 revolutions) refines only the steps whose models come near
+its extremes, with the numbers of refining every step.
 """
 
 import numpy as np
 import pytest
 
 from campar.core.analysis import N_REV_STATS, REV_EPS_MIN, REV_GRAZE, REV_T_FREE
-from campar.core.deferred import DEFER_COLUMNS, DEFERRED
+from campar.core.codes import CHAOTIC
+from campar.core.deferred import (
+    DEFER_COLUMNS,
+    DEFERRED,
+    DIP_DONE,
+    FIRST_SLOT,
+    MODEL_DIP,
+    MODEL_PEAK,
+    MODEL_PN,
+    PEAK_DONE,
+    PN_DONE,
+    REFINED,
+    SLOT,
+    SLOTS,
+    H,
+)
 from campar.core.kernel import OUT_EXTREMA, OUT_STATS, chain_compiled, make_chain_work
 from campar.core.model import kernel_law, start_chain
 from campar.core.revolution_call import revolution_link
@@ -23,12 +40,18 @@ from campar.sweep.plan import chain_parameters
 from campar.sweep.tile import allocate_outputs, cell_settings, chain_starts, solver_options
 
 
-def job_of(model=None, integrator=None, outputs=("label", "dc", "eps", "pn", "multipliers")):
+def job_of(
+    model=None,
+    integrator=None,
+    outputs=("label", "dc", "eps", "pn", "multipliers"),
+    omega=(3.0, 0.6, 9),
+    mu_cn=0.8,
+):
     spec = {
         "name": "deferred",
         "sweep": {
-            "omega": {"from": 3.0, "to": 0.6, "points": 9},
-            "mu_cn": {"from": 0.8, "to": 0.8, "points": 1},
+            "omega": dict(zip(("from", "to", "points"), omega, strict=True)),
+            "mu_cn": {"from": mu_cn, "to": mu_cn, "points": 1},
         },
         "fixed": {"zeta": 0.2, "mu_kn": 0.8, "f0": 0.5},
         "chains": {"start": "continue"},
@@ -125,3 +148,28 @@ def test_a_duty_cycle_map_refines_the_dips_alone_with_the_same_numbers():
     kept_full = full_work.revs[: k - m, DEFERRED].sum()
     kept_duty = duty_work.revs[: k - m, DEFERRED].sum()
     assert 0 < kept_duty < kept_full
+
+
+def test_a_chaotic_window_refines_only_the_steps_near_its_extremes():
+    # ω 4.5, μcn 0.97: chaos (test_early_verdicts); one cell, so every row holds the slots
+    # of its own revolution
+    job = job_of(omega=(4.5, 4.5, 1), mu_cn=0.97)
+    deferred, cw = run(job, True)
+    at_once, _ = run(job, False)
+    for name, values in deferred._asdict().items():
+        assert values.tobytes() == getattr(at_once, name).tobytes(), name
+    assert deferred.kind[0] == CHAOTIC  # a 64-revolution window
+    k = deferred.revolutions[0]
+    window = cw.revs[k - 64 : k]
+    slots = window[:, FIRST_SLOT:].reshape(64, SLOTS, SLOT)
+    kept = slots[:, :, H] > 0.0
+    refined = slots[:, :, REFINED].astype(int)
+    counts = []
+    for column, bit in ((MODEL_DIP, DIP_DONE), (MODEL_PEAK, PEAK_DONE), (MODEL_PN, PN_DONE)):
+        candidates = kept & np.isfinite(slots[:, :, column])
+        done = candidates & (refined & bit > 0)
+        counts.append((int(candidates.sum()), int(done.sum())))
+        assert done.any()
+    # far fewer refined than candidates: the window's extremes, not its 64 revolutions
+    assert sum(done for _, done in counts) < 0.5 * sum(c for c, _ in counts), counts
+    assert not window[:, DEFERRED].any()

@@ -18,6 +18,8 @@ to an extremum of the right kind; else the model's value stands.
 
 import math
 
+import numpy as np
+
 from .hermite import MAXIMUM, MINIMUM, hermite_extremum, quintic_extremum
 from .integrator import dense_eval, prepare_dense
 from .jit import hot
@@ -30,6 +32,7 @@ THETA_TOL = 1e-9
 # Pn's peak to this fraction of the step: Pn's relative error ~ (δθ)² Pn'' h² / Pn, below
 # 1e-8 for the short steps of a contact, and Illinois needs far fewer evaluations
 PEAK_THETA_TOL = 1e-4
+WANTED = np.bool_(True)  # (not a literal True: numba would compile a variant per value)
 
 
 @hot
@@ -169,30 +172,70 @@ def step_extremes(rhs, method, w, t0, h, p, mode, k0, k1, extremes):
     just accepted from t0 (size h), from the values and rates at its ends (k0, k1:
     model.contact_kinematics, ε with two rates and Pn with one) and its dense output.
     Without ``extremes``, ε's minimum alone (the maximum NaN, Pn the ends' larger)."""
-    e0, de0, dde0, pn0, dpn0 = k0
-    e1, de1, dde1, pn1, dpn1 = k1
-    h2 = h * h
+    return refine_extremes(rhs, method, w, t0, h, p, mode, k0, k1, WANTED, extremes, extremes)
+
+
+@hot
+def refine_extremes(rhs, method, w, t0, h, p, mode, k0, k1, want_dip, want_peak, want_pn):
+    """step_extremes for the quantities wanted alone: ε's interior minimum (``want_dip``),
+    maximum (``want_peak``) and Pn's interior peak (``want_pn``); one not wanted is NaN
+    (Pn: the ends' larger). Each wanted one is the number step_extremes gives."""
+    _, _, _, pn0, dpn0 = k0
+    _, _, _, pn1, dpn1 = k1
     dip = math.nan
     peak = math.nan
-    th, val = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MINIMUM)
-    if th > 0.0:
-        dip = val
-        th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MINIMUM)
-        if th > 0.0:
-            dip = val
+    if want_dip:
+        dip = eps_extreme(rhs, method, w, t0, h, p, mode, k0, k1, MINIMUM)
     pn_hi = max(pn0, pn1)
-    if not extremes:
-        return dip, peak, pn_hi
-    th, val = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MAXIMUM)
-    if th > 0.0:
-        peak = val
-        th, val = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, MAXIMUM)
-        if th > 0.0:
-            peak = val
-    if mode[1] == PUSH:
+    if want_peak:
+        peak = eps_extreme(rhs, method, w, t0, h, p, mode, k0, k1, MAXIMUM)
+    if want_pn and mode[1] == PUSH:
         th, val = hermite_extremum(pn0, dpn0 * h, pn1, dpn1 * h, MAXIMUM)
         if th > 0.0:
             if dpn0 > 0.0 > dpn1:
                 val = force_peak(rhs, method, w, t0, h, p, mode, th)
             pn_hi = max(pn_hi, val)
+    return dip, peak, pn_hi
+
+
+@hot
+def eps_extreme(rhs, method, w, t0, h, p, mode, k0, k1, want_min):
+    """ε's interior minimum (want_min) or maximum over the step: where the quintic model
+    has one, located on the dense output (eps_extremum), or the model's value where Newton
+    leaves the step; NaN where the model has none."""
+    e0, de0, dde0, _, _ = k0
+    e1, de1, dde1, _, _ = k1
+    h2 = h * h
+    th, val = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, want_min)
+    if not th > 0.0:
+        return math.nan
+    th, refined = eps_extremum(rhs, method, w, t0, h, p, mode, th, de0, de1, want_min)
+    return refined if th > 0.0 else val
+
+
+@hot
+def step_model_extremes(h, mode, k0, k1, extremes):
+    """What step_extremes would start from, without the dense output: the models' ε
+    minimum and maximum (the quintic's), and Pn's largest value with the cubic's interior
+    peak; NaN where the models see no interior extremum (the maximum and Pn also without
+    ``extremes``). Pn's is step_extremes's own number where its end rates do not bracket
+    the peak."""
+    e0, de0, dde0, pn0, dpn0 = k0
+    e1, de1, dde1, pn1, dpn1 = k1
+    h2 = h * h
+    dip = math.nan
+    peak = math.nan
+    pn_hi = math.nan
+    th, val = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MINIMUM)
+    if th > 0.0:
+        dip = val
+    if not extremes:
+        return dip, peak, pn_hi
+    th, val = quintic_extremum(e0, de0 * h, dde0 * h2, e1, de1 * h, dde1 * h2, MAXIMUM)
+    if th > 0.0:
+        peak = val
+    if mode[1] == PUSH:
+        th, val = hermite_extremum(pn0, dpn0 * h, pn1, dpn1 * h, MAXIMUM)
+        if th > 0.0:
+            pn_hi = max(max(pn0, pn1), val)
     return dip, peak, pn_hi

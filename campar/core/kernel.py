@@ -45,7 +45,7 @@ from .codes import (
     OK,
     PERIODIC,
 )
-from .deferred import DEFER_COLUMNS, refine_deferred
+from .deferred import DEFER_COLUMNS, refine_window
 from .integrator import StepWork, initial_step, make_work, restart_control
 from .jit import hot, inlined
 from .model import (
@@ -151,7 +151,7 @@ class ChainWork(NamedTuple):
     x_start: np.ndarray  # (2,) the start of the current cell
     prev: np.ndarray  # (3, 2) final states of the last three cells, newest first
     revolution: np.ndarray  # int64 [address, fingerprint] of run_revolution (revolution_call)
-    refine: StepWork  # deferred.refine_deferred's buffers (N_STATE components)
+    refine: StepWork  # deferred.refine_window's buffers (N_STATE components)
     refine_mode: np.ndarray  # … and its contact mode
 
 
@@ -217,11 +217,10 @@ def fail_cell(out, i, status, k, steps):
 
 @inlined
 def record_window(out, i, cw, first, count, period, p, method, extremes):
-    """Statistics of revolutions first … first+count−1 into the outputs of cell i, their
-    deferred extrema refined first (campar.core.deferred; ``extremes``: all of them, else
-    ε's minima alone)."""
-    for j in range(first, first + count):
-        refine_deferred(cw.revs[j], cw.refine, cw.refine_mode, p, method, extremes)
+    """Statistics of revolutions first … first+count−1 into the outputs of cell i, the
+    deferred extrema that can be the window's refined first (campar.core.deferred;
+    ``extremes``: all of them, else ε's minima alone)."""
+    refine_window(cw.revs, first, count, cw.refine, cw.refine_mode, p, method, extremes, GRAZE_TOL)
     t_free, detach, eps_min, eps_max, pn_max, stretch, graze = window_stats(cw.revs, first, count)
     out.p[i] = int(detach + 0.5)
     out.dc[i] = t_free / (count * period)

@@ -17,7 +17,7 @@ from .codes import EVENT_LOOP, OK, STEP_LIMIT
 from .contact import impact_velocity, note_impact
 from .deferred import clear_deferred, defer_step
 from .extrema import step_extremes, step_models
-from .integrator import SolverOptions, advance, dense_eval, prepare_dense
+from .integrator import CTRL_DENSE, SolverOptions, advance, dense_eval, prepare_dense
 from .jit import hot
 from .model import (
     FREE,
@@ -123,7 +123,7 @@ def run_revolution(x, f, p, opt, w, mode, row, stats, step_limit, rec):
     one-revolution map. Fills the revolution's statistics in ``row``, those ``stats``
     names (NO_STATS, DUTY_STATS, ALL_STATS); a row wider than
     N_REV_STATS (the chain's) keeps the steps whose extrema need the dense output for
-    deferred.refine_deferred instead of refining them. Fails with STEP_LIMIT once the
+    deferred.refine_window instead of refining them. Fails with STEP_LIMIT once the
     workspace has counted more than step_limit steps.
     Records the orbit into ``rec`` unless it is None: numba then prunes every
     recording branch before typing, so a map's kernel never compiles the recorder.
@@ -174,15 +174,33 @@ def run_revolution(x, f, p, opt, w, mode, row, stats, step_limit, rec):
                     dense, pn_hi = step_models(h, mode, k0, k1, extremes)
                     if not dense:
                         add_step_stats(row, h, free, k0[0], k1[0], math.nan, math.nan, pn_hi)
-                    elif defer_step(
-                        row, w, t_prev, h, mode, free, impact_velocity(p.contact), k0, k1
-                    ):
-                        pn_hi = max(k0[3], k1[3])
-                        add_step_stats(row, h, free, k0[0], k1[0], math.nan, math.nan, pn_hi)
                     else:
-                        dip, peak, pn_hi = step_extremes(
-                            model.rhs, opt.method, w, t_prev, h, p, mode, k0, k1, extremes
-                        )
+                        # the event search may have prepared the dense output already,
+                        # from the integrator's own step size: keep its coefficients
+                        prepared = w.ctrl[CTRL_DENSE] == 1.0
+                        stages = w.F if prepared else w.K
+                        impact = impact_velocity(p.contact)
+                        if defer_step(
+                            row,
+                            w.y_old,
+                            w.y_new,
+                            stages,
+                            prepared,
+                            t_prev,
+                            h,
+                            mode,
+                            free,
+                            impact,
+                            k0,
+                            k1,
+                        ):
+                            pn_hi = max(k0[3], k1[3])
+                            dip = math.nan
+                            peak = math.nan
+                        else:
+                            dip, peak, pn_hi = step_extremes(
+                                model.rhs, opt.method, w, t_prev, h, p, mode, k0, k1, extremes
+                            )
                         add_step_stats(row, h, free, k0[0], k1[0], dip, peak, pn_hi)
                     k0 = k1
                     fresh = True
