@@ -116,8 +116,9 @@ CELLS.append(
         0.5,
         id="table-hunt-crossley-n1.2-4.0",
         marks=pytest.mark.xfail(
-            reason="max ε 1.0e-6 from the reference at rtol 1e-7 (measured 1.009e-6); "
-            "not yet traced to the extremum's location or the integration's own error",
+            reason="max ε 0.8–1.0e-6 from the reference at rtol 1e-7: the integration's own "
+            "error (2.5e-7 at rtol 1e-8, 2.6e-8 at 1e-9), not the extremum's location "
+            "(benchmarks/RESULTS.md, the table cell's max ε)",
             strict=False,
         ),
     )
