@@ -68,10 +68,12 @@ def main() -> int:
             with np.load(out) as data:
                 arrays.append({name: data[name] for name in data.files})
     mine, base = arrays
-    differ = {
-        name: "absent" if name not in mine else f"{differing_cells(mine[name], base[name])} cells"
-        for name in base.keys() | mine.keys()
-        if name not in mine or name not in base or mine[name].tobytes() != base[name].tobytes()
+    differ = {name: "absent" for name in base.keys() - mine.keys()}
+    differ |= {name: "new" for name in mine.keys() - base.keys()}
+    differ |= {
+        name: f"{differing_cells(mine[name], base[name])} cells"
+        for name in base.keys() & mine.keys()
+        if mine[name].tobytes() != base[name].tobytes()
     }
     cells = "×".join(str(n) for n in next(iter(base.values())).shape[:2])
     verdict = ", ".join(f"{n} ({c})" for n, c in sorted(differ.items())) or "bit-identical"
