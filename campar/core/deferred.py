@@ -18,8 +18,8 @@ number being exactly what extrema.step_extremes gives. The margin starts at a fr
 of the window's range and grows to SAFETY times the largest model error the refined
 steps showed, so a step left unrefined would need a model error fifteen times any this
 window has shown to reach the extreme. The window's numbers are those of refining every
-step (tests/test_deferred.py; every job in jobs/ compared byte for byte, benchmarks/
-RESULTS.md); its rows hold the refined steps' interior extremes alone.
+step (tests/test_deferred.py; 21 jobs and law variants compared byte for byte,
+benchmarks/RESULTS.md); its rows hold the refined steps' interior extremes alone.
 
 A row of N_REV_STATS columns (shooting, the tracer) defers nothing; neither does a step
 that finds its row's slots full: it is refined at once. Refining changes the order in
