@@ -7,12 +7,14 @@ they test the store alone and take no kernel time.
 import json
 import logging
 import os
+import shutil
 import signal
 import socket
 import subprocess
 import sys
 import textwrap
 import time
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -26,6 +28,8 @@ from campar.sweep.plan import plan_tiles
 from campar.sweep.store import lock_path, open_store, read_store
 from campar.sweep.store._lock import process_state
 from campar.sweep.store._schema import cell_arrays
+
+ROOT = Path(__file__).resolve().parents[1]
 
 JOB = {
     "name": "store_suite",
@@ -357,19 +361,17 @@ class TestZarrStore(StoreSuite):
         with campar's chunk keys (c.<i>.<j>) and with those of stores made before them
         (c/<i>/<j>: a folder per chunk row, made at its first write)."""
         from campar.sweep.store import _zarr
-        from campar.sweep.store._chunks import DirectChunk
-        from campar.sweep.store._zarr import ZarrTileArrays
 
         monkeypatch.setattr(_zarr, "CHUNK_KEYS", {"name": "default", "separator": separator})
         job = make_job(chains__direction=direction, classify__n_max=3)
         files = {}
         for way in ("direct", "zarr"):
-            if way == "zarr":
-                monkeypatch.setattr(DirectChunk, "for_array", classmethod(lambda *_: None))
             store_path = path.with_name(f"{way}{self.suffix}")
             with open_store(store_path, job) as store:
-                writer = ZarrTileArrays(store.real, job)
-                assert all(writer.direct.values()) == (way == "direct")
+                assert all(store._tile_arrays.direct.values()) and all(store._tile_direct.values())
+                if way == "zarr":  # every chunk through zarr's setitem
+                    store._tile_arrays.direct = dict.fromkeys(store._tile_arrays.direct)
+                    store._tile_direct = dict.fromkeys(store._tile_direct)
                 for tile in plan_tiles(job):
                     arrays = fake_tile(job, tile, tile.index)
                     arrays["multipliers"][:] = np.nan  # the fill: no file
@@ -384,6 +386,55 @@ class TestZarrStore(StoreSuite):
         assert sum(f.parts[0] in ("dc", "n") for f in files["zarr"]) == 2 * len(plan_tiles(job))
         assert files["direct"] == files["zarr"]
         assert all((len(f.parts) == 2) == (separator == ".") for f in files["direct"])
+
+    @pytest.mark.parametrize(
+        "job_file, separator",
+        [
+            ("mu_cn", "."),
+            ("mu_cn", "/"),
+            ("basin_bistable", "."),
+            ("mu_kn_both", "."),
+            ("mu_kn_multistability", "."),
+            ("design_rise_cycloidal", "."),
+        ],
+    )
+    def test_a_new_store_is_the_store_zarr_makes(self, tmp_path, job_file, separator, monkeypatch):
+        """campar writes a new store itself (_zarr_documents, _chunks): every file — each
+        array's zarr.json, the coordinates' chunks (text among them), the group's zarr.json
+        with the variables' checksums and every document consolidated, the root record — is
+        byte for byte what zarr's own API writes (support.zarr_reference), for jobs of
+        jobs/: the paper's plane (both chunk key separators), a basin, two sweep
+        directions, an attractor census, a cam law's design plane."""
+        from support.zarr_reference import build_with_zarr, store_files
+
+        from campar.sweep.job import load_job
+        from campar.sweep.store import _schema, _zarr
+
+        monkeypatch.setattr(_schema, "utc_now", lambda: "2026-01-01T00:00:00+00:00")
+        job = load_job(ROOT / "jobs" / f"{job_file}.yaml")
+        _zarr._build(tmp_path / "campar.zarr", job, separator)
+        build_with_zarr(tmp_path / "zarr.zarr", job, separator)
+        ours, zarrs = store_files(tmp_path / "campar.zarr"), store_files(tmp_path / "zarr.zarr")
+        assert sorted(ours) == sorted(zarrs)
+        assert [name for name in ours if ours[name] != zarrs[name]] == []
+        assert any(name.startswith("component/c") for name in ours)  # a text coordinate
+
+    def test_a_run_log_is_appended_as_zarr_appends_it(self, path, job):
+        """The run log goes into the group's attributes as zarr's ``attrs.update`` puts it:
+        the group's zarr.json, consolidated documents and all, byte for byte."""
+        import zarr
+
+        tiles = plan_tiles(job)
+        with open_store(path, job) as store:
+            copy = path.with_name("copy.zarr")
+            shutil.copytree(path, copy)
+            store.write_tile(tiles[0], fake_tile(job, tiles[0], 0))
+            store.log_run({"start": "2026-01-01T00:00:00+00:00", "tiles": 1, "ranks": 1})
+        attrs = json.loads((path / "zarr.json").read_bytes())["attributes"]
+        assert json.loads(attrs["runs"])[0]["tiles"] == 1
+        group = zarr.open_group(copy, mode="r+")
+        group.attrs.update({key: attrs[key] for key in ("runs", "history")})
+        assert (copy / "zarr.json").read_bytes() == (path / "zarr.json").read_bytes()
 
     def test_a_store_with_the_older_chunk_keys_resumes_and_reads(self, path, job, monkeypatch):
         """Stores made before the flat keys have c/<i>/<j> (a folder per chunk row): a run
@@ -408,35 +459,42 @@ class TestZarrStore(StoreSuite):
                     reader.read_rows("n", tile.rows), fake_tile(job, tile, tile.index)["n"]
                 )
 
-    @pytest.mark.parametrize("failing_write", [8, 20])
-    def test_a_creation_that_fails_leaves_nothing_though_zarr_still_writes(
-        self, path, job, monkeypatch, failing_write
-    ):
-        """A full disk fails one of zarr's writes while others of the same gather still run
-        (seen once under mpirun): create waits for them before deleting what it built."""
+    @pytest.mark.parametrize("failing", ["first", "middle", "group", "root record"])
+    def test_a_creation_that_fails_leaves_nothing(self, path, job, monkeypatch, failing):
+        """A full disk fails one of the creation's writes (the first document, one in the
+        middle, the group's zarr.json written last, the root record after it): nothing is
+        left of the store, nor of the write."""
         import errno
-        import threading
 
-        import zarr.storage._local as local
+        from campar.sweep.store import _chunks, _zarr, _zarr_documents
 
-        from campar.sweep.store import _zarr
+        put, calls = _zarr_documents.write_file, []
 
-        put, calls, lock = local._put, [0], threading.Lock()
+        def counted(file, body):
+            calls.append(str(file))
+            return put(file, body)
 
-        def full_disk_once(file, value, *args, **kwargs):
-            with lock:
-                calls[0] += 1
-                call = calls[0]
-            if call == failing_write:
-                raise OSError(errno.ENOSPC, "No space left on device")
-            if call > failing_write:
-                time.sleep(0.2)  # still writing when the failure reaches create
-            return put(file, value, *args, **kwargs)
+        for module in (_zarr_documents, _chunks):
+            monkeypatch.setattr(module, "write_file", counted)
+        _zarr.create(path.with_name("counted.zarr"), job)
+        assert calls[-1].endswith(f"counted.zarr.creating-{os.getpid()}/zarr.json")
+        shutil.rmtree(path.with_name("counted.zarr"))
+        at = {"first": 1, "middle": len(calls) // 2, "group": len(calls)}.get(failing)
 
-        monkeypatch.setattr(local, "_put", full_disk_once)
+        def full_disk(*_):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        def full_disk_once(file, body):
+            calls.append(str(file))
+            return full_disk() if len(calls) == at else put(file, body)
+
+        calls.clear()
+        for module in (_zarr_documents, _chunks):
+            monkeypatch.setattr(module, "write_file", full_disk_once)
+        if at is None:
+            monkeypatch.setattr(_zarr, "write_zarr_root", full_disk)
         with pytest.raises(OSError, match="No space left"):
             _zarr.create(path, job)
-        time.sleep(0.5)
         assert list(path.parent.iterdir()) == []
 
     def test_partial_files_of_a_killed_writer_are_cleaned_on_resume(self, path, job):

@@ -178,7 +178,8 @@ def leave(code: int) -> None:
     interpreter's exit would do that matters — log handlers flushed and closed, MPI
     finalized where a one-rank run initialized it, the standard streams flushed — then
     ``os._exit``, without tearing down every module and object the program built
-    (numba's compiled code, zarr's event loop and threads, idle by now), the larger part
+    (numba's compiled code, and zarr's event loop and threads where the run read its store
+    through zarr), the larger part
     of a run's exit (benchmarks/RESULTS.md, "Start-up")."""
     import logging
 

@@ -1,8 +1,11 @@
 """Zarr v3 backend (the default): a directory, one chunk file per tile and array.
 
-Crash safety comes from zarr's ``LocalStore``, which writes every chunk and
-metadata document aside (``<key>.<32 hex>.partial``) and renames it into
-place: a killed writer leaves whole files plus stray ``.partial`` files, which
+A run creates the store, writes its tiles and its run log without zarr
+(``_zarr_documents``, ``_chunks``: zarr's own documents and chunk files, byte for
+byte); reading, verifying and repairing a store go through zarr, imported then.
+Crash safety comes from writing every chunk and metadata document aside
+(``<key>.<32 hex>.partial``) and renaming it into place, as zarr's ``LocalStore``
+does: a killed writer leaves whole files plus stray ``.partial`` files, which
 ``clean_leftovers`` deletes (also after a write that failed, a full disk).
 A tile's ``checksum`` and then its ``done`` chunk are written after its array
 chunks, so a kill in between leaves the tile pending and it is recomputed. A
@@ -19,23 +22,16 @@ xarray encodes it (floats as base64 of the little-endian double).
 """
 
 import asyncio
-import base64
+import itertools
 import json
+import math
 import os
 import re
 import shutil
-import struct
 import tempfile
-import uuid
-import warnings
 from pathlib import Path
 
 import numpy as np
-import zarr
-import zarr.api.asynchronous
-from zarr.codecs import Crc32cCodec, ZstdCodec
-from zarr.core.sync import sync
-from zarr.errors import ZarrUserWarning
 
 from ...errors import StoreDamaged, StoreError
 from ..job import Job
@@ -48,6 +44,7 @@ from ._metadata import CHECKSUMS_ATTR, GLOBAL, VOLATILE_ATTRS, Variable, digests
 from ._root import Root, RootLog, new_root, read_zarr_root, write_zarr_root
 from ._schema import (
     TILE_ARRAYS,
+    ArraySchema,
     cell_arrays,
     chunk_coords,
     decode_attrs,
@@ -55,8 +52,24 @@ from ._schema import (
     run_attrs,
     store_arrays,
 )
+from ._zarr_documents import (
+    ZARR_JSON,
+    array_document,
+    chunk_key,
+    group_document,
+    read_document,
+    write_document,
+)
 
 PARTIAL = re.compile(r"\.[0-9a-f]{32}\.partial$")
+
+
+def _zarr():
+    """zarr, imported where a store is read, verified or repaired through it (a run's own
+    writes never need it, and its import is a good part of a process's start-up)."""
+    import zarr
+
+    return zarr
 
 
 def read_attrs(path: Path) -> dict | None:
@@ -98,77 +111,61 @@ def create(path: Path, job: Job) -> None:
         _build(tmp, job)
         os.rename(tmp, path)
     except BaseException:
-        _settle()
         shutil.rmtree(tmp, ignore_errors=True)
         raise
 
 
-def _settle(seconds: float = 30.0) -> None:
-    """Wait for zarr's writes still running: a failed write inside zarr (a gather without
-    ``return_exceptions``) raises at once while the others go on, and one that ended after
-    the clean-up left a file in a store being deleted (seen on a full disk, under mpirun)."""
-
-    async def others_done():
-        me = asyncio.current_task()
-        pending = [t for t in asyncio.all_tasks() if t is not me]
-        if pending:
-            await asyncio.wait(pending, timeout=seconds)
-
-    sync(others_done())
-
-
 def _build(tmp: Path, job: Job, separator: str | None = None) -> None:
-    """A new store of ``job`` at ``tmp`` (chunk keys with ``separator``; None: CHUNK_KEYS)."""
+    """A new store of ``job`` at ``tmp`` (chunk keys with ``separator``; None: CHUNK_KEYS):
+    every array's zarr.json and a coordinate's values, then the group's zarr.json with the
+    checksums of its variables (``_metadata``) and every array's document consolidated,
+    then the root record."""
     arrays = store_arrays(job)
-    sync(_create_nodes(tmp, job, arrays, separator))
-    variables = record_checksums(tmp, arrays)
-    write_zarr_root(tmp, new_root(initial_attrs(job), variables, len(plan_tiles(job))))
+    separator = CHUNK_KEYS["separator"] if separator is None else separator
+    attrs = initial_attrs(job)
+    tmp.mkdir(parents=True)
+    documents = {}
+    found: dict = {GLOBAL: global_variable(group_document(attrs))}
+    for a in arrays:
+        document = array_document(a, separator)
+        (tmp / a.name).mkdir()
+        write_document(tmp / a.name / ZARR_JSON, document)
+        values = None if a.values is None else _write_values(tmp / a.name, document, a)
+        documents[a.name] = document
+        found[a.name] = Variable({f"{a.name}/{ZARR_JSON}": document}, values)
+    recorded = digests(found)
+    group = group_document({**attrs, CHECKSUMS_ATTR: json.dumps(recorded)}, documents)
+    write_document(tmp / ZARR_JSON, group)
+    write_zarr_root(tmp, new_root(attrs, recorded, len(plan_tiles(job))))
 
 
-async def _create_nodes(tmp: Path, job: Job, arrays, separator: str | None) -> None:
-    """The group, then every array (metadata, and a coordinate's values) at once, in one
-    pass through zarr's event loop rather than a round trip per array: every document is
-    the same as one array at a time writes. Every write has ended when this returns or
-    raises (the first error), so a failed creation leaves nothing running."""
-    group = await zarr.api.asynchronous.create_group(
-        store=tmp, zarr_format=3, attributes=initial_attrs(job)
-    )
-    keys = CHUNK_KEYS if separator is None else {**CHUNK_KEYS, "separator": separator}
-
-    async def create(a) -> None:
-        text = a.dtype.kind == "U"
-        array = await group.create_array(
-            a.name,
-            shape=a.shape,
-            dtype=str if text else a.dtype,
-            chunks=a.chunks,
-            fill_value="" if text else a.fill,
-            dimension_names=list(a.dims),
-            attributes=zarr_attrs(a.attrs, a.dtype),
-            compressors=_codecs(a.name),
-            chunk_key_encoding=keys,
-        )
-        if a.values is not None:
-            await array.setitem(..., a.values)
-
-    results = await asyncio.gather(*(create(a) for a in arrays), return_exceptions=True)
-    for result in results:
-        if isinstance(result, BaseException):
-            raise result
+def _write_values(folder: Path, document: dict, a: ArraySchema) -> np.ndarray:
+    """Write a coordinate's values, chunk by chunk as zarr does (the last chunk padded with
+    the fill, a chunk of the fill alone left out); returns them as zarr reads them."""
+    writer = DirectChunk.for_document(folder, document)
+    values = np.asarray(a.values, dtype=writer.fill.dtype)
+    counts = [math.ceil(n / c) for n, c in zip(a.shape, a.chunks, strict=True)]
+    for coords in itertools.product(*map(range, counts)):
+        bounds = zip(coords, a.chunks, a.shape, strict=True)
+        region = tuple(slice(i * c, min((i + 1) * c, n)) for i, c, n in bounds)
+        part = values[region]
+        chunk = writer.fill.copy()
+        chunk[tuple(slice(0, m) for m in part.shape)] = part
+        writer.put(coords, chunk)
+    return values
 
 
 def record_checksums(path: Path, arrays) -> dict[str, str]:
     """Record the checksums of the variables as their own documents hold them
     (``_metadata``), then consolidate every document into the store's zarr.json; returns
     them (what the root record holds)."""
-    group = zarr.open_group(path, mode="r+", use_consolidated=False)
+    group = _zarr().open_group(path, mode="r", use_consolidated=False)
     found = describe_variables(path, arrays, group, consolidated=False)
     recorded = digests(found)
-    group.attrs[CHECKSUMS_ATTR] = json.dumps(recorded)
-    with warnings.catch_warnings():
-        # "consolidated metadata is not part of the v3 spec": xarray reads it, and we want that.
-        warnings.simplefilter("ignore", ZarrUserWarning)
-        zarr.consolidate_metadata(path)
+    document = read_document(path / ZARR_JSON)
+    attrs = {**document["attributes"], CHECKSUMS_ATTR: json.dumps(recorded)}
+    own = {a.name: found[a.name].documents[f"{a.name}/{ZARR_JSON}"] for a in arrays}
+    write_document(path / ZARR_JSON, group_document(attrs, own))
     return recorded
 
 
@@ -188,8 +185,7 @@ def describe_variables(path: Path, arrays, group, consolidated: bool = True) -> 
     found: dict = {GLOBAL: "the store's zarr.json cannot be read"}
     try:
         document = json.loads((path / "zarr.json").read_bytes())
-        own = {f"(zarr.json) {key}": document.get(key) for key in GROUP_KEYS}
-        found[GLOBAL] = Variable({"zarr.json": {**global_document(document["attributes"]), **own}})
+        found[GLOBAL] = global_variable(document)
         if consolidated:
             copies = document["consolidated_metadata"]["metadata"]
     except (OSError, ValueError, KeyError, TypeError):
@@ -219,6 +215,13 @@ def describe_variables(path: Path, arrays, group, consolidated: bool = True) -> 
     return found
 
 
+def global_variable(document: dict) -> Variable:
+    """The store's attributes as a variable (``_metadata.GLOBAL``) from its group's zarr.json:
+    those under the checksum, and the group's own keys."""
+    own = {f"(zarr.json) {key}": document.get(key) for key in GROUP_KEYS}
+    return Variable({"zarr.json": {**global_document(document["attributes"]), **own}})
+
+
 _fresh: dict[tuple, dict] = {}  # (job hash, separator) → its variables: the last few jobs
 
 
@@ -230,7 +233,7 @@ def fresh_variables(job: Job, arrays, separator: str) -> dict:
         with tempfile.TemporaryDirectory(prefix="campar-expected-") as tmp:
             path = Path(tmp) / "expected.zarr"
             _build(path, job, separator)
-            found = describe_variables(path, arrays, zarr.open_group(path, mode="r"))
+            found = describe_variables(path, arrays, _zarr().open_group(path, mode="r"))
         while len(_fresh) >= 4:
             _fresh.pop(next(iter(_fresh)))
         _fresh[key] = found
@@ -301,28 +304,7 @@ def _rewrite_group(path: Path, job: Job) -> None:
     except (OSError, ValueError, AttributeError):
         kept = {}
     wanted = {k: v for k, v in initial_attrs(job).items() if k not in VOLATILE_ATTRS}
-    document = {"zarr_format": 3, "node_type": "group", "attributes": {**wanted, **kept}}
-    aside = path / f"zarr.json.{uuid.uuid4().hex}.partial"
-    aside.write_text(json.dumps(document))
-    os.replace(aside, target)
-
-
-def _codecs(name: str) -> list:
-    """Zstd for the arrays (not the one-byte flags), then a CRC32C of every chunk's bytes:
-    a chunk changed on disk fails to read, even where zstd would decode it alike."""
-    return [Crc32cCodec()] if name in TILE_ARRAYS else [ZstdCodec(level=0), Crc32cCodec()]
-
-
-def zarr_attrs(attrs: dict, dtype: np.dtype) -> dict:
-    """Attributes as JSON values; ``_FillValue`` encoded as xarray reads it from Zarr v3."""
-    out = {}
-    for key, value in attrs.items():
-        if key == "_FillValue" and dtype.kind == "f":
-            value = base64.standard_b64encode(struct.pack("<d", value)).decode()
-        elif isinstance(value, np.ndarray):
-            value = value.tolist()
-        out[key] = value
-    return out
+    write_document(target, group_document({**wanted, **kept}))
 
 
 def remove(path: Path) -> None:
@@ -350,16 +332,16 @@ def repair(path: Path, job: Job, report: Verification) -> None:
     fill from then on); then write the root record of what verified."""
     names = set(report.variables) | ({GLOBAL} if report.adopting else set())
     variables = repair_variables(path, job, names)
-    group = zarr.open_group(path, mode="r+")
+    documents = {a.name: read_document(path / a.name / ZARR_JSON) for a in store_arrays(job)}
     tiles = plan_tiles(job)
     for index in sorted(set(report.damaged) | set(report.stray)):
         for name in TILE_ARRAYS[::-1]:  # the flag first
-            key = group[name].metadata.encode_chunk_key((index,))
-            group.store.delete_sync(f"{name}/{key}")
+            _delete_chunk(path / name, chunk_key(documents[name], (index,)))
         for a in cell_arrays(job):
-            key = group[a.name].metadata.encode_chunk_key(chunk_coords(job, tiles[index], a))
-            group.store.delete_sync(f"{a.name}/{key}")
-    attrs = {"campar_store": report_format(group), "job_hash": job.digest()}
+            coords = chunk_coords(job, tiles[index], a)
+            _delete_chunk(path / a.name, chunk_key(documents[a.name], coords))
+    group = read_document(path / ZARR_JSON)
+    attrs = {"campar_store": int(group["attributes"]["campar_store"]), "job_hash": job.digest()}
     if report.tiles_checked:
         sums = np.where(report.verified, report.sums, 0).astype(np.uint64)
     else:  # the tiles are checked next, against the record as it stands
@@ -367,8 +349,13 @@ def repair(path: Path, job: Job, report: Verification) -> None:
     write_zarr_root(path, new_root(attrs, variables, len(tiles)).with_sums(sums))
 
 
-def report_format(group) -> int:
-    return int(group.attrs["campar_store"])
+def _delete_chunk(folder: Path, key: str) -> None:
+    """Delete a chunk (it reads as the fill from then on), as zarr's ``LocalStore`` does."""
+    path = folder / key
+    if path.is_dir():  # zarr deletes a key that is a folder with everything under it
+        shutil.rmtree(path)
+    else:
+        path.unlink(missing_ok=True)
 
 
 class ZarrTileArrays:
@@ -378,22 +365,23 @@ class ZarrTileArrays:
     commits a tile (checksum, then ``done``) only after its writer reported it written,
     and resume clears the chunks of uncommitted tiles (``ZarrStore._clear``)."""
 
-    def __init__(self, real: Path, job: Job, group=None):
+    def __init__(self, real: Path, job: Job):
         self.real, self.job = real, job
-        group = group if group is not None else zarr.open_group(real, mode="r+")
         self.schemas = {a.name: a for a in cell_arrays(job)}
-        self.arrays = {name: group[name] for name in self.schemas}
+        self.documents = {name: read_document(real / name / ZARR_JSON) for name in self.schemas}
         self.direct = {
-            name: DirectChunk.for_array(real / name, array) for name, array in self.arrays.items()
+            name: DirectChunk.for_document(real / name, document)
+            for name, document in self.documents.items()
         }
 
     def write(self, tile: Tile, arrays: dict[str, np.ndarray]) -> None:
         try:
             lead = 0 if tile.layer is None else 1
             write_chunks(
+                self.real,
                 [
                     (
-                        self.arrays[name],
+                        name,
                         self.direct[name],
                         tile.region,
                         chunk_coords(self.job, tile, self.schemas[name]),
@@ -401,7 +389,7 @@ class ZarrTileArrays:
                         values,
                     )
                     for name, values in arrays.items()
-                ]
+                ],
             )
         except OSError:
             clean_leftovers(self.real, self.job)  # a failed write's .partial files
@@ -412,18 +400,11 @@ class ZarrStore(Store):
     direct_writes = True
 
     def __init__(self, path: Path, job: Job, lock: StoreLock, done: np.ndarray, real: Path):
-        group = zarr.open_group(real, mode="r+")
-        super().__init__(path, job, lock, decode_attrs(group.attrs.asdict())["runs"], real)
-        self._group = group
-        self._tile_arrays = ZarrTileArrays(real, job, group)
-        self._arrays = self._tile_arrays.arrays
-        self._schemas = self._tile_arrays.schemas.values()
-        self._checksums = group["checksum"]
-        self._flags = group["done"]
-        self._tile_direct = {
-            a.basename: DirectChunk.for_array(real / a.basename, a)
-            for a in (self._checksums, self._flags)
-        }
+        self._document = read_document(real / ZARR_JSON)
+        runs = decode_attrs(self._document["attributes"])["runs"]
+        super().__init__(path, job, lock, runs, real)
+        self._tile_arrays = ZarrTileArrays(real, job)
+        self._tile_direct = {name: DirectChunk.for_array(real / name) for name in TILE_ARRAYS}
         self._done = np.array(done, bool)
         self._root = RootLog(real, read_zarr_root(real))  # sound: ``open_store`` checked it
         self._clear(np.flatnonzero(~self._done))
@@ -431,13 +412,11 @@ class ZarrStore(Store):
     def _clear(self, tiles) -> None:
         """Delete the chunks of pending tiles that a killed or failed write left: outside the
         committed tiles the store holds only the fill, never numbers no flag vouches for."""
-        for a in self._schemas:
-            array = self._arrays[a.name]
+        for name, a in self._tile_arrays.schemas.items():
+            document = self._tile_arrays.documents[name]
             for index in tiles:
                 coords = chunk_coords(self.job, self.tiles[int(index)], a)
-                key = f"{a.name}/{array.metadata.encode_chunk_key(coords)}"
-                if (self.real / key).exists():
-                    self._group.store.delete_sync(key)
+                _delete_chunk(self.real / name, chunk_key(document, coords))
 
     @property
     def done(self) -> np.ndarray:
@@ -451,8 +430,8 @@ class ZarrStore(Store):
         # Each tile's checksum and flag is a chunk of its own: every checksum, then the flags
         # after them (the commit of each tile); directly (DirectChunk) where it can.
         try:
-            self._set_each(self._checksums, [(t.index, np.uint64(v)) for t, v in written])
-            self._set_each(self._flags, [(t.index, np.int8(1)) for t, _ in written])
+            self._set_each("checksum", [(t.index, np.uint64(v)) for t, v in written])
+            self._set_each("done", [(t.index, np.int8(1)) for t, _ in written])
             self._root.commit(written)  # the commit: readers see the tiles from now on
         except OSError:
             clean_leftovers(self.real, self.job)
@@ -460,34 +439,43 @@ class ZarrStore(Store):
         for tile, _ in written:
             self._done[tile.index] = True
 
-    def _set_each(self, array, values: list[tuple[int, np.generic]]) -> None:
+    def _set_each(self, name: str, values: list[tuple[int, np.generic]]) -> None:
         """Set elements of a per-tile array, one chunk each (``write_chunks``)."""
-        direct = self._tile_direct[array.basename]
-        write_chunks([(array, direct, i, (i,), 0, np.array([v])) for i, v in values])
+        direct = self._tile_direct[name]
+        write_chunks(self.real, [(name, direct, i, (i,), 0, np.array([v])) for i, v in values])
 
     def _write_runs(self, runs: list[dict]) -> None:
+        """The run log into the group's attributes: its zarr.json replaced whole, the
+        consolidated documents in it as they were (array metadata never changes)."""
+        attrs = self._document["attributes"]
+        group = {**self._document, "attributes": {**attrs, **run_attrs(self.job, attrs, runs)}}
         try:
-            self._group.attrs.update(run_attrs(self.job, self._group.attrs.asdict(), runs))
+            write_document(self.real / ZARR_JSON, group)
         except OSError:
             clean_leftovers(self.real, self.job)
             raise
+        self._document = group
 
     def _close(self) -> None:
         self._root.fold()  # every other write is already a whole file on disk
 
 
-def write_chunks(chunks) -> None:
-    """Write chunks given as (array, its DirectChunk or None, region, chunk coordinates,
-    leading length-1 axes, values): each by DirectChunk where it can, the rest through
-    zarr in one call of its event loop (one call per chunk costs each its own round trip
-    through the loop, docs/scaling.md)."""
+def write_chunks(real: Path, chunks) -> None:
+    """Write chunks of the store at ``real`` given as (array name, its DirectChunk or None,
+    region, chunk coordinates, leading length-1 axes, values): each by DirectChunk where it
+    can, the rest through zarr in one call of its event loop (an array of a codec chain
+    campar does not write)."""
     rest = [
-        (array, region, values)
-        for array, direct, region, coords, lead, values in chunks
+        (name, region, values)
+        for name, direct, region, coords, lead, values in chunks
         if direct is None or not direct.write(coords, lead, values)
     ]
     if rest:
-        sync(_all_at_once(a.async_array.setitem(r, v) for a, r, v in rest))
+        from zarr.core.sync import sync
+
+        group = _zarr().open_group(real, mode="r+", use_consolidated=False)
+        arrays = {name: group[name] for name in {name for name, _, _ in rest}}
+        sync(_all_at_once(arrays[n].async_array.setitem(r, v) for n, r, v in rest))
 
 
 async def _all_at_once(writes) -> None:
@@ -553,7 +541,7 @@ def _open_group(path: Path, real: Path):
     if that copy is damaged (``variable_damage`` then says how); StoreDamaged if neither."""
     for consolidated in (None, False):
         try:
-            return zarr.open_group(real, mode="r", use_consolidated=consolidated)
+            return _zarr().open_group(real, mode="r", use_consolidated=consolidated)
         except Exception as exc:  # zarr raises many kinds on damaged metadata
             failure = exc
     raise StoreDamaged(
