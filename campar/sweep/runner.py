@@ -456,8 +456,8 @@ def run_job(
             receive_outcome(comm)  # of the run
             return RunSummary("worker", {})
         # Serial: compiled (or loaded) before the store opens and before the lane's thread
-        # starts: the process then has one thread (zarr starts one of its own when the
-        # store opens), so a cold compile may fork a helper (campar.core.split_compile),
+        # starts: the process then has one thread (zarr starts one of its own where a
+        # resume verifies the store), so a cold compile may fork a helper (split_compile),
         # and the first tile runs at full speed. A store with nothing pending then has
         # loaded the kernel for nothing (a compile if the cache is cold).
         # Under MPI every worker waits for the store: rank 0 opens it first, and its lane

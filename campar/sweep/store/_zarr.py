@@ -21,7 +21,6 @@ Attributes follow xarray's Zarr v3 conventions: ``dimension_names``, a
 xarray encodes it (floats as base64 of the little-endian double).
 """
 
-import asyncio
 import itertools
 import json
 import math
@@ -482,6 +481,8 @@ async def _all_at_once(writes) -> None:
     """Await every write (gathered inside zarr's loop: a gather made outside belongs to no
     loop), all to their end, then raise the first error: nothing still writes while a
     failed tile's ``.partial`` files are cleaned up."""
+    import asyncio  # with zarr alone: a run's own writes need neither
+
     for outcome in await asyncio.gather(*writes, return_exceptions=True):
         if isinstance(outcome, BaseException):
             raise outcome
