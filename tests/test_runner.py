@@ -462,3 +462,38 @@ def test_a_worker_writes_into_the_store_only_where_it_sees_the_masters_lock(tmp_
     assert seen_store(f'{store}\n{{"host": "other", "pid": 2}}') == ""  # another run's lock
     assert seen_store(f'{tmp_path / "absent.zarr"}\n{{"host": "h", "pid": 1}}') == ""
     assert seen_store("") == ""
+
+
+def test_closing_a_lane_waits_for_its_kernel_load_and_abandons_its_tile(monkeypatch):
+    """A lane closed while it loads the kernel returns once the load is over (a process that
+    ends with a thread inside llvmlite can crash: a segmentation fault under mpirun when a
+    Ctrl-C stopped a run during a rank's load); one closed during a tile returns at once,
+    the tile abandoned."""
+    from support.jobs import SMALL_JOB
+
+    from campar.sweep.job import Job
+
+    job = Job.from_dict({**SMALL_JOB, "store": None})
+    loaded, started, release = threading.Event(), threading.Event(), threading.Event()
+
+    def slow_load(job, share):
+        time.sleep(0.3)
+        loaded.set()
+
+    def slow_tile(job, tile):
+        started.set()
+        release.wait(10)
+        return {}
+
+    monkeypatch.setattr(runner, "load_kernel", slow_load)
+    monkeypatch.setattr(runner, "run_tile", slow_tile)
+    lane = runner.ThreadLane(job, "test", preload=True)
+    lane.close()
+    assert loaded.is_set()
+    lane = runner.ThreadLane(job, "test")
+    lane.start(plan_tiles(job)[0])
+    assert started.wait(10)
+    begun = time.monotonic()
+    lane.close()
+    assert time.monotonic() - begun < 0.2
+    release.set()

@@ -147,12 +147,13 @@ class ThreadLane:
         return out
 
     def close(self, wait: bool = False) -> None:
-        """Drop the queued tiles and end the thread; one in progress is abandoned (the
-        daemon thread dies with the process) unless ``wait``: then the thread's work
-        (a tile, or the kernel load) ends first."""
+        """Drop the queued tiles and end the thread; a tile in progress is abandoned (the
+        daemon thread dies with the process) unless ``wait``, the kernel load never: a
+        process that ends while a thread is inside llvmlite can crash (a segmentation fault
+        under mpirun, when a Ctrl-C stops a run while a rank's lane still loads)."""
         self.withdraw()
         self._put(None)
-        if wait:
+        if wait or not self.warm:
             self._thread.join()
 
     def _put(self, tile: Tile | None) -> None:
@@ -447,10 +448,8 @@ def run_job(
             )
             try:  # of opening the store: where to write, if at all
                 direct = receive_outcome(comm)
-            except BaseException:
-                # A refusal: the process ends once the kernel load is over, never during it
-                # (a daemon thread inside llvmlite at the interpreter's exit can crash it).
-                lane.close(wait=True)
+            except BaseException:  # a refusal: the process ends once the kernel is loaded
+                lane.close()
                 raise
             work(comm, job, signals, lane, direct)
             receive_outcome(comm)  # of the run
