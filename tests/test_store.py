@@ -405,7 +405,7 @@ class TestZarrStore(StoreSuite):
         byte for byte what zarr's own API writes (support.zarr_reference), for jobs of
         jobs/: the paper's plane (both chunk key separators), a basin, two sweep
         directions, an attractor census, a cam law's design plane."""
-        from support.zarr_reference import build_with_zarr, store_files
+        from support.zarr_reference import build_with_zarr
 
         from campar.sweep.job import load_job
         from campar.sweep.store import _schema, _zarr
@@ -414,7 +414,7 @@ class TestZarrStore(StoreSuite):
         job = load_job(ROOT / "jobs" / f"{job_file}.yaml")
         _zarr._build(tmp_path / "campar.zarr", job, separator)
         build_with_zarr(tmp_path / "zarr.zarr", job, separator)
-        ours, zarrs = store_files(tmp_path / "campar.zarr"), store_files(tmp_path / "zarr.zarr")
+        ours, zarrs = snapshot(tmp_path / "campar.zarr"), snapshot(tmp_path / "zarr.zarr")
         assert sorted(ours) == sorted(zarrs)
         assert [name for name in ours if ours[name] != zarrs[name]] == []
         assert any(name.startswith("component/c") for name in ours)  # a text coordinate

@@ -52,8 +52,3 @@ def build_with_zarr(path: Path, job: Job, separator: str = ".") -> None:
         warnings.simplefilter("ignore", ZarrUserWarning)
         zarr.consolidate_metadata(path)
     write_zarr_root(path, new_root(attrs, recorded, len(plan_tiles(job))))
-
-
-def store_files(path: Path) -> dict[str, bytes]:
-    """Every file of a store by its path inside it."""
-    return {str(f.relative_to(path)): f.read_bytes() for f in path.rglob("*") if f.is_file()}

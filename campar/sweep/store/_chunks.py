@@ -5,11 +5,11 @@ pipeline, event loop and thread pool) a tile costs several times the CPU of the 
 system's own work; on a rank that computes while it writes, that CPU is the kernel's.
 ``DirectChunk`` encodes the chunk with the codec chain campar's arrays have (bytes,
 little-endian, or variable-length UTF-8 for text; zstd or nothing; CRC32C:
-``_zarr_documents.codecs``) and writes it as zarr's ``LocalStore`` does — aside as
-``<key>.<32 hex>.partial``, then renamed into place — and leaves out a chunk that holds
-only the fill, as zarr does (``write_empty_chunks`` false): the files are byte for byte
-zarr's (tests/test_store.py), at a fraction of the CPU (chunks are files c.<i>.<j> with
-no folder to make: ``_zarr.CHUNK_KEYS``). It reads the array's codecs from its zarr.json;
+``_zarr_documents.codecs``) and writes it as zarr's ``LocalStore`` does — aside, then
+renamed into place (``_atomic``) — and leaves out a chunk that holds only the fill, as
+zarr does (``write_empty_chunks`` false): the files are byte for byte zarr's
+(tests/test_store.py), at a fraction of the CPU (chunks are files c.<i>.<j> with no
+folder to make: ``_zarr.CHUNK_KEYS``). It reads the array's codecs from its zarr.json;
 an array with any other codec chain (a store made by a later campar, say) is written
 through zarr.
 """
@@ -23,7 +23,8 @@ import numpy as np
 from numcodecs.vlen import VLenUTF8
 from numcodecs.zstd import Zstd
 
-from ._zarr_documents import ZARR_JSON, chunk_key, read_document, write_file
+from ._atomic import write_file
+from ._zarr_documents import ZARR_JSON, chunk_key, read_document
 
 
 class DirectChunk:
@@ -53,14 +54,10 @@ class DirectChunk:
             dtype = _dtype(document["data_type"])
             if dtype is None or len(codecs) not in (2, 3) or names[-1] != "crc32c":
                 return None
-            first = codecs[0]
-            if dtype.kind == "O":
-                if names[0] != "vlen-utf8":
-                    return None
-            elif names[0] != "bytes" or first.get("configuration", {}).get("endian") not in (
-                None,
-                "little",
-            ):
+            endian = codecs[0].get("configuration", {}).get("endian")
+            if names[0] != ("vlen-utf8" if dtype.kind == "O" else "bytes"):
+                return None
+            if endian not in (None, "little"):
                 return None
             zstd = None
             if len(codecs) == 3:

@@ -40,12 +40,12 @@ record stops vouching there.
 import base64
 import hashlib
 import json
-import os
-import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from ._atomic import write_file
 
 ROOT_VERSION = 1
 ZARR_FILE = "campar-root.json"  # beside the group's zarr.json; Zarr readers ignore it
@@ -279,12 +279,4 @@ class RootLog:
 
 def write_zarr_root(path: Path, root: Root) -> None:
     """Replace the record of the Zarr store at ``path`` whole (written aside, renamed)."""
-    final = path / ZARR_FILE
-    tmp = path / f"{ZARR_FILE}.{uuid.uuid4().hex}.partial"  # as zarr's: clean_leftovers
-    try:
-        with open(tmp, "w") as fh:
-            fh.write(root.encode() + "\n")
-        os.replace(tmp, final)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    write_file(path / ZARR_FILE, (root.encode() + "\n").encode())

@@ -9,23 +9,19 @@ tests/test_store.py builds a store both ways): an array's ``zarr.json`` from its
 metadata, sorted as zarr sorts it). Reading, verifying and repairing a store still go
 through zarr (``_zarr``), as every other reader does.
 
-Every document is written aside (``<name>.<32 hex>.partial``) and renamed into place, as
-zarr's ``LocalStore`` writes: a killed writer leaves whole files and stray ``.partial``
-ones (``_zarr.clean_leftovers``).
+Every document is written aside and renamed into place (``_atomic``).
 """
 
 import base64
-import contextlib
 import json
 import math
-import os
 import struct
 import unicodedata
-import uuid
 from pathlib import Path
 
 import numpy as np
 
+from ._atomic import write_file
 from ._schema import TILE_ARRAYS, ArraySchema
 
 ZARR_JSON = "zarr.json"
@@ -139,16 +135,3 @@ def read_document(path: Path) -> dict:
 def write_document(path: Path, document: dict) -> None:
     """Replace ``path`` by ``document``: written aside, renamed into place."""
     write_file(path, encode(document))
-
-
-def write_file(path: Path | str, body: bytes) -> None:
-    """Write ``body`` aside as ``<path>.<32 hex>.partial``, then rename it into place."""
-    aside = f"{path}.{uuid.uuid4().hex}.partial"
-    try:
-        with open(aside, "wb") as file:
-            file.write(body)
-        os.replace(aside, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(aside)
-        raise
