@@ -5,7 +5,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from campar.bench.revolutions import distribution, labels_differ
+from campar import simulate_point
+from campar.bench.revolutions import adjudicate, distribution, labels_differ
 from campar.cli import main
 from campar.core.codes import Kind
 
@@ -30,7 +31,7 @@ def test_the_distribution_and_its_shares_are_counted_by_hand():
     other["kind"][3], other["n"][3], other["p"][3] = PER, 5, 4  # chaos → 5-4
     other["p"][2] = 1  # 2-2 → 2-1
     other["revolutions"][:] = 7  # revolutions are not labels
-    assert labels_differ(cells, other) == 2
+    assert labels_differ(cells, other).tolist() == [False, False, True, True, False, False, False]
 
 
 @pytest.mark.process  # computes the tiny map in child processes, this tree and a baseline
@@ -43,3 +44,35 @@ def test_revolutions_benchmark_runs_tiny_against_a_baseline(capsys, monkeypatch)
         assert text in out, text
     # the same tree twice: the same map
     assert "cells whose label differs from the baseline's: 0" in out
+
+
+def test_a_changed_label_is_adjudicated_by_a_long_run_from_each_trees_hand_off():
+    """Two cells along ω at μcn 0.8 (the base point's 1-1 region); both trees hand the
+    second cell the first one's cycle point, the baseline calls it chaos, this tree 1-1:
+    the long run from that hand-off sides with this tree."""
+    sets = [
+        "sweep.omega.from=3.0",
+        "sweep.omega.to=2.95",
+        "sweep.omega.points=2",
+        "sweep.mu_cn.from=0.8",
+        "sweep.mu_cn.to=0.8",
+        "sweep.mu_cn.points=1",
+    ]
+    first = simulate_point(3.0, mu_cn=0.8, tensile="clamp")
+    assert first.label == "1-1"
+    this = {
+        "kind": np.array([PER, PER]),
+        "n": np.array([1, 1]),
+        "p": np.array([1, 1]),
+        "state": np.array([first.state, [np.nan, np.nan]]),
+    }
+    baseline = {name: values.copy() for name, values in this.items()}
+    baseline["kind"][1], baseline["n"][1], baseline["p"][1] = CHAOS, 0, 0
+    found = adjudicate(
+        str(REPO / "jobs" / "mu_cn.yaml"),
+        sets,
+        {"this": this, "baseline": baseline},
+        labels_differ(this, baseline),
+    )
+    assert found["counts"]["this right"] == 1 and found["counts"]["baseline right"] == 0
+    assert found["changes"] == {("chaos", "1-1", True): 1}

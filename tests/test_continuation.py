@@ -1,6 +1,6 @@
 """Continuation along ω and the early verdicts, against independent runs.
 
-Warm starts (previous cell, linear or quadratic extrapolation through the
+Warm starts (previous cell, linear, quadratic or cubic extrapolation through the
 previous cells' cycles) must not change a label, only the cost; the chain's
 cells are those SciPy finds from rest; the non-periodic verdicts must agree
 with long SciPy runs of the same cell, and a cycle reached by a jump on
@@ -41,23 +41,24 @@ def chain(extrapolate: int):
 
 @pytest.fixture(scope="module")
 def chains():
-    return {order: chain(order) for order in (0, 1, 2)}
+    return {order: chain(order) for order in (0, 1, 2, 3)}
 
 
 def test_warm_start_order_changes_no_label_only_the_cost(chains):
-    plain, linear, quadratic = (chains[order][1] for order in (0, 1, 2))
+    plain, *extrapolating = (chains[order][1] for order in (0, 1, 2, 3))
     assert (plain["kind"] == Kind.PERIODIC).all()
-    for other in (linear, quadratic):
+    for other in extrapolating:
         np.testing.assert_array_equal(other["n"], plain["n"])
         np.testing.assert_array_equal(other["p"], plain["p"])
         np.testing.assert_allclose(other["dc"], plain["dc"], atol=1e-6)
-    extrapolated = [(c["flags"] & Flag.WARM_EXTRAPOLATED) != 0 for c in (plain, linear, quadratic)]
+    extrapolated = [(c["flags"] & Flag.WARM_EXTRAPOLATED) != 0 for c in (plain, *extrapolating)]
     assert not extrapolated[0].any()
-    # extrapolated wherever the last fixed points are close (not across the 1-1/1-2 jump)
-    assert extrapolated[1].mean() > 0.6 and (extrapolated[2] == extrapolated[1]).all()
+    # extrapolated from the third cell on (two cycles of one period before it), by every order
+    for order in (1, 2, 3):
+        assert not extrapolated[order][:2].any() and extrapolated[order][2:].all(), order
     # each order of extrapolation lands closer to the next cycle: fewer revolutions
-    revolutions = [c["revolutions"].sum() for c in (plain, linear, quadratic)]
-    assert revolutions[2] < revolutions[1] < revolutions[0], revolutions
+    revolutions = [c["revolutions"].sum() for c in (plain, *extrapolating)]
+    assert revolutions[3] < revolutions[2] < revolutions[1] < revolutions[0], revolutions
 
 
 # chain cells checked with SciPy: 1-1 at ω = 3 and 2, 1-2 at ω = 1.4, 1-1 at ω = 1
@@ -68,7 +69,7 @@ SCIPY_CELLS = (0, 40, 64, 80)
 def test_chain_cells_are_the_cycles_scipy_finds_from_rest(chains, k):
     """The warm-started chain lands on the cycle SciPy DOP853 reaches from rest (these
     cells are monostable): same n-p, duty cycle and section point."""
-    job, warm = chains[2]
+    job, warm = chains[3]
     omega = float(job.omega[k])
     cell = Cell("chain", omega, mu_cn=float(job.second_values[0]), **job.fixed)
     cold = scipy_cell(cell.scipy_model(), (0.0, 0.0), 60, 4, rtol=1e-10)
@@ -81,7 +82,7 @@ def test_chain_cells_are_the_cycles_scipy_finds_from_rest(chains, k):
 
 def test_chain_ends_on_the_reference_cell(chains):
     """The chain's last cell (ω = 1) is reference cell 102 (computed from rest)."""
-    job, warm = chains[2]
+    job, warm = chains[3]
     case = reference_case(102)
     assert case["clamp"] and job.model.tensile == "clamp"
     assert (float(job.omega[-1]), job.second_values[0]) == (case["omega"], case["mu_cn"])

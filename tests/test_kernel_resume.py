@@ -142,3 +142,20 @@ def test_under_mpirun_every_rank_ends_on_the_refusal(tmp_path, monkeypatch):
     assert result.stderr.count(f"computed by kernel version {OTHER}") == 1, result.stderr
     assert "Traceback" not in result.stderr
     assert as_it_was(path) == before
+
+
+def test_a_store_of_another_kernel_and_of_a_job_that_differs_is_refused_naming_both(
+    tmp_path, monkeypatch
+):
+    """A default that changed with the kernel (transient.extrapolate) makes an earlier
+    kernel's store hold another job too: the refusal names the key and the kernel."""
+    from test_store import make_job
+
+    path = tmp_path / "earlier.zarr"
+    store_of_kernel(path, monkeypatch)
+    before = as_it_was(path)
+    with pytest.raises(StoreMismatch) as refused:
+        open_store(path, make_job(transient__extrapolate=1))
+    said = str(refused.value)
+    assert "transient.extrapolate" in said and f"computed by kernel version {OTHER}" in said
+    assert as_it_was(path) == before

@@ -236,6 +236,11 @@ def _revolutions_arguments(p):
         help="change one key of the job, e.g. sweep.omega.points=100 (repeatable)",
     )
     p.add_argument("--baseline", metavar="DIR", help="another campar checkout, run in turn")
+    p.add_argument(
+        "--adjudicate",
+        action="store_true",
+        help="run the cells whose label differs from the baseline's for 3000 revolutions",
+    )
     p.add_argument("--quick", action="store_true", help="a tiny configuration (seconds)")
 
 

@@ -10,10 +10,15 @@ chaos, unconverged) and by the periodic cells over 20 revolutions, and the count
 With ``--baseline DIR`` (another campar checkout, e.g. main's) the same job is also
 computed by that tree (its child process runs with DIR first on PYTHONPATH) in the same
 run, its distribution printed beside this tree's, and the cells whose label differs
-between the two counted: the cells to adjudicate with a long run (``campar point --from
-STORE`` with ``--set transient.chaos_after=0`` and a long budget).
+between the two counted. ``--adjudicate`` then runs each of those cells again, from each
+tree's own hand-off (the final state of the cell before it along the chain, the warm
+start wherever that cell is not a cycle of the same period; the rest are counted), with
+this tree's kernel for LONG_RUN revolutions and no early non-periodic verdict: a tree's
+label is right where it is its long run's, and the counts of cells each tree has right
+are printed.
 
     campar bench revolutions
+    campar bench revolutions --baseline ../main --adjudicate
     campar bench revolutions --baseline ../main --set sweep.omega.points=200
 """
 
@@ -21,18 +26,20 @@ import os
 import subprocess
 import sys
 import tempfile
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
 
 import campar
 
-from ..core.codes import Kind
+from ..core.codes import Kind, cell_label
 from ..sweep.store import read_store
 from .common import format_table, machine_line
 
 LONG = 20  # a periodic cell over this many revolutions counts as a long transient
-FIELDS = ("revolutions", "kind", "n", "p")
+LONG_RUN = 3000  # revolutions of an adjudicating run, which has no early non-periodic verdict
+FIELDS = ("revolutions", "kind", "n", "p", "state")
 QUICK_SETS = ("sweep.omega.points=8", "sweep.mu_cn.points=3")
 
 
@@ -55,10 +62,13 @@ def compute(job: str, sets: list[str], store: Path, tree: str | None) -> None:
 
 
 def stored_cells(store: Path) -> dict:
-    """The store's per-cell revolutions, kind, n and p (flat arrays), and the version of
-    the kernel that wrote it."""
+    """The store's per-cell revolutions, kind, n, p and final state (flat over the cells),
+    and the version of the kernel that wrote it."""
     with read_store(store) as reader:
-        cells = {name: np.asarray(reader.read(name)).ravel() for name in FIELDS}
+        cells = {}
+        for name in FIELDS:
+            values = np.asarray(reader.read(name))
+            cells[name] = values.reshape(-1, 2) if name == "state" else values.ravel()
         cells["kernel"] = reader.attrs.get("versions", {}).get("kernel", "?")
     return cells
 
@@ -85,11 +95,63 @@ def distribution(cells: dict) -> dict:
     }
 
 
-def labels_differ(a: dict, b: dict) -> int:
-    """Cells whose label (kind, and n, p where periodic) differs between two stores."""
+def labels_differ(a: dict, b: dict) -> np.ndarray:
+    """Whether each cell's label (kind, and n, p where periodic) differs between two stores."""
     periodic = (a["kind"] == Kind.PERIODIC) & (b["kind"] == Kind.PERIODIC)
-    differ = (a["kind"] != b["kind"]) | (periodic & ((a["n"] != b["n"]) | (a["p"] != b["p"])))
-    return int(differ.sum())
+    return (a["kind"] != b["kind"]) | (periodic & ((a["n"] != b["n"]) | (a["p"] != b["p"])))
+
+
+def label_at(cells: dict, i: int) -> str:
+    return cell_label(int(cells["kind"][i]), int(cells["n"][i]), int(cells["p"][i]))
+
+
+def adjudicate(job_path: str, sets: list[str], found: dict, differ: np.ndarray) -> dict:
+    """The long runs of the cells whose label differs (module docstring): for each tree,
+    how many of them it has right, and which label changes the long runs side with."""
+    from ..sweep.job import load_job
+    from ..sweep.overrides import parse_assignment, with_settings
+    from ..sweep.plan import chain_order
+    from ..views.point import simulate_point
+
+    job = with_settings(load_job(job_path), dict(parse_assignment(item) for item in sets))
+    shape = job.shape
+    place = np.empty(shape[1], int)
+    place[chain_order(job)] = np.arange(shape[1])  # each column's place in its chain
+    order = chain_order(job)
+    right = Counter()
+    changes = Counter()
+    for flat in np.flatnonzero(differ):
+        row, col = np.unravel_index(flat, shape)
+        k = place[col]
+        if k == 0:
+            right["first cells (not run)"] += 1
+            continue
+        before = np.ravel_multi_index((row, order[k - 1]), shape)
+        model = job.cell_model(row, col)
+        verdicts = {}
+        for name, cells in found.items():
+            if cells["kind"][before] == Kind.PERIODIC and label_at(cells, before) == label_at(
+                cells, flat
+            ):
+                right[f"{name}: start extrapolated (hand-off used)"] += 1
+            start = tuple(float(v) for v in cells["state"][before])
+            long = simulate_point(model, state=start, revolutions=LONG_RUN, chaos_after=0)
+            verdicts[name] = long.label == label_at(cells, flat)
+        for name, ok in verdicts.items():
+            right[f"{name} right"] += ok
+        change = (label_at(found["baseline"], flat), label_at(found["this"], flat))
+        changes[(*change, verdicts["this"])] += 1
+    right["cells"] = int(differ.sum())
+    return {"counts": dict(right), "changes": changes}
+
+
+def report_adjudication(found: dict) -> None:
+    print(f"\nlong runs ({LONG_RUN} revolutions, no early verdict) from each tree's hand-off:")
+    for key, count in found["counts"].items():
+        print(f"  {key}: {count}")
+    print("  label changes (baseline → this), with the long run siding with this tree:")
+    for (baseline, this, right), count in found["changes"].most_common():
+        print(f"    {baseline} → {this}: {count} ({'this' if right else 'not this'})")
 
 
 def run(args) -> int:
@@ -113,6 +175,9 @@ def run(args) -> int:
     if "baseline" in found:
         a, b = found["this"], found["baseline"]
         if a["kind"].shape == b["kind"].shape:
-            print(f"cells whose label differs from the baseline's: {labels_differ(a, b)}")
+            differ = labels_differ(a, b)
+            print(f"cells whose label differs from the baseline's: {int(differ.sum())}")
+            if args.adjudicate:
+                report_adjudication(adjudicate(args.job, sets, found, differ))
     print(machine_line())
     return 0

@@ -76,7 +76,8 @@ SLOW_REACH = 0.1  # … and, for a non-periodic cell, a stable cycle estimate th
 SLOW_SETTLED = 1e-4  # a slow stable cycle this close at the budget's end is the cell's motion
 PERIOD_REACH = 1e-5  # a converged cycle this close to a stable one of a divisor period is it
 GRAZE_TOL = 1e-5  # a dip of ε this close to 0 marks a cell whose p is sensitive
-EXTRAPOLATE_MAX = 0.05  # extrapolate the warm start only between close fixed points
+EXTRAPOLATE_MAX = 0.5  # extrapolate the warm start only between fixed points this close (L1)
+EXTRAPOLATE_ORDER = 3  # the highest order: a cubic through the last four cells' cycles
 
 
 class CellSettings(NamedTuple):
@@ -149,7 +150,7 @@ class ChainWork(NamedTuple):
     revs: np.ndarray  # (R, deferred.DEFER_COLUMNS): statistics, then the deferred steps
     u: np.ndarray  # tangent vector for the Lyapunov exponent
     x_start: np.ndarray  # (2,) the start of the current cell
-    prev: np.ndarray  # (3, 2) final states of the last three cells, newest first
+    prev: np.ndarray  # (EXTRAPOLATE_ORDER + 1, 2) the last cells' final states, newest first
     revolution: np.ndarray  # int64 [address, fingerprint] of run_revolution (revolution_call)
     refine: StepWork  # deferred.refine_window's buffers (N_STATE components)
     refine_mode: np.ndarray  # … and its contact mode
@@ -173,7 +174,7 @@ def make_chain_work(cs) -> ChainWork:
         revs=np.zeros((rows, DEFER_COLUMNS)),
         u=np.array([1.0, 0.0]),
         x_start=np.empty(2),
-        prev=np.empty((3, 2)),
+        prev=np.empty((EXTRAPOLATE_ORDER + 1, 2)),
         revolution=np.zeros(2, dtype=np.int64),  # linked by run_chain
         refine=make_work(N_STATE, MAX_EVENTS, 0.0),
         refine_mode=np.zeros(2, dtype=np.int64),
@@ -425,14 +426,7 @@ def chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out, 
         flags = 0
         order = min(extrapolation_order(prev, streak), cs.extrapolate)
         for c in range(2):  # component-wise: array expressions would allocate
-            if streak == 0:
-                x_start[c] = x_init[c]
-            elif order == 2:
-                x_start[c] = 3.0 * prev[0, c] - 3.0 * prev[1, c] + prev[2, c]
-            elif order == 1:
-                x_start[c] = 2.0 * prev[0, c] - prev[1, c]
-            else:
-                x_start[c] = prev[0, c]
+            x_start[c] = x_init[c] if streak == 0 else extrapolated(prev, order, c)
         if streak == 0 and i > 0:
             flags |= FLAG_RESTARTED
         elif streak > 0 and order > 0:
@@ -458,11 +452,12 @@ def chain_compiled(omega, zeta, f0, mu_kn, mu_cn, law, x_init, solver, cs, out, 
             continue
         periodic = out.kind[i] == PERIODIC
         same_period = periodic and streak > 0 and out.n[i] == prev_n
-        streak = min(streak + 1, 3) if same_period else 1
+        streak = min(streak + 1, EXTRAPOLATE_ORDER + 1) if same_period else 1
         prev_n = out.n[i] if periodic else -1
-        for c in range(2):  # element by element: a row assignment compiles numba's
-            prev[2, c] = prev[1, c]  # shape-checking error message (in every cold compile)
-            prev[1, c] = prev[0, c]
+        for j in range(EXTRAPOLATE_ORDER, 0, -1):  # element by element: a row assignment
+            for c in range(2):  # compiles numba's shape-checking error message (every cold compile)
+                prev[j, c] = prev[j - 1, c]
+        for c in range(2):
             prev[0, c] = cw.xs[final, c]
 
 
@@ -476,18 +471,54 @@ def fill(a, value):
 
 @hot
 def extrapolation_order(prev, streak):
-    """Polynomial order of the warm start from the last cells' cycles (0: the last state).
+    """Polynomial order of the warm start through the last cells' cycles (0: the last state).
 
-    Quadratic through three cycles of one period, linear through two, and only
-    while consecutive fixed points are close (far apart, the branch is turning).
+    Up to ``streak`` − 1 (the cells in a row whose cycles have one period, newest in
+    prev[0]), and raised only while each finite difference of their fixed points is no
+    larger than the one of the order below: on a smooth branch each order of the
+    polynomial adds less; where the differences grow (the cells' own convergence error
+    dominates them on a flat branch, or the branch bends at a corner) the lower order is
+    the safer start. None between fixed points over EXTRAPOLATE_MAX apart (the cycle
+    jumped, or the phase of an n-cycle's points is in doubt).
     """
-    if streak < 2 or not close(prev[0], prev[1]):
+    step = difference_size(prev, 1)
+    if streak < 2 or not step <= EXTRAPOLATE_MAX:
         return 0
-    if streak < 3 or not close(prev[1], prev[2]):
-        return 1
-    return 2
+    order = 1
+    while order < min(streak - 1, EXTRAPOLATE_ORDER):
+        higher = difference_size(prev, order + 1)
+        if not higher <= step:
+            break
+        step = higher
+        order += 1
+    return order
 
 
 @hot
-def close(a, b):
-    return abs(a[0] - b[0]) + abs(a[1] - b[1]) < EXTRAPOLATE_MAX
+def difference_size(prev, order):
+    """|∇^order prev[0]|, the L1 norm of the backward difference of that order."""
+    size = 0.0
+    for c in range(2):
+        size += abs(backward_difference(prev, order, c))
+    return size
+
+
+@hot
+def backward_difference(prev, order, c):
+    """Component c of ∇^order prev[0] (∇x_i = x_i − x_{i−1}; binomial coefficients)."""
+    total = 0.0
+    coefficient = 1.0
+    for j in range(order + 1):
+        total += coefficient * prev[j, c]
+        coefficient *= -(order - j) / (j + 1)
+    return total
+
+
+@hot
+def extrapolated(prev, order, c):
+    """Component c of the next cell's start: Newton's backward-difference polynomial of
+    this order through prev, one cell on (x_{i+1} = Σ_{j ≤ order} ∇^j x_i)."""
+    total = 0.0
+    for j in range(order + 1):
+        total += backward_difference(prev, j, c)
+    return total

@@ -120,9 +120,10 @@ class TransientSettings(Settings):
     """Distance to the cycle (Newton estimate) at which a cell has converged."""
     window_tol: Annotated[float, Field(gt=0.0, lt=1e-1)] = 1e-6
     """… and the distance of the read window's first point from it."""
-    extrapolate: Annotated[int, Field(ge=0, le=2)] = 2
-    """Warm start: 0 the previous cell's state; 1 linear, 2 quadratic extrapolation
-    through the previous cells' fixed points (where they are cycles of one period)."""
+    extrapolate: Annotated[int, Field(ge=0, le=3)] = 3
+    """Warm start: 0 the previous cell's state; 1 linear, 2 quadratic, 3 cubic (the highest
+    order) extrapolation through the previous cells' cycle points, where they are cycles of
+    one period on a smooth branch (each finite difference no larger than the one below)."""
     chaos_after: Annotated[int, Field(ge=0, le=MAX_COUNT)] = 96
     """From this revolution on, a surely chaotic motion ends the transient (0: never)."""
     chaos_lyapunov: Annotated[float, Field(gt=0.0)] = 0.1

@@ -427,8 +427,10 @@ def check_same_job(path, attrs: dict, job: Job) -> None:
             "computed with (the store keeps a copy: attribute cam_table), or run into "
             "another --store path"
         )
+    kernel = other_kernel(attrs)  # a default that changed with the kernel differs too
     raise StoreMismatch(
         f"{path} holds results of a different job ("
         + "; ".join(diffs)
-        + "): use --overwrite to replace it, or another --store path"
+        + (f") and was {kernel}" if kernel else ")")
+        + ": use --overwrite to replace it, or another --store path"
     )
