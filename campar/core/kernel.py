@@ -481,8 +481,10 @@ def extrapolation_order(prev, streak):
     the safer start. None between fixed points over EXTRAPOLATE_MAX apart (the cycle
     jumped, or the phase of an n-cycle's points is in doubt).
     """
+    if streak < 2:
+        return 0
     step = difference_size(prev, 1)
-    if streak < 2 or not step <= EXTRAPOLATE_MAX:
+    if not step <= EXTRAPOLATE_MAX:
         return 0
     order = 1
     while order < min(streak - 1, EXTRAPOLATE_ORDER):
