@@ -27,6 +27,11 @@ def test_the_distribution_and_its_shares_are_counted_by_hand():
     assert found["non-periodic"] == 1 and found["non-periodic share"] == pytest.approx(100 / 198)
     # over 20 revolutions: 50 and 21, not 20
     assert found["periodic > 20"] == 2 and found["periodic > 20 share"] == pytest.approx(71 / 198)
+    # by period: 1-cycles 2, 2; the 2-cycle 3; no 3-cycle; 8-, 4- and 4-cycles; the chaos
+    assert found["mean, period 1"] == 2 and found["mean, period 2"] == 3
+    assert np.isnan(found["mean, period 3"])
+    assert found["mean, period 4+"] == pytest.approx(91 / 3)
+    assert found["mean, non-periodic"] == 100
     other = {name: values.copy() for name, values in cells.items()}
     other["kind"][3], other["n"][3], other["p"][3] = PER, 5, 4  # chaos → 5-4
     other["p"][2] = 1  # 2-2 → 2-1

@@ -22,6 +22,7 @@ are printed.
     campar bench revolutions --baseline ../main --set sweep.omega.points=200
 """
 
+import math
 import os
 import subprocess
 import sys
@@ -38,6 +39,7 @@ from ..sweep.store import read_store
 from .common import format_table, machine_line
 
 LONG = 20  # a periodic cell over this many revolutions counts as a long transient
+BY_PERIOD = 4  # the mean revolutions of the cycles of each period up to this one (and longer)
 LONG_RUN = 3000  # revolutions of an adjudicating run, which has no early non-periodic verdict
 FIELDS = ("revolutions", "kind", "n", "p", "state")
 QUICK_SETS = ("sweep.omega.points=8", "sweep.mu_cn.points=3")
@@ -75,11 +77,18 @@ def stored_cells(store: Path) -> dict:
 
 def distribution(cells: dict) -> dict:
     """Mean, median, p90, p99 and max revolutions per cell; the shares of all revolutions
-    taken by non-periodic cells and by periodic cells over LONG revolutions; their counts."""
+    taken by non-periodic cells and by periodic cells over LONG revolutions; their counts;
+    the mean of the cycles of each period up to BY_PERIOD (the last row: that period and
+    longer) and of the non-periodic cells (NaN where there are none)."""
     revs = cells["revolutions"].astype(float)
     total = revs.sum()
     periodic = cells["kind"] == Kind.PERIODIC
     long = periodic & (revs > LONG)
+    period = np.where(periodic, np.minimum(cells["n"], BY_PERIOD), 0)
+    means = {
+        f"mean, period {n}{'+' if n == BY_PERIOD else ''}": mean_of(revs[period == n])
+        for n in range(1, BY_PERIOD + 1)
+    }
     return {
         "kernel": cells.get("kernel", "?"),
         "cells": revs.size,
@@ -92,7 +101,13 @@ def distribution(cells: dict) -> dict:
         "non-periodic share": revs[~periodic].sum() / total,
         f"periodic > {LONG}": int(long.sum()),
         f"periodic > {LONG} share": revs[long].sum() / total,
+        **means,
+        "mean, non-periodic": mean_of(revs[~periodic]),
     }
+
+
+def mean_of(values: np.ndarray) -> float:
+    return float(values.mean()) if values.size else math.nan
 
 
 def labels_differ(a: dict, b: dict) -> np.ndarray:
