@@ -24,39 +24,33 @@ def warm_start(prev, streak):
 
 
 def branch(z, omegas):
-    """The cycle points z(ω) of the cells at ``omegas``, newest (last computed) first."""
+    """The cycle points z(ω) of the cells at ``omegas`` (in the chain's order), newest
+    first."""
     return np.array([z(w) for w in omegas])[::-1].copy()
 
 
-def cubic(w):
-    return np.array([0.3 + 0.2 * w - 0.05 * w**2 + 0.01 * w**3, -0.4 + 0.1 * w + 0.02 * w**3])
+COEFFICIENTS = np.array([[0.3, 0.2, -0.05, 0.01], [-0.4, 0.1, 0.0, 0.02]])  # of 1, ω, ω², ω³
+
+
+def polynomial(degree):
+    """A branch of cycle points z(ω), polynomial of ``degree`` in ω."""
+    rows = COEFFICIENTS[:, : degree + 1]
+    return lambda w: np.array([np.polyval(row[::-1], w) for row in rows])
+
+
+cubic = polynomial(3)
 
 
 @pytest.mark.parametrize("streak", [2, 3, 4])
 def test_a_polynomial_branch_is_continued_exactly_by_the_order_the_cells_allow(streak):
-    """streak cells give order streak − 1, which continues a polynomial of that degree
-    exactly: the start is the branch's next point."""
+    """streak cells give order streak − 1 (the cubic, EXTRAPOLATE_ORDER, from four), which
+    continues a polynomial of that degree exactly: the start is the branch's next point."""
     h = 0.02
-    omegas = 3.0 - h * np.arange(EXTRAPOLATE_ORDER + 1)[::-1]  # the chain runs down in ω
-    degree = streak - 1
-    coefficients = np.array([[0.3, 0.2, -0.05, 0.01], [-0.4, 0.1, 0.0, 0.02]])[:, : degree + 1]
-
-    def z(w):
-        return np.array([np.polyval(row[::-1], w) for row in coefficients])
-
-    prev = branch(z, omegas[::-1])  # omegas[::-1]: the chain's order, so prev[0] is ω = 3 − 3h
-    order, start = warm_start(prev, streak)
-    assert order == degree
-    np.testing.assert_allclose(start, z(omegas[0] - h), rtol=0, atol=1e-13)
-
-
-def test_a_smooth_branch_gets_the_cubic_and_lands_closest():
-    h = 0.02
-    omegas = 3.0 - h * np.arange(4)
-    prev = branch(cubic, omegas)
-    order, start = warm_start(prev, 4)
-    assert order == EXTRAPOLATE_ORDER == 3
-    np.testing.assert_allclose(start, cubic(3.0 - 4 * h), rtol=0, atol=1e-13)
+    omegas = 3.0 - h * np.arange(EXTRAPOLATE_ORDER + 1)  # the chain runs down in ω
+    z = polynomial(streak - 1)
+    order, start = warm_start(branch(z, omegas), streak)
+    assert order == streak - 1 <= EXTRAPOLATE_ORDER
+    np.testing.assert_allclose(start, z(omegas[-1] - h), rtol=0, atol=1e-13)
 
 
 def test_where_the_differences_grow_the_order_stays_low():
