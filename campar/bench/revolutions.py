@@ -11,8 +11,8 @@ With ``--baseline DIR`` (another campar checkout, e.g. main's) the same job is a
 computed by that tree (its child process runs with DIR first on PYTHONPATH) in the same
 run, its distribution printed beside this tree's, and the cells whose label differs
 between the two counted. ``--adjudicate`` then runs each of those cells again, from each
-tree's own hand-off (the final state of the cell before it along the chain, the warm
-start wherever that cell is not a cycle of the same period; the rest are counted), with
+tree's own hand-off (the final state of the cell before it along the chain: the warm
+start unless the two cells before it are cycles of one period, which are counted), with
 this tree's kernel for LONG_RUN revolutions and no early non-periodic verdict: a tree's
 label is right where it is its long run's, and the counts of cells each tree has right
 are printed.
@@ -130,9 +130,9 @@ def adjudicate(job_path: str, sets: list[str], found: dict, differ: np.ndarray) 
 
     job = with_settings(load_job(job_path), dict(parse_assignment(item) for item in sets))
     shape = job.shape
-    place = np.empty(shape[1], int)
-    place[chain_order(job)] = np.arange(shape[1])  # each column's place in its chain
     order = chain_order(job)
+    place = np.empty(shape[1], int)
+    place[order] = np.arange(shape[1])  # each column's place in its chain
     right = Counter()
     changes = Counter()
     for flat in np.flatnonzero(differ):
@@ -142,13 +142,12 @@ def adjudicate(job_path: str, sets: list[str], found: dict, differ: np.ndarray) 
             right["first cells (not run)"] += 1
             continue
         before = np.ravel_multi_index((row, order[k - 1]), shape)
+        two_before = np.ravel_multi_index((row, order[k - 2]), shape) if k >= 2 else None
         model = job.cell_model(row, col)
         verdicts = {}
         for name, cells in found.items():
-            if cells["kind"][before] == Kind.PERIODIC and label_at(cells, before) == label_at(
-                cells, flat
-            ):
-                right[f"{name}: start extrapolated (hand-off used)"] += 1
+            if two_before is not None and same_period(cells, before, two_before):
+                right[f"{name}: start may be extrapolated (hand-off used)"] += 1
             start = tuple(float(v) for v in cells["state"][before])
             long = simulate_point(model, state=start, revolutions=LONG_RUN, chaos_after=0)
             verdicts[name] = long.label == label_at(cells, flat)
@@ -158,6 +157,13 @@ def adjudicate(job_path: str, sets: list[str], found: dict, differ: np.ndarray) 
         changes[(*change, verdicts["this"])] += 1
     right["cells"] = int(differ.sum())
     return {"counts": dict(right), "changes": changes}
+
+
+def same_period(cells: dict, i: int, j: int) -> bool:
+    """Cells i and j are cycles of one period: the chain extrapolates the next start
+    through them (core.kernel.extrapolation_order)."""
+    periodic = cells["kind"][i] == Kind.PERIODIC and cells["kind"][j] == Kind.PERIODIC
+    return bool(periodic and cells["n"][i] == cells["n"][j])
 
 
 def report_adjudication(found: dict) -> None:
