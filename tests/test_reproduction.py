@@ -122,6 +122,9 @@ def test_from_refuses_what_would_change_the_stored_model(stores, capsys):
     base = ["point", "--from", str(path), "--omega", "3", "--mu-cn", "0.8"]
     assert campar.cli.main([*base, "--rtol", "1e-9"]) == 2
     assert "--rtol would change it" in capsys.readouterr().err
+    # a flag not named by its key's last part (transient.max_revolutions)
+    assert campar.cli.main([*base, "--revolutions", "3000"]) == 2
+    assert "--revolutions would change it" in capsys.readouterr().err
     assert campar.cli.main(["point", "--from", str(path), "--omega", "3"]) == 2
     assert "give --mu-cn too" in capsys.readouterr().err
     assert campar.cli.main([*base, "--zeta", "0.3"]) == 2

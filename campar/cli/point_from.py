@@ -15,6 +15,7 @@ def coordinates_of(args) -> dict:
     parameter's flag (--phi1, --n, …) and a basin's --y0 --v0; JobError for a model flag
     that would change the stored model."""
     from ..model.laws import LAW_PARAMETERS
+    from ..model.model import FIELDS
 
     coords = {"omega": args.omega, **parameter_values(args)}
     coords = {name: value for name, value in coords.items() if value is not None}
@@ -26,7 +27,7 @@ def coordinates_of(args) -> dict:
             coords[BASIN_FLAGS[key]] = float(text)
         else:
             raise JobError(
-                f"--from takes the cell's model from the store; --{name.replace('_', '-')} "
+                f"--from takes the cell's model from the store; {FIELDS[key].flag} "
                 "would change it: leave it out (or compute the cell without --from)"
             )
     if args.job or args.set:
