@@ -45,6 +45,9 @@ N_REV_STATS = 8
 
 # Longest Newton jump taken on agreeing estimates (assess_revolution).
 TRUSTED_JUMP_MAX = 0.2
+# A jump on agreeing estimates is taken for a period whose repeat is within this factor of
+# the motion's closest repeat over the periods available (assess_revolution).
+EVIDENT_REPEAT = 10.0
 
 # The largest Lyapunov exponent of a non-periodic motion (exponent_window, exponent_bounds).
 # The tangent vector starts along y at every restart and needs a revolution or two to turn
@@ -146,7 +149,12 @@ def assess_revolution(
     n revolutions earlier to within ``agree`` times its distance and lies
     within TRUSTED_JUMP_MAX: then the section map is linear enough around the
     path for the estimate to be trusted however far the transient still has
-    to go. ``est`` (n_max, n_max, 3) keeps each period's estimates by
+    to go — but only for a period at which the motion repeats within
+    EVIDENT_REPEAT times its closest repeat. Just past a period doubling the motion
+    alternates about the unstable cycle it left; the Jacobian along its path is
+    stable, and the estimates of period 1 (and 3, …) agree on that unstable cycle, a
+    jump there holding the motion for hundreds of revolutions, while it repeats far
+    closer every 2. ``est`` (n_max, n_max, 3) keeps each period's estimates by
     revolution, rows (revolution, z0, z1); reset it for every cell.
     """
     jump_n = 0
@@ -155,12 +163,16 @@ def assess_revolution(
     avail = min(n_max, k - base)
     if avail < 1:
         return 0, 0, 0.0, 0.0
+    closest = math.inf  # the motion's closest repeat over the periods available
+    for n in range(1, avail + 1):
+        closest = min(closest, max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1])))
     m = jacobian_at(jac, k - 1)
     for n in range(1, avail + 1):
         if n > 1:
             m = mat2_mul(m, jacobian_at(jac, k - n))
         r = max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1]))
         near = r <= jump_residual
+        evident = r <= EVIDENT_REPEAT * closest
         if not (near or (agree > 0.0 and r <= TRUSTED_JUMP_MAX)):
             continue
         if not spectral_radius(m) < 1.0:
@@ -181,7 +193,8 @@ def assess_revolution(
         then[1] = z0
         then[2] = z1
         if jump_n == 0 and (
-            (near and dist_now <= jump_cap) or (agreeing and dist_now <= TRUSTED_JUMP_MAX)
+            (near and dist_now <= jump_cap)
+            or (agreeing and evident and dist_now <= TRUSTED_JUMP_MAX)
         ):
             jump_n = n
             jz0 = z0

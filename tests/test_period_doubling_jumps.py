@@ -1,0 +1,76 @@
+"""Newton jumps just past a period doubling (campar.core.analysis.assess_revolution): the
+motion alternates about the unstable 1-cycle it left, the Jacobian along its path is
+stable and the period-1 estimates agree on that unstable cycle; a jump is taken only for a
+period at which the motion evidently repeats. Checked on a synthetic history and on a
+cell of the (ω, μkn) plane against the independent SciPy model."""
+
+import numpy as np
+
+from campar import simulate_point
+from campar.bench.scipy_model import Model, integrate
+from campar.core import analysis as A
+from campar.core.jit import through_numba
+
+# A cell of jobs/mu_kn_tongue.yaml on 600 × 600 cells (row 510, column 512) and the final
+# state of the cell before it along its chain, a 2-2 cycle's: from there the agreeing
+# period-1 estimates pointed at the unstable 1-cycle, and the transient took 967
+# revolutions where plain iteration takes 62.
+PAST_DOUBLING = {"omega": 2.3631051752921537, "mu_kn": 0.8563439065108513, "mu_cn": 0.8}
+HAND_OFF = (0.13503923831453424, -1.0972018876786755)
+
+
+def test_agreeing_estimates_of_a_period_the_motion_does_not_repeat_are_not_jumped_to():
+    # a 2-cycle a, b (the motion shrinking onto it) along the flip direction of a
+    # one-revolution Jacobian of −0.99: from either point the period-1 Newton estimate lies
+    # about halfway between them, consecutive estimates agree and the Jacobian along the
+    # path is stable, but the motion repeats every 2 revolutions thousands of times closer
+    # than every 1
+    a, b = np.array([0.14, -1.10]), np.array([0.30, -1.10])
+    xs = np.array([(a, b)[k % 2] + 1e-4 * 0.9**k for k in range(8)])
+    flip = np.diag([-0.99, 0.3])
+    jac = np.tile(flip.ravel(), (7, 1))
+    estimate = through_numba(A.newton_fixed_point)(*xs[3], *xs[2], flip.ravel())
+    assert abs(estimate[0] - 0.5 * (a[0] + b[0])) < 0.01 <= A.TRUSTED_JUMP_MAX - estimate[2]
+    est = np.full((32, 32, 3), -1.0)
+    assess = through_numba(A.assess_revolution)
+    for k in range(1, 8):
+        period, jump, z0, z1 = assess(xs, jac, est, k, 0, 32, 1e-9, 1e-6, 1e-3, 0.02, 0.1)
+        assert jump != 1
+        if jump:  # a period-2 jump lands on the cycle the motion repeats
+            assert min(np.abs([z0, z1] - a).max(), np.abs([z0, z1] - b).max()) < 1e-3
+
+
+def scipy_cycle(model, x, n, revolutions=200):
+    """A fixed point of SciPy's P^n near the end of ``revolutions`` of plain iteration
+    from x (for n = 1: Newton from x itself) and its multipliers, by Newton with
+    central-difference Jacobians."""
+
+    def section(v, m):
+        return np.array(integrate(model, v, m, rtol=1e-11, atol=1e-13)[0][:2])
+
+    if n > 1:
+        x = section(x, revolutions)
+    x = np.asarray(x, float)
+    for _ in range(20):
+        jac = np.column_stack(
+            [(section(x + e, n) - section(x - e, n)) / 2e-7 for e in np.eye(2) * 1e-7]
+        )
+        step = np.linalg.solve(jac - np.eye(2), x - section(x, n))
+        x = x + step
+        if np.abs(step).max() < 1e-12:
+            break
+    return x, np.linalg.eigvals(jac)
+
+
+def test_a_cell_past_a_period_doubling_converges_on_its_two_cycle_at_once():
+    cell = simulate_point(state=HAND_OFF, **PAST_DOUBLING)
+    assert cell.label == "2-2"
+    assert cell.revolutions <= 20
+    model = Model(**PAST_DOUBLING)
+    one, one_multipliers = scipy_cycle(model, HAND_OFF, 1)
+    assert min(one_multipliers.real) < -1.0  # the 1-cycle is past its period doubling
+    two, two_multipliers = scipy_cycle(model, HAND_OFF, 2)
+    assert max(abs(two_multipliers)) < 1.0  # and the 2-cycle is the attractor
+    final = np.array(cell.state)
+    other = np.array(integrate(model, two, 1, rtol=1e-11, atol=1e-13)[0][:2])
+    assert min(np.abs(final - two).max(), np.abs(final - other).max()) < 1e-6
