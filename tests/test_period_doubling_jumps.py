@@ -67,7 +67,7 @@ def test_a_cell_past_a_period_doubling_converges_on_its_two_cycle_at_once():
     assert cell.label == "2-2"
     assert cell.revolutions <= 20
     model = Model(**PAST_DOUBLING)
-    one, one_multipliers = scipy_cycle(model, HAND_OFF, 1)
+    _, one_multipliers = scipy_cycle(model, HAND_OFF, 1)
     assert min(one_multipliers.real) < -1.0  # the 1-cycle is past its period doubling
     two, two_multipliers = scipy_cycle(model, HAND_OFF, 2)
     assert max(abs(two_multipliers)) < 1.0  # and the 2-cycle is the attractor

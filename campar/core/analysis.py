@@ -103,6 +103,12 @@ def jacobian_at(jac, j):
 
 
 @hot
+def section_gap(xs, i, j):
+    """The ∞-norm distance between section points xs[i] and xs[j]."""
+    return max(abs(xs[i, 0] - xs[j, 0]), abs(xs[i, 1] - xs[j, 1]))
+
+
+@hot
 def cycle_jacobian(jac, k, n):
     """DP^n at xs[k-n]: the product J_k ⋯ J_{k-n+1} of the last n revolutions."""
     m = jacobian_at(jac, k - 1)
@@ -165,12 +171,12 @@ def assess_revolution(
         return 0, 0, 0.0, 0.0
     closest = math.inf  # the motion's closest repeat over the periods available
     for n in range(1, avail + 1):
-        closest = min(closest, max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1])))
+        closest = min(closest, section_gap(xs, k, k - n))
     m = jacobian_at(jac, k - 1)
     for n in range(1, avail + 1):
         if n > 1:
             m = mat2_mul(m, jacobian_at(jac, k - n))
-        r = max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1]))
+        r = section_gap(xs, k, k - n)
         near = r <= jump_residual
         evident = r <= EVIDENT_REPEAT * closest
         if not (near or (agree > 0.0 and r <= TRUSTED_JUMP_MAX)):
@@ -221,8 +227,8 @@ def unstable_cycle_nearby(xs, jac, k, base, n_max, reach):
     for n in range(1, avail + 1):
         if n > 1:
             m = mat2_mul(m, jacobian_at(jac, k - n))
-        r = max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1]))
-        before = max(abs(xs[k - n, 0] - xs[k - 2 * n, 0]), abs(xs[k - n, 1] - xs[k - 2 * n, 1]))
+        r = section_gap(xs, k, k - n)
+        before = section_gap(xs, k - n, k - 2 * n)
         if r > reach or not r > before:
             continue
         mu, im, _, _ = eig2(m)
@@ -275,7 +281,7 @@ def stable_cycle_period(xs, jac, k, first, n_max, reach, returning, margin):
     for n in range(1, avail + 1):
         if n > 1:
             m = mat2_mul(m, jacobian_at(jac, k - n))
-        if returning and max(abs(xs[k, 0] - xs[k - n, 0]), abs(xs[k, 1] - xs[k - n, 1])) > reach:
+        if returning and section_gap(xs, k, k - n) > reach:
             continue
         if not spectral_radius(m) < 1.0:
             continue
