@@ -141,16 +141,19 @@ def test_the_slow_escape_from_an_unstable_cycle_is_not_read_as_a_torus():
 
 def test_a_budget_ending_on_a_slow_stable_cycle_is_that_cycle():
     """Just past a period doubling (μcn 0.8515, ω 2.3517) the 2-cycle's multiplier is
-    0.998: from this start, Newton jumps to it stall at the integration's noise over 1 − μ,
-    and 500 revolutions close in on it by a factor 0.6 alone. The window's exponent is ~0,
-    yet the motion sits on the stable 2-2 cycle that an independent SciPy shooting finds
-    (rtol 1e-10) within the 1e-4 the verdict asks; the cell says so, flagged slow."""
+    0.998: from this start the transient's Newton jumps, from the Jacobian along a path
+    that creeps towards it, and 500 revolutions close in on it by a factor 0.6 alone. The
+    window's exponent is ~0, yet the motion sits on the stable 2-2 cycle that an
+    independent SciPy shooting finds (rtol 1e-10); Newton's method on P² at the budget's
+    end converges on it (within the 1e-4 the slow verdict asks: at rtol 1e-7 the kernel's
+    cycle lies 2.5e-5 from SciPy's, 1 − μ dividing the integration's error), flagged
+    slow."""
     parameters = {"omega": 2.351717171717172, "mu_cn": 0.8515151515151514}
     found = simulate_point(
         multipliers=True, y0=0.08519105224337234, v0=-1.0035574481119836, **parameters
     )
-    assert found.label == "2-2" and found.revolutions == 500
-    assert "slow" in found.flags
+    assert found.label == "2-2" and 500 < found.revolutions <= 516
+    assert "slow" in found.flags and "settled" not in found.flags
     two, m2 = scipy_shooting.fixed_point(parameters, found.state, 2)
     reference = scipy_shooting.multipliers(m2)
     assert 0.99 < np.abs(reference).max() < 1.0  # stable and slow

@@ -354,7 +354,7 @@ def test_a_tabulated_cosine_law_reproduces_the_built_in_map(tmp_path):
     labels = [cell_labels(m["kind"], m["n"], m["p"]) for m in (built_in, tabulated)]
     np.testing.assert_array_equal(labels[1], labels[0])
     # A cell whose budget ended on a slow stable cycle is periodic within 1e-4 of its cycle
-    # (the kernel's SLOW_SETTLED), not converged: its figures agree to that distance.
+    # (analysis.SETTLED_DISTANCE), not converged: its figures agree to that distance.
     budget = Job.from_dict(base).transient.max_revolutions
     ended = np.maximum(built_in["revolutions"], tabulated["revolutions"]) >= budget
     slow = (built_in["kind"] == 0) & ended

@@ -57,3 +57,32 @@ def test_every_module_of_the_core_that_numba_compiles_is_in_the_digest():
     }
     assert compiled, "no compiled module found: the pattern is out of date"
     assert compiled <= set(jitcache.COMPILED_MODULES), compiled - set(jitcache.COMPILED_MODULES)
+
+
+def test_a_chain_and_a_shooter_check_the_cache_before_they_load_the_kernel(monkeypatch):
+    # the paths of `campar point --from` (a replayed chain) and of the continuation (the
+    # shooter), where nothing before them may have checked the cache in this process
+    from campar.core import shooting
+    from campar.model import compute
+
+    calls = []
+    monkeypatch.setattr(compute, "ensure_fresh_cache", lambda: calls.append("checked"))
+    monkeypatch.setattr(compute, "run_chain", lambda *args: calls.append("chain"))
+    compute.run_chain_over(
+        {name: [] for name in compute.CHAIN_PARAMETERS}, 0, None, None, None, None
+    )
+    assert calls == ["checked", "chain"]
+
+    class Loaded(Exception):
+        pass
+
+    def shooter(*args):
+        calls.append("shooter")
+        raise Loaded
+
+    calls.clear()
+    monkeypatch.setattr(shooting, "ensure_fresh_cache", lambda: calls.append("checked"))
+    monkeypatch.setattr(shooting, "Shooter", shooter)
+    with pytest.raises(Loaded):
+        shooting.compile_shooter(0, None, None)
+    assert calls == ["checked", "shooter"]

@@ -1,15 +1,22 @@
 """Newton jumps just past a period doubling (campar.core.analysis.assess_revolution): the
 motion alternates about the unstable 1-cycle it left, the Jacobian along its path is
 stable and the period-1 estimates agree on that unstable cycle; a jump is taken only for a
-period at which the motion evidently repeats. Checked on a synthetic history and on a
-cell of the (ω, μkn) plane against the independent SciPy model."""
+period at which the motion evidently repeats; and a budget that ends there without a
+verdict ends with Newton's method on P² (transient.settle_at_budget). Checked on a
+synthetic history and on cells of the (ω, μkn) plane against the independent SciPy
+model."""
 
 import numpy as np
+import pytest
 
 from campar import simulate_point
+from campar.api import job_of
 from campar.bench.scipy_model import Model, integrate
 from campar.core import analysis as A
+from campar.core.codes import Flag
 from campar.core.jit import through_numba
+from campar.sweep.replay import replay_cell
+from campar.views.dataset import cell_labels
 
 # A cell of jobs/mu_kn_tongue.yaml on 600 × 600 cells (row 510, column 512) and the final
 # state of the cell before it along its chain, a 2-2 cycle's: from there the agreeing
@@ -74,3 +81,29 @@ def test_a_cell_past_a_period_doubling_converges_on_its_two_cycle_at_once():
     final = np.array(cell.state)
     other = np.array(integrate(model, two, 1, rtol=1e-11, atol=1e-13)[0][:2])
     assert min(np.abs(final - two).max(), np.abs(final - other).max()) < 1e-6
+
+
+# Cells of jobs/mu_kn_tongue.yaml on 600 × 600 cells next to the 2-2 tongue's period
+# doubling whose budget ended without a verdict (quasi-periodic, unconverged): plain
+# Newton jumps from the path's Jacobian crept for hundreds of revolutions there. (row,
+# column): the tolerance on the final state against SciPy's 2-cycle (settled: within
+# analysis.SETTLED_DISTANCE; converged: to the integrator's accuracy).
+AT_THE_BUDGET = {(445, 347): 1e-4, (581, 510): 1e-6}
+
+
+@pytest.mark.parametrize("cell", AT_THE_BUDGET)
+def test_a_budget_that_ends_next_to_a_period_doubling_ends_on_its_two_cycle(cell):
+    job = job_of("jobs/mu_kn_tongue.yaml", {f"sweep.{a}.points": 600 for a in ("omega", "mu_kn")})
+    row, col = cell
+    values = replay_cell(job, row, col)
+    assert cell_labels(values["kind"], values["n"], values["p"]) == "2-2"
+    settled = bool(values["flags"] & Flag.SETTLED)
+    assert settled == (AT_THE_BUDGET[cell] > 1e-6)
+    model = Model(omega=job.first_values[col], mu_kn=job.second_values[row])
+    _, one_multipliers = scipy_cycle(model, values["state"], 1)
+    assert min(one_multipliers.real) < -1.0  # the 1-cycle is past its period doubling
+    two, two_multipliers = scipy_cycle(model, values["state"], 2, revolutions=1)
+    assert max(abs(two_multipliers)) < 1.0
+    other = np.array(integrate(model, two, 1, rtol=1e-11, atol=1e-13)[0][:2])
+    final = values["state"]
+    assert min(np.abs(final - two).max(), np.abs(final - other).max()) < AT_THE_BUDGET[cell]

@@ -48,6 +48,10 @@ TRUSTED_JUMP_MAX = 0.2
 # A jump on agreeing estimates is taken for a period whose repeat is within this factor of
 # the motion's closest repeat over the periods available (assess_revolution).
 EVIDENT_REPEAT = 10.0
+# A stable cycle this close to the motion at the budget's end (∞-norm, the distance of its
+# Newton estimate and that estimate's last step) is the cell's motion, though not
+# converged to conv_tol: settled (transient.settle_at_budget, kernel.run_cell).
+SETTLED_DISTANCE = 1e-4
 
 # The largest Lyapunov exponent of a non-periodic motion (exponent_window, exponent_bounds).
 # The tangent vector starts along y at every restart and needs a revolution or two to turn

@@ -161,6 +161,20 @@ def lift(law, theta, phase):
     raise TypeError("campar.core.cam.lift is for compiled code")
 
 
+def next_join(law, phase, t, omega):
+    """The first time after t (θ = ω t) at which the formula of cam phase ``phase`` of cam
+    ``law`` joins two pieces (math.inf: none in the phase); compiled code only.
+
+    The composite laws are piecewise: the modified trapezoid's acceleration is a sine
+    ramp, a plateau, a sine, a plateau, a ramp, and the modified sine's three sines, each
+    join a jump of the cam's fourth derivative (its second derivative and jerk are
+    continuous). A step across one is no longer smooth, and the embedded error estimate
+    can pass it with an error far above the tolerance: the revolution ends its steps on
+    the joins, as on the phase boundaries (run_revolution).
+    """
+    raise TypeError("campar.core.cam.next_join is for compiled code")
+
+
 def _normalised(s_of):
     """A segment's rise and fall from its law's s(u), s'(u), s''(u) on u ∈ [0, 1]."""
 
@@ -260,6 +274,12 @@ def _cosine_fall(law, theta):
     return 0.5 * (1.0 + c3), -law.c1 * s3, -law.c2 * c3
 
 
+# Where a composite law's pieces join, as fractions u of its segment (next_join).
+SEGMENT_JOINS = {
+    ModifiedTrapezoid: (0.125, 0.375, 0.625, 0.875),
+    ModifiedSine: (0.125, 0.875),
+}
+
 _SEGMENT_IMPLS = {
     Cosine: (_cosine_rise, _cosine_fall),
     Cycloidal: _normalised(cycloidal),
@@ -323,4 +343,63 @@ def _lift(law, theta, phase):
         return _phased_lift
     if cls is TabulatedCam:
         return _spline_lift
+    return None
+
+
+def _segment_join(joins):
+    """next_join of one segment law whose pieces join at fractions ``joins`` of it."""
+
+    @register_jitable
+    def join_after(law, t, omega):
+        for u in joins:
+            t_join = (law.start + u / law.inv_width) / omega
+            if t_join > t:
+                return t_join
+        return math.inf
+
+    return join_after
+
+
+_SEGMENT_JOIN_IMPLS = {cls: _segment_join(joins) for cls, joins in SEGMENT_JOINS.items()}
+
+
+@register_jitable
+def _no_join(law, t, omega):
+    return math.inf
+
+
+def segment_join(law, t, omega):
+    """next_join within one segment law (compiled code only)."""
+    raise TypeError("campar.core.cam.segment_join is for compiled code")
+
+
+@overload(segment_join, jit_options=OPTIONS)
+def _segment_join_overload(law, t, omega):
+    cls = _law_class(law)
+    if cls in _SEGMENT_JOIN_IMPLS:
+        return _SEGMENT_JOIN_IMPLS[cls]
+    if cls in _SEGMENT_IMPLS:
+        return _no_join
+    return None
+
+
+def _phased_join(law, phase, t, omega):
+    if phase == 0:
+        return segment_join(law.rise, t, omega)
+    if phase == 2:
+        return segment_join(law.fall, t, omega)
+    return math.inf
+
+
+def _spline_join(law, phase, t, omega):
+    return math.inf  # a table's knots (its third derivative jumps there) are no breakpoints
+
+
+@overload(next_join, jit_options=OPTIONS)
+def _next_join(law, phase, t, omega):
+    cls = _law_class(law)
+    if cls is PhasedCam:
+        return _phased_join
+    if cls is TabulatedCam:
+        return _spline_join
     return None

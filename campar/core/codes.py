@@ -28,6 +28,7 @@ FLAG_GRAZING = 4
 FLAG_WARM_EXTRAPOLATED = 8
 FLAG_RESTARTED = 16
 FLAG_ESCAPED = 32
+FLAG_SETTLED = 64
 
 
 class Status(enum.IntEnum):
@@ -95,6 +96,10 @@ class Flag(enum.IntFlag):
     # the transient lingered at an unstable cycle and was moved off it along its unstable
     # direction (next to a period doubling or a fold)
     ESCAPED = FLAG_ESCAPED
+    # the budget ended with the motion within 1e-4 of a stable cycle that Newton's method
+    # could not bring within conv_tol (the integration's noise over 1 − |μ|, or a multiplier
+    # near the unit circle): the cell is that cycle, its outputs the cycle's to about 1e-4
+    SETTLED = FLAG_SETTLED
 
 
 def status_message(code: int) -> str:

@@ -134,6 +134,21 @@ def make_work(n, max_events, h0) -> StepWork:
     return w
 
 
+@hot
+def copy_step_control(ctrl, memory, to_ctrl, to_memory):
+    """Copy a StepWork's step control (``ctrl``: the proposed step, the controller's
+    memory) and its entry steps (``memory``: ``h_memory``) into ``to_ctrl`` and
+    ``to_memory``: what one revolution hands the next. Every other buffer of a StepWork
+    is a step's scratch, written before it is read. A chain that tries revolutions and
+    takes them back restores these, so the cells after it are computed as if it had not
+    tried."""
+    for i in range(ctrl.shape[0]):
+        to_ctrl[i] = ctrl[i]
+    for i in range(memory.shape[0]):
+        for j in range(memory.shape[1]):
+            to_memory[i, j] = memory[i, j]
+
+
 @entry
 def restart_control(w, h0):
     """Step control as at a start: next step h0, no error history, no reusable events."""

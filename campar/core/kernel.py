@@ -23,6 +23,7 @@ from numba import njit, typeof
 
 from . import model
 from .analysis import (
+    SETTLED_DISTANCE,
     cycle_jacobian,
     distinct_period,
     exponent_window,
@@ -40,13 +41,15 @@ from .codes import (
     FLAG_GRAZING,
     FLAG_NEWTON,
     FLAG_RESTARTED,
+    FLAG_SETTLED,
     FLAG_SLOW,
     FLAG_WARM_EXTRAPOLATED,
     OK,
     PERIODIC,
 )
 from .deferred import DEFER_COLUMNS, refine_window
-from .integrator import StepWork, initial_step, make_work, restart_control
+from .entry_steps import MEMORY_SHAPE
+from .integrator import N_CTRL, StepWork, initial_step, make_work, restart_control
 from .jit import hot, inlined
 from .model import (
     MAX_EVENTS,
@@ -73,7 +76,6 @@ OUT_EXTREMA = 16  # ε extremes, Pn max (with OUT_STATS)
 
 SLOW_MARGIN = 0.02  # a multiplier this close to the unit circle marks a slow cell
 SLOW_REACH = 0.1  # … and, for a non-periodic cell, a stable cycle estimate this close
-SLOW_SETTLED = 1e-4  # a slow stable cycle this close at the budget's end is the cell's motion
 PERIOD_REACH = 1e-5  # a converged cycle this close to a stable one of a divisor period is it
 GRAZE_TOL = 1e-5  # a dip of ε this close to 0 marks a cell whose p is sensitive
 EXTRAPOLATE_MAX = 0.5  # extrapolate the warm start only between fixed points this close (L1)
@@ -139,6 +141,8 @@ class ChainWork(NamedTuple):
 
     w2: StepWork  # integrator buffers without variational equations
     w6: StepWork  # … with them
+    saved_ctrl: np.ndarray  # w6's step control and entry steps where the chain may take
+    saved_memory: np.ndarray  # revolutions back (integrator.copy_step_control)
     x2: np.ndarray
     f2: np.ndarray
     x6: np.ndarray
@@ -163,6 +167,8 @@ def make_chain_work(cs) -> ChainWork:
     return ChainWork(
         w2=make_work(N_STATE, MAX_EVENTS, 0.0),
         w6=make_work(N_STATE_VARIATIONAL, MAX_EVENTS, 0.0),
+        saved_ctrl=np.zeros(N_CTRL),
+        saved_memory=np.zeros(MEMORY_SHAPE),
         x2=np.zeros(N_STATE),
         f2=np.zeros(N_STATE),
         x6=np.zeros(N_STATE_VARIATIONAL),
@@ -255,11 +261,15 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
     cw.u[1] = 0.0
     flags = 0
     if cs.transient == CONVERGED:
-        status, k, n, base, jumps, escapes = transient_converged(cw, p, opt, cs, stats, step_budget)
+        status, k, n, base, jumps, escapes, settled = transient_converged(
+            cw, p, opt, cs, stats, step_budget
+        )
         if jumps > escapes:
             flags |= FLAG_NEWTON
         if escapes > 0:
             flags |= FLAG_ESCAPED
+        if settled:
+            flags |= FLAG_SETTLED
         variational_from = 0
     else:
         status, k, n = transient_fixed(cw, p, opt, cs, stats, step_budget)
@@ -282,9 +292,11 @@ def run_cell(x_start, p, opt, cs, cw, out, i):
             k,
             max(base, k - cs.window_revolutions),
             cs.n_max,
-            SLOW_SETTLED,
+            SETTLED_DISTANCE,
             SLOW_MARGIN,
         )
+        if n > 0:
+            flags |= FLAG_SETTLED
     if n > 0:
         m = distinct_period(cw.xs, k, n, cs.period_tol)
         if cs.transient == CONVERGED:  # (the paper's recipe keeps its plain repeat test)

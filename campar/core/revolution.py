@@ -1,9 +1,9 @@
 """One cam revolution of the hybrid system, and the recorder that traces it.
 
 ``run_revolution`` is where the model meets the integrator: it steps across
-the four cam phases (every step ends on a phase boundary), switches the
-contact mode at every event the integrator locates, counts detachments and
-folds every step into the revolution's statistics.
+the four cam phases (every step ends on a phase boundary, and on the joins of a
+composite law's pieces), switches the contact mode at every event the integrator
+locates, counts detachments and folds every step into the revolution's statistics.
 """
 
 import math
@@ -13,6 +13,7 @@ import numpy as np
 
 from . import model
 from .analysis import REV_DETACH, add_step_stats, reset_revolution_stats
+from .cam import next_join
 from .codes import EVENT_LOOP, OK, STEP_LIMIT
 from .contact import impact_velocity, note_impact
 from .deferred import clear_deferred, defer_step
@@ -118,7 +119,8 @@ def record_event(rec, t, x, contact, which):
 def run_revolution(x, f, p, opt, w, mode, row, stats, step_limit, rec):
     """Integrate one cam revolution from θ = 0 to 2π, in place on x.
 
-    Steps end on every cam phase boundary and every contact event; with the
+    Steps end on every cam phase boundary, every join of a composite cam law's pieces
+    (cam.next_join) and every contact event; with the
     variational part, Φ starts at I, so x[2:6] ends as the Jacobian of the
     one-revolution map. Fills the revolution's statistics in ``row``, those ``stats``
     names (NO_STATS, DUTY_STATS, ALL_STATS); a row wider than
@@ -144,14 +146,15 @@ def run_revolution(x, f, p, opt, w, mode, row, stats, step_limit, rec):
         record_sample(rec, t, x[0], x[1], p, mode)
     for phase in range(N_PHASES):
         mode[0] = phase
-        t_end = p.cam.bounds[phase + 1] / p.omega
+        phase_end = p.cam.bounds[phase + 1] / p.omega
         model.rhs(t, x, p, mode, f)
         w.counts[2] += 1
         stuck = 0
         fresh = False  # k0 holds the kinematics at t in this mode
-        while t < t_end:
+        while t < phase_end:
             if w.counts[0] + w.counts[1] > step_limit:
                 return STEP_LIMIT
+            t_end = min(phase_end, next_join(p.cam, phase, t, p.omega))
             t_prev = t
             contact = mode[1]
             if stats != NO_STATS and not fresh:

@@ -31,6 +31,7 @@ from .analysis import (
 from .codes import NONFINITE, OK
 from .entry_steps import forget
 from .integrator import SolverOptions, initial_step, make_work, restart_control
+from .jitcache import ensure_fresh_cache
 from .model import (
     MAX_EVENTS,
     N_STATE_VARIATIONAL,
@@ -120,7 +121,9 @@ class Shooter:
 
 
 def compile_shooter(law, solver, cs) -> None:
-    """Compile (or load) the shooting entry for these options, and link its revolution."""
+    """Compile (or load) the shooting entry for these options, and link its revolution,
+    once the on-disk cache is checked against the core's sources (jitcache)."""
+    ensure_fresh_cache()
     shooter = Shooter(law, solver, cs)
     args = (
         np.zeros(5),

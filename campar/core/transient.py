@@ -13,22 +13,31 @@ import numpy as np
 
 from .analysis import (
     REV_LOG_STRETCH,
+    SETTLED_DISTANCE,
     assess_revolution,
+    cycle_jacobian,
     exponent_bounds,
     exponent_window,
+    newton_fixed_point,
     repeat_period,
+    section_gap,
+    spectral_radius,
     stable_cycle_nearby,
     stretch_tangent,
     unstable_cycle_nearby,
 )
 from .codes import NONFINITE, OK
-from .integrator import CTRL_ERR, CTRL_H
+from .integrator import CTRL_ERR, CTRL_H, copy_step_control
 from .jit import inlined
 from .revolution_call import call_revolution
 
 # Transient policies.
 CONVERGED = 0  # stop once the section has converged to a cycle (Newton-accelerated)
 FIXED = 1  # a fixed number of revolutions, then a read window (the paper's recipe)
+
+# Newton iterations on Pⁿ at the budget's end at most (settle_at_budget): from a start
+# within jump_cap, a few reach conv_tol where they can; more only repeat the noise.
+SETTLE_ITERATIONS = 8
 
 
 @inlined
@@ -87,8 +96,9 @@ def transient_converged(cw, p, opt, cs, stats, step_budget):
     a period doubling its multiplier is near −1 and the escape takes hundreds of
     revolutions, which the window reads as a torus or as chaos) is moved off it along
     its unstable direction by cs.jump_cap, on the side it was drifting to; Newton jumps
-    back to that cycle are refused from then on. Returns (status, k, period, base,
-    jumps, escapes).
+    back to that cycle are refused from then on. A budget that ends without a verdict
+    ends with Newton's method on the section map (settle_at_budget). Returns (status, k,
+    period, base, jumps, escapes, settled).
     """
     k = 0
     base = np.int64(0)  # not a literal: numba would compile assess_revolution twice
@@ -103,7 +113,7 @@ def transient_converged(cw, p, opt, cs, stats, step_budget):
     while k < cs.max_revolutions:
         status = step_revolution(cw, k, True, p, opt, cs, stats, step_budget)
         if status != OK:
-            return status, k, 0, base, jumps, escapes
+            return status, k, 0, base, jumps, escapes, False
         k += 1
         period, jump_n, z0, z1 = assess_revolution(
             cw.xs,
@@ -119,13 +129,13 @@ def transient_converged(cw, p, opt, cs, stats, step_budget):
             cs.jump_agree,
         )
         if period > 0:
-            return OK, k, period, base, jumps, escapes
+            return OK, k, period, base, jumps, escapes, False
         if cs.chaos_sight > 0.0 and stable_cycle_nearby(
             cw.xs, cw.jac, k, base, cs.n_max, cs.chaos_sight
         ):
             sighted = k
         if nonperiodic_verdict(cw, k, base, sighted, cs):
-            return OK, k, 0, base, jumps, escapes
+            return OK, k, 0, base, jumps, escapes, False
         if not cs.newton or jumps >= cs.max_jumps:
             continue
         if jump_n > 0 and not max(abs(z0 - avoid0), abs(z1 - avoid1)) <= cs.jump_residual:
@@ -147,7 +157,80 @@ def transient_converged(cw, p, opt, cs, stats, step_budget):
             base = k
             jumps += 1
             escapes += 1
-    return OK, k, 0, base, jumps, escapes
+    if not cs.newton:
+        return OK, k, 0, base, jumps, escapes, False
+    k, period, base, settled, iterations = settle_at_budget(
+        cw, k, base, p, opt, cs, stats, step_budget
+    )
+    return OK, k, period, base, jumps + iterations, escapes, settled
+
+
+@inlined
+def settle_at_budget(cw, k, base, p, opt, cs, stats, step_budget):
+    """Newton's method on Pⁿ from where the budget left a motion without a verdict:
+    (k, period, base, settled, iterations).
+
+    Where the motion returns within jump_residual every n revolutions (the smallest such
+    n since the last restart) and the Newton estimate lies within jump_cap, each iteration
+    jumps to the estimate and integrates n revolutions with the variational equations,
+    so the next estimate comes from DPⁿ at the iterate itself. In the transient the
+    estimate comes from the Jacobian along the path, off by the path's distance from the
+    cycle: next to a period doubling (a multiplier of P² near 1) that decides whether the
+    cycle looks stable, and the motion creeps for thousands of revolutions. period > 0:
+    a cycle stable by its own multipliers, converged as assess_revolution converges
+    (settled False), or after SETTLE_ITERATIONS with its estimate and last step within
+    SETTLED_DISTANCE (settled True: the integration's noise, amplified by 1/(1 − μ),
+    keeps Newton from conv_tol). period 0: no such cycle; the budget's end is restored
+    (k, its section point, base and the step control): the cell and the cells after it
+    are as they were without the search, but for the revolutions it tried, which stay in
+    the step count. A revolution that fails ends the search so too.
+    """
+    n = 0
+    for d in range(1, min(cs.n_max, k - base) + 1):
+        if section_gap(cw.xs, k, k - d) <= cs.jump_residual:
+            n = d
+            break
+    if n == 0:
+        return k, 0, base, False, 0
+    end = k
+    end0 = cw.xs[k, 0]
+    end1 = cw.xs[k, 1]
+    end_base = base
+    copy_step_control(cw.w6.ctrl, cw.w6.h_memory, cw.saved_ctrl, cw.saved_memory)
+    rows = cw.jac.shape[0]
+    iterations = 0
+    while True:
+        m = cycle_jacobian(cw.jac, k, n)
+        z0, z1, dist_now, dist_then = newton_fixed_point(
+            cw.xs[k, 0], cw.xs[k, 1], cw.xs[k - n, 0], cw.xs[k - n, 1], m
+        )
+        if iterations > 0 and spectral_radius(m) < 1.0:
+            if dist_now <= cs.conv_tol and dist_then <= cs.window_tol:
+                return k, n, base, False, iterations
+            if (
+                iterations == SETTLE_ITERATIONS
+                and dist_now <= SETTLED_DISTANCE
+                and dist_then <= SETTLED_DISTANCE
+            ):
+                return k, n, base, True, iterations
+        if iterations == SETTLE_ITERATIONS or not dist_now <= cs.jump_cap or k + n > rows:
+            break
+        cw.xs[k, 0] = z0
+        cw.xs[k, 1] = z1
+        base = k
+        iterations += 1
+        failed = False
+        for _ in range(n):
+            if step_revolution(cw, k, True, p, opt, cs, stats, step_budget) != OK:
+                failed = True
+                break
+            k += 1
+        if failed:
+            break
+    cw.xs[end, 0] = end0
+    cw.xs[end, 1] = end1
+    copy_step_control(cw.saved_ctrl, cw.saved_memory, cw.w6.ctrl, cw.w6.h_memory)
+    return end, 0, end_base, False, 0
 
 
 @inlined

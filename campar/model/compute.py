@@ -169,7 +169,10 @@ CHAIN_PARAMETERS = ("omega", "zeta", "f0", "mu_kn", "mu_cn")  # run_chain's orde
 
 def run_chain_over(par: dict, law, x_init, solver, settings, out: CellOutputs) -> None:
     """The kernel's run_chain over the cells whose parameters ``par`` holds by name
-    (CHAIN_PARAMETERS, arrays of one length); ``out`` is filled in place."""
+    (CHAIN_PARAMETERS, arrays of one length); ``out`` is filled in place. The on-disk cache
+    is checked first: a replay (``campar point --from``) may be the process's first use of
+    the kernel, and numba would load an entry compiled from other sources of the core."""
+    ensure_fresh_cache()
     run_chain(*(par[name] for name in CHAIN_PARAMETERS), law, x_init, solver, settings, out)
 
 
