@@ -11,8 +11,7 @@ import numpy as np
 import pytest
 
 from campar import simulate_point
-from campar.bench.scipy_model import Model as ScipyModel
-from campar.bench.scipy_model import integrate
+from campar.bench import scipy_shooting
 from campar.core import cam as C
 from campar.core.jit import through_numba
 from campar.model.compute import run_cells
@@ -50,27 +49,16 @@ def test_the_revolution_stops_on_each_join_of_a_composite_law_and_nowhere_else(l
     np.testing.assert_allclose(times, expected, rtol=1e-12, atol=0)
 
 
-def scipy_one_cycle(model, x):
-    """SciPy's fixed point of P near x, by Newton with central differences, and its
-    multipliers."""
-
-    def section(v):
-        return np.array(integrate(model, v, 1, rtol=1e-11, atol=1e-13)[0][:2])
-
-    x = np.asarray(x, float)
-    for _ in range(10):
-        jac = np.column_stack([(section(x + e) - section(x - e)) / 2e-7 for e in np.eye(2) * 1e-7])
-        step = np.linalg.solve(jac - np.eye(2), x - section(x))
-        x = x + step
-        if np.abs(step).max() < 1e-12:
-            break
-    return x, np.linalg.eigvals(jac)
+def scipy_one_cycle(parameters: dict, x):
+    """SciPy's 1-cycle near x and its multipliers (campar.bench.scipy_shooting)."""
+    cycle, jacobian = scipy_shooting.fixed_point(parameters, x, 1)
+    return cycle, scipy_shooting.multipliers(jacobian)
 
 
 @pytest.mark.slow
 def test_a_modified_trapezoid_cycle_repeats_to_the_integrators_accuracy():
     cell = simulate_point(**CELL, **TRAPEZOID)
-    cycle, multipliers = scipy_one_cycle(ScipyModel(**CELL, **TRAPEZOID), cell.state)
+    cycle, multipliers = scipy_one_cycle({**CELL, **TRAPEZOID}, cell.state)
     assert max(abs(multipliers)) < 0.5  # a strongly attracting 1-cycle
     assert cell.label == "1-1" and cell.revolutions <= 12
     assert np.abs(np.array(cell.state) - cycle).max() < 5e-8
@@ -97,7 +85,7 @@ def test_a_modified_trapezoid_chain_is_one_one_where_scipy_has_a_stable_one_cycl
     out = run_cells(model, omega=omega, outputs=("label",))
     assert set(cell_labels(out.kind, out.n, out.p)) == {"1-1"}
     for i in (0, 60, 120):
-        scipy = ScipyModel(omega=omega[i], f0=CELL["f0"], **TRAPEZOID)
-        cycle, multipliers = scipy_one_cycle(scipy, out.state[i])
+        parameters = {"omega": float(omega[i]), "f0": CELL["f0"], **TRAPEZOID}
+        cycle, multipliers = scipy_one_cycle(parameters, out.state[i])
         assert max(abs(multipliers)) < 1.0
         assert np.abs(out.state[i] - cycle).max() < 5e-7

@@ -11,7 +11,7 @@ import pytest
 
 from campar import simulate_point
 from campar.api import job_of
-from campar.bench.scipy_model import Model, integrate
+from campar.bench import scipy_shooting
 from campar.core import analysis as A
 from campar.core.codes import Flag
 from campar.core.jit import through_numba
@@ -47,40 +47,28 @@ def test_agreeing_estimates_of_a_period_the_motion_does_not_repeat_are_not_jumpe
             assert min(np.abs([z0, z1] - a).max(), np.abs([z0, z1] - b).max()) < 1e-3
 
 
-def scipy_cycle(model, x, n, revolutions=200):
-    """A fixed point of SciPy's P^n near the end of ``revolutions`` of plain iteration
-    from x (for n = 1: Newton from x itself) and its multipliers, by Newton with
-    central-difference Jacobians."""
+def scipy_cycles(parameters: dict, x):
+    """SciPy's cycles near x (campar.bench.scipy_shooting): the 1-cycle's multipliers,
+    the 2-cycle's two section points and its multipliers."""
+    _, one = scipy_shooting.fixed_point(parameters, x, 1)
+    two, m2 = scipy_shooting.fixed_point(parameters, x, 2)
+    points = (two, scipy_shooting.section_map(parameters, two, 1))
+    return scipy_shooting.multipliers(one), points, scipy_shooting.multipliers(m2)
 
-    def section(v, m):
-        return np.array(integrate(model, v, m, rtol=1e-11, atol=1e-13)[0][:2])
 
-    if n > 1:
-        x = section(x, revolutions)
-    x = np.asarray(x, float)
-    for _ in range(20):
-        jac = np.column_stack(
-            [(section(x + e, n) - section(x - e, n)) / 2e-7 for e in np.eye(2) * 1e-7]
-        )
-        step = np.linalg.solve(jac - np.eye(2), x - section(x, n))
-        x = x + step
-        if np.abs(step).max() < 1e-12:
-            break
-    return x, np.linalg.eigvals(jac)
+def distance(points, x) -> float:
+    """The ∞-norm distance from x to the nearest of ``points``."""
+    return min(np.abs(np.asarray(x) - point).max() for point in points)
 
 
 def test_a_cell_past_a_period_doubling_converges_on_its_two_cycle_at_once():
     cell = simulate_point(state=HAND_OFF, **PAST_DOUBLING)
     assert cell.label == "2-2"
     assert cell.revolutions <= 20
-    model = Model(**PAST_DOUBLING)
-    _, one_multipliers = scipy_cycle(model, HAND_OFF, 1)
+    one_multipliers, two, two_multipliers = scipy_cycles(PAST_DOUBLING, HAND_OFF)
     assert min(one_multipliers.real) < -1.0  # the 1-cycle is past its period doubling
-    two, two_multipliers = scipy_cycle(model, HAND_OFF, 2)
     assert max(abs(two_multipliers)) < 1.0  # and the 2-cycle is the attractor
-    final = np.array(cell.state)
-    other = np.array(integrate(model, two, 1, rtol=1e-11, atol=1e-13)[0][:2])
-    assert min(np.abs(final - two).max(), np.abs(final - other).max()) < 1e-6
+    assert distance(two, cell.state) < 1e-6
 
 
 # Cells of jobs/mu_kn_tongue.yaml on 600 × 600 cells next to the 2-2 tongue's period
@@ -99,11 +87,8 @@ def test_a_budget_that_ends_next_to_a_period_doubling_ends_on_its_two_cycle(cell
     assert cell_labels(values["kind"], values["n"], values["p"]) == "2-2"
     settled = bool(values["flags"] & Flag.SETTLED)
     assert settled == (AT_THE_BUDGET[cell] > 1e-6)
-    model = Model(omega=job.first_values[col], mu_kn=job.second_values[row])
-    _, one_multipliers = scipy_cycle(model, values["state"], 1)
+    parameters = {"omega": float(job.first_values[col]), "mu_kn": float(job.second_values[row])}
+    one_multipliers, two, two_multipliers = scipy_cycles(parameters, values["state"])
     assert min(one_multipliers.real) < -1.0  # the 1-cycle is past its period doubling
-    two, two_multipliers = scipy_cycle(model, values["state"], 2, revolutions=1)
     assert max(abs(two_multipliers)) < 1.0
-    other = np.array(integrate(model, two, 1, rtol=1e-11, atol=1e-13)[0][:2])
-    final = values["state"]
-    assert min(np.abs(final - two).max(), np.abs(final - other).max()) < AT_THE_BUDGET[cell]
+    assert distance(two, values["state"]) < AT_THE_BUDGET[cell]

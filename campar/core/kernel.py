@@ -141,8 +141,8 @@ class ChainWork(NamedTuple):
 
     w2: StepWork  # integrator buffers without variational equations
     w6: StepWork  # … with them
-    saved_ctrl: np.ndarray  # w6's step control and entry steps where the chain may take
-    saved_memory: np.ndarray  # revolutions back (integrator.copy_step_control)
+    saved_ctrl: np.ndarray  # w6.ctrl while the budget's end tries revolutions (settle_at_budget)
+    saved_memory: np.ndarray  # … and w6.h_memory (integrator.copy_step_control)
     x2: np.ndarray
     f2: np.ndarray
     x6: np.ndarray
