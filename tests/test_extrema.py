@@ -105,24 +105,9 @@ CELLS = [
     pytest.param(name, omega, f0, id=f"{name}-{omega}")
     for name in LAWS
     for omega, f0 in [(2.0, 1.0), (4.0, 0.5)]
-    if (name, omega) != ("table-hunt-crossley-n1.2", 4.0)
     # a restitution law's cell must be a 1-cycle (below): at ω 4 these are 2- and 12-cycles
-    and not (LAWS[name][2] != "hunt-crossley" and omega == 4.0)
+    if not (LAWS[name][2] != "hunt-crossley" and omega == 4.0)
 ]
-CELLS.append(
-    pytest.param(
-        "table-hunt-crossley-n1.2",
-        4.0,
-        0.5,
-        id="table-hunt-crossley-n1.2-4.0",
-        marks=pytest.mark.xfail(
-            reason="max ε 0.8–1.0e-6 from the reference at rtol 1e-7: the integration's own "
-            "error (2.5e-7 at rtol 1e-8, 2.6e-8 at 1e-9), not the extremum's location "
-            "(benchmarks/RESULTS.md, the table cell's max ε)",
-            strict=False,
-        ),
-    )
-)
 
 
 @pytest.mark.slow  # a kernel compile for each combination of laws

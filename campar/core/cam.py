@@ -91,17 +91,50 @@ class TabulatedCam(NamedTuple):
     d = θ − knots[i] and (a, b, c, e) = coef[i]; knots[-1] = 2π. Phase p uses the
     intervals span[p, 0] … span[p, 1] (those meeting it), so that, as a phased cam's
     formula, a phase's spline piece is used as given a rounding error outside the phase.
-    ``bounds`` as PhasedCam's (the revolution's steps end there)."""
+    ``bounds`` as PhasedCam's (the revolution's steps end there); ``breaks``: the rough
+    knots (``rough_knots``), which the steps end on too, then inf."""
 
     knots: np.ndarray
     coef: np.ndarray
     span: np.ndarray  # int64 (4, 2)
     bounds: tuple
+    breaks: np.ndarray
+
+
+# A knot whose kink (rough_knots) exceeds this is a breakpoint. Measured on tables of the
+# cosine, cycloidal and modified-trapezoid laws at 720 … 3600 points along 121-cell chains
+# (benchmarks/RESULTS.md, "Tabulated cams"): kinks up to 8e-4 stepped across leave every
+# label and the cycles within 1.2e-7 of the built-in law's; from 1.9e-3 up they did not.
+ROUGHNESS_LIMIT = 1e-3
+
+
+def rough_knots(knots, coef, bounds) -> np.ndarray:
+    """The knots of a spline (``knots`` with 2π last, ``coef`` as TabulatedCam's) the
+    revolution ends its steps on.
+
+    The spline's third derivative jumps at every knot, by 6 Δa. A step across a knot is
+    not smooth there, and its error depends on where in the step the knot falls: each
+    revolution's map is off by a noise the embedded error estimate does not see (a
+    720-point table of the modified trapezoid read its 1-cycles as 2-2 … 12-12). The
+    noise grows with the kink |ΔS'''| h (h: the knot's shorter interval), the
+    jump's trace in the cam's acceleration S''; knots whose kink exceeds ROUGHNESS_LIMIT
+    are breakpoints, the others (a dense table's, a dwell's) are stepped across. The phase
+    boundaries end the steps already and are left out."""
+    knots = np.asarray(knots, dtype=np.float64)
+    coef = np.asarray(coef, dtype=np.float64)
+    interval = np.diff(knots)
+    shorter = np.minimum(interval, np.roll(interval, 1))  # knot 0: its first and last
+    kink = 6.0 * np.abs(coef[:, 0] - np.roll(coef[:, 0], 1)) * shorter
+    rough = kink > ROUGHNESS_LIMIT
+    for b in bounds:
+        rough &= np.abs(knots[:-1] - b) > 1e-12 * TWO_PI
+    return knots[:-1][rough]
 
 
 def tabulated_cam(knots, coef, bounds) -> TabulatedCam:
     """The TabulatedCam of a spline (campar.model.cam_table) and the cam's phase bounds."""
     knots = np.ascontiguousarray(knots, dtype=np.float64)
+    breaks = np.append(rough_knots(knots, coef, bounds), math.inf)
     last = len(knots) - 2  # the last interval
     span = np.empty((4, 2), dtype=np.int64)
     for p in range(4):
@@ -109,7 +142,11 @@ def tabulated_cam(knots, coef, bounds) -> TabulatedCam:
         final = int(np.searchsorted(knots, bounds[p + 1], side="left")) - 1
         span[p] = min(max(first, 0), last), min(max(final, first, 0), last)
     return TabulatedCam(
-        knots, np.ascontiguousarray(coef, dtype=np.float64), span, tuple(float(b) for b in bounds)
+        knots,
+        np.ascontiguousarray(coef, dtype=np.float64),
+        span,
+        tuple(float(b) for b in bounds),
+        breaks,
     )
 
 
@@ -170,7 +207,8 @@ def next_join(law, phase, t, omega):
     join a jump of the cam's fourth derivative (its second derivative and jerk are
     continuous). A step across one is no longer smooth, and the embedded error estimate
     can pass it with an error far above the tolerance: the revolution ends its steps on
-    the joins, as on the phase boundaries (run_revolution).
+    the joins, as on the phase boundaries (run_revolution). A tabulated cam's joins are
+    its rough knots (``rough_knots``).
     """
     raise TypeError("campar.core.cam.next_join is for compiled code")
 
@@ -392,7 +430,16 @@ def _phased_join(law, phase, t, omega):
 
 
 def _spline_join(law, phase, t, omega):
-    return math.inf  # a table's knots (its third derivative jumps there) are no breakpoints
+    breaks = law.breaks
+    lo = 0
+    hi = breaks.shape[0] - 1  # inf: none left
+    while lo < hi:  # the first break after t
+        mid = (lo + hi) >> 1
+        if breaks[mid] / omega > t:
+            hi = mid
+        else:
+            lo = mid + 1
+    return breaks[lo] / omega
 
 
 @overload(next_join, jit_options=OPTIONS)
