@@ -92,3 +92,47 @@ def test_a_budget_that_ends_next_to_a_period_doubling_ends_on_its_two_cycle(cell
     assert min(one_multipliers.real) < -1.0  # the 1-cycle is past its period doubling
     assert max(abs(two_multipliers)) < 1.0
     assert distance(two, values["state"]) < AT_THE_BUDGET[cell]
+
+
+def test_the_dominant_direction_is_numpys_eigenvector():
+    rng = np.random.default_rng(7)
+    direction = through_numba(A.real_dominant_direction)
+    for _ in range(200):
+        m = rng.normal(size=(2, 2))
+        values, vectors = np.linalg.eig(m)
+        lam, v0, v1 = direction(tuple(m.ravel()))
+        if np.iscomplexobj(values) and values.imag.any():
+            assert np.isnan(lam)
+            continue
+        i = int(np.argmax(np.abs(values)))
+        assert lam == pytest.approx(values[i].real, rel=1e-12, abs=1e-12)
+        assert abs(abs(np.dot([v0, v1], vectors[:, i].real)) - 1.0) < 1e-9
+
+
+# Cells of jobs/design_f0_modified-trapezoid.yaml on 600 × 600 cells whose budget ended
+# quasi-periodic: Newton on P² from the motion converged to the 1-cycle, past its period
+# doubling (multiplier −1.0013, −1.0014), and a start off it along its flip direction
+# reaches the stable 2-cycle (P² multiplier 0.995, 0.994). (row, column).
+OFF_THE_FLIP = [(298, 19), (300, 14)]
+
+
+@pytest.mark.slow  # the modified trapezoid's kernel
+@pytest.mark.parametrize("cell", OFF_THE_FLIP)
+def test_a_budget_that_ends_on_the_unstable_one_cycle_starts_off_it_to_the_two_cycle(cell):
+    job = job_of(
+        "jobs/design_f0_modified-trapezoid.yaml",
+        {f"sweep.{a}.points": 600 for a in ("omega", "f0")},
+    )
+    row, col = cell
+    values = replay_cell(job, row, col)
+    assert cell_labels(values["kind"], values["n"], values["p"]) == "2-2"
+    parameters = {
+        "omega": float(job.first_values[col]),
+        "f0": float(job.second_values[row]),
+        "rise": "modified-trapezoid",
+        "fall": "modified-trapezoid",
+    }
+    one_multipliers, two, two_multipliers = scipy_cycles(parameters, values["state"])
+    assert min(one_multipliers.real) < -1.0
+    assert max(abs(two_multipliers)) < 1.0
+    assert distance(two, values["state"]) < 1e-6

@@ -101,6 +101,26 @@ def spectral_radius(m):
 
 
 @hot
+def real_dominant_direction(m):
+    """(λ, v0, v1): the eigenvalue of largest modulus of a real 2×2 matrix and its unit
+    eigenvector; (nan, 0, 0) when the eigenvalues are complex."""
+    re0, im0, _, _ = eig2(m)
+    if im0 != 0.0:
+        return math.nan, 0.0, 0.0
+    # (M − λI) v = 0: v from the row of M − λI of the larger norm
+    a0, a1 = m[1], re0 - m[0]  # orthogonal to row 0, (m0 − λ, m1)
+    b0, b1 = re0 - m[3], m[2]  # orthogonal to row 1, (m2, m3 − λ)
+    if math.hypot(a0, a1) >= math.hypot(b0, b1):
+        v0, v1 = a0, a1
+    else:
+        v0, v1 = b0, b1
+    norm = math.hypot(v0, v1)
+    if not norm > 0.0:
+        return re0, 1.0, 0.0
+    return re0, v0 / norm, v1 / norm
+
+
+@hot
 def jacobian_at(jac, j):
     """The one-revolution Jacobian stored in row j as a 4-tuple."""
     return jac[j, 0], jac[j, 1], jac[j, 2], jac[j, 3]

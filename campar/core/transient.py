@@ -19,6 +19,7 @@ from .analysis import (
     exponent_bounds,
     exponent_window,
     newton_fixed_point,
+    real_dominant_direction,
     repeat_period,
     section_gap,
     spectral_radius,
@@ -165,6 +166,54 @@ def transient_converged(cw, p, opt, cs, stats, step_budget):
     return OK, k, period, base, jumps + iterations, escapes, settled
 
 
+# Newton's outcomes on Pⁿ (newton_on_period)
+NO_CYCLE = 0
+STABLE_CYCLE = 1  # converged as assess_revolution converges
+SETTLED_CYCLE = 2  # within SETTLED_DISTANCE after SETTLE_ITERATIONS
+UNSTABLE_CYCLE = 3  # either, to a fixed point of Pⁿ that is not stable
+
+# Starts off an unstable cycle along its flip direction (settle_at_budget): at the
+# motion's distance from it, then twice, four and eight times that.
+FLIP_STARTS = 4
+
+
+@inlined
+def newton_on_period(cw, k, n, base, iterations, p, opt, cs, stats, step_budget):
+    """Newton's method on Pⁿ from section point k: ``iterations`` 1 where the n
+    revolutions before it were integrated from a start with the variational equations, 0
+    where they are the transient's path (whose Jacobian is not the cycle's: its first
+    estimate is not judged). Each iteration jumps to the estimate from DPⁿ over the last n
+    revolutions and integrates n revolutions from it, SETTLE_ITERATIONS at most. Returns
+    (outcome, k, base, iterations, z0, z1, m): the last estimate z and DPⁿ; at
+    UNSTABLE_CYCLE, z is the fixed point and m its DPⁿ."""
+    rows = cw.jac.shape[0]
+    while True:
+        m = cycle_jacobian(cw.jac, k, n)
+        z0, z1, dist_now, dist_then = newton_fixed_point(
+            cw.xs[k, 0], cw.xs[k, 1], cw.xs[k - n, 0], cw.xs[k - n, 1], m
+        )
+        if iterations > 0:
+            stable = spectral_radius(m) < 1.0
+            if dist_now <= cs.conv_tol and dist_then <= cs.window_tol:
+                return STABLE_CYCLE if stable else UNSTABLE_CYCLE, k, base, iterations, z0, z1, m
+            if (
+                iterations >= SETTLE_ITERATIONS
+                and dist_now <= SETTLED_DISTANCE
+                and dist_then <= SETTLED_DISTANCE
+            ):
+                return SETTLED_CYCLE if stable else UNSTABLE_CYCLE, k, base, iterations, z0, z1, m
+        if iterations >= SETTLE_ITERATIONS or not dist_now <= cs.jump_cap or k + n > rows:
+            return NO_CYCLE, k, base, iterations, z0, z1, m
+        cw.xs[k, 0] = z0
+        cw.xs[k, 1] = z1
+        base = k
+        iterations += 1
+        for _ in range(n):
+            if step_revolution(cw, k, True, p, opt, cs, stats, step_budget) != OK:
+                return NO_CYCLE, k, base, iterations, z0, z1, m
+            k += 1
+
+
 @inlined
 def settle_at_budget(cw, k, base, p, opt, cs, stats, step_budget):
     """Newton's method on Pⁿ from where the budget left a motion without a verdict:
@@ -173,17 +222,28 @@ def settle_at_budget(cw, k, base, p, opt, cs, stats, step_budget):
     Where the motion returns within jump_residual every n revolutions (the smallest such
     n since the last restart) and the Newton estimate lies within jump_cap, each iteration
     jumps to the estimate and integrates n revolutions with the variational equations,
-    so the next estimate comes from DPⁿ at the iterate itself. In the transient the
-    estimate comes from the Jacobian along the path, off by the path's distance from the
-    cycle: next to a period doubling (a multiplier of P² near 1) that decides whether the
-    cycle looks stable, and the motion creeps for thousands of revolutions. period > 0:
-    a cycle stable by its own multipliers, converged as assess_revolution converges
-    (settled False), or after SETTLE_ITERATIONS with its estimate and last step within
-    SETTLED_DISTANCE (settled True: the integration's noise, amplified by 1/(1 − μ),
-    keeps Newton from conv_tol). period 0: no such cycle; the budget's end is restored
-    (k, its section point, base and the step control): the cell and the cells after it
-    are as they were without the search, but for the revolutions it tried, which stay in
-    the step count. A revolution that fails ends the search so too.
+    so the next estimate comes from DPⁿ at the iterate itself (newton_on_period). In the
+    transient the estimate comes from the Jacobian along the path, off by the path's
+    distance from the cycle: next to a period doubling (a multiplier of P² near 1) that
+    decides whether the cycle looks stable, and the motion creeps for thousands of
+    revolutions. period > 0: a cycle stable by its own multipliers, converged as
+    assess_revolution converges (settled False), or after SETTLE_ITERATIONS with its
+    estimate and last step within SETTLED_DISTANCE (settled True: the integration's
+    noise, amplified by 1/(1 − μ), keeps Newton from conv_tol).
+
+    Past a period doubling Newton converges as readily to the cycle that doubled, now
+    unstable, as to the stable cycle of twice its period about it: both are fixed points
+    of P²ⁿ. Where it converged to a cycle unstable through a multiplier below −1 (of Pⁿ;
+    or above 1 of Pⁿ on a cycle that repeats every n/2 revolutions: the same flip), the
+    doubled cycle lies on either side of it along that multiplier's eigenvector, at a
+    distance Newton from the unstable cycle's side cannot reach: it starts again on the
+    motion's side along the eigenvector, at the motion's distance and at 2, 4 and 8 times
+    it (FLIP_STARTS), on P²ⁿ (or Pⁿ), and a stable cycle it converges to there is the
+    cell's (its revolutions count those of the start that reached it, not the starts
+    before). period 0: no such cycle; the budget's end is restored (k, its section
+    point, base and the step control): the cell and the cells after it are as they were
+    without the search, but for the revolutions it tried, which stay in the step count.
+    A revolution that fails ends the search so too.
     """
     n = 0
     for d in range(1, min(cs.n_max, k - base) + 1):
@@ -197,36 +257,48 @@ def settle_at_budget(cw, k, base, p, opt, cs, stats, step_budget):
     end1 = cw.xs[k, 1]
     end_base = base
     copy_step_control(cw.w6.ctrl, cw.w6.h_memory, cw.saved_ctrl, cw.saved_memory)
-    rows = cw.jac.shape[0]
-    iterations = 0
-    while True:
-        m = cycle_jacobian(cw.jac, k, n)
-        z0, z1, dist_now, dist_then = newton_fixed_point(
-            cw.xs[k, 0], cw.xs[k, 1], cw.xs[k - n, 0], cw.xs[k - n, 1], m
-        )
-        if iterations > 0 and spectral_radius(m) < 1.0:
-            if dist_now <= cs.conv_tol and dist_then <= cs.window_tol:
-                return k, n, base, False, iterations
-            if (
-                iterations == SETTLE_ITERATIONS
-                and dist_now <= SETTLED_DISTANCE
-                and dist_then <= SETTLED_DISTANCE
-            ):
-                return k, n, base, True, iterations
-        if iterations == SETTLE_ITERATIONS or not dist_now <= cs.jump_cap or k + n > rows:
-            break
-        cw.xs[k, 0] = z0
-        cw.xs[k, 1] = z1
-        base = k
-        iterations += 1
-        failed = False
-        for _ in range(n):
-            if step_revolution(cw, k, True, p, opt, cs, stats, step_budget) != OK:
-                failed = True
+    outcome, k, base, iterations, z0, z1, m = newton_on_period(
+        cw, k, n, base, 0, p, opt, cs, stats, step_budget
+    )
+    if outcome in (STABLE_CYCLE, SETTLED_CYCLE):
+        return k, n, base, outcome == SETTLED_CYCLE, iterations
+    if outcome == UNSTABLE_CYCLE:
+        flip, v0, v1 = real_dominant_direction(m)
+        period = 0
+        if flip < -1.0 and 2 * n <= cs.n_max:
+            period = 2 * n
+        elif flip > 1.0 and n % 2 == 0 and section_gap(cw.xs, k, k - n // 2) <= SETTLED_DISTANCE:
+            period = n
+        side = (end0 - z0) * v0 + (end1 - z1) * v1
+        sign = 1.0 if side >= 0.0 else -1.0
+        reach = max(abs(side), cs.conv_tol)
+        # each start takes the rows from here on again (a start and its iterations)
+        first_row = k
+        if first_row + period * (SETTLE_ITERATIONS + 1) > cw.jac.shape[0]:
+            period = 0
+        for _ in range(FLIP_STARTS if period > 0 else 0):
+            if reach > cs.jump_cap:
                 break
-            k += 1
-        if failed:
-            break
+            k = first_row
+            cw.xs[k, 0] = z0 + sign * reach * v0
+            cw.xs[k, 1] = z1 + sign * reach * v1
+            base = k
+            failed = False
+            for _ in range(period):
+                if step_revolution(cw, k, True, p, opt, cs, stats, step_budget) != OK:
+                    failed = True
+                    break
+                k += 1
+            if failed:
+                break
+            found, k, base, tried, c0, c1, _ = newton_on_period(
+                cw, k, period, base, 1, p, opt, cs, stats, step_budget
+            )
+            iterations += tried
+            distinct = max(abs(c0 - z0), abs(c1 - z1)) > SETTLED_DISTANCE
+            if found in (STABLE_CYCLE, SETTLED_CYCLE) and distinct:
+                return k, period, base, found == SETTLED_CYCLE, iterations
+            reach *= 2.0
     cw.xs[end, 0] = end0
     cw.xs[end, 1] = end1
     copy_step_control(cw.saved_ctrl, cw.saved_memory, cw.w6.ctrl, cw.w6.h_memory)
