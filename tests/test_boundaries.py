@@ -273,10 +273,12 @@ def test_a_map_period_doubling_matches_its_line_and_scipys_multiplier(pd_store):
     np.testing.assert_allclose(mine, reference, atol=1e-4)
     assert abs(reference[0].imag) < 1e-9 and abs(reference[0] + 1) < NEAR
     assert t.evidence.value == pytest.approx(reference[0].real, abs=1e-4)
-    # on the μkn = 0.905 row, 2-2 meets a one-cell QP before 1-1: its multiplier → +1 is the
-    # square of the doubling one, and without σn points stored a fold is not claimed
-    (row2,) = [s for s in found.segments if s.before == (1, 44) and s.after == (1, 45)]
-    assert row2.type == "unknown" and "pairing unseen" in row2.transition.reason
+    # on the μkn = 0.905 row the budget of the cell at ω 2.3636 ends next to the doubling
+    # (SciPy: its 1-cycle −1.000067, its 2-cycle 0.99973): settled on the 2-cycle, and the
+    # row's 2-2 meets 1-1 on a period doubling too
+    (row2,) = [s for s in found.segments if s.before[0] == 1 and s.axis == "omega"]
+    assert row2.type == "PD" and (row2.before, row2.after) == ((1, 45), (1, 46))
+    assert (row2.transition.before.label, row2.transition.after.label) == ("2-2", "1-1")
     assert found.counts()["SN"] == 0
     # a zoom keeps the edges inside it, typed alike; tracing changes no multiplier verdict
     zoomed = store_boundaries(pd_store, omega=(2.3, 2.4), trace=True)

@@ -136,3 +136,16 @@ def test_a_budget_that_ends_on_the_unstable_one_cycle_starts_off_it_to_the_two_c
     assert min(one_multipliers.real) < -1.0
     assert max(abs(two_multipliers)) < 1.0
     assert distance(two, values["state"]) < 1e-6
+
+
+def test_a_cycle_too_weakly_attracting_for_the_jobs_tolerance_is_settled_at_a_tighter_one():
+    # (77, 507) of jobs/mu_kn_tongue.yaml at 600²: SciPy's 1-cycle −1.0000021, its 2-cycle
+    # 0.9999917; at the job's tolerance DP² was anywhere in 0.9992 … 1.00017 (QP)
+    job = job_of("jobs/mu_kn_tongue.yaml", {f"sweep.{a}.points": 600 for a in ("omega", "mu_kn")})
+    values = replay_cell(job, 77, 507)
+    assert cell_labels(values["kind"], values["n"], values["p"]) == "2-2"
+    parameters = {"omega": float(job.first_values[507]), "mu_kn": float(job.second_values[77])}
+    one_multipliers, two, two_multipliers = scipy_cycles(parameters, values["state"])
+    assert min(one_multipliers.real) < -1.0
+    assert max(abs(two_multipliers)) < 1.0
+    assert distance(two, values["state"]) < 1e-6

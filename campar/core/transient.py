@@ -28,8 +28,9 @@ from .analysis import (
     unstable_cycle_nearby,
 )
 from .codes import NONFINITE, OK
-from .integrator import CTRL_ERR, CTRL_H, copy_step_control
+from .integrator import CTRL_ERR, CTRL_H, SolverOptions, copy_step_control
 from .jit import inlined
+from .model import N_STATE_VARIATIONAL
 from .revolution_call import call_revolution
 
 # Transient policies.
@@ -172,42 +173,59 @@ STABLE_CYCLE = 1  # converged as assess_revolution converges
 SETTLED_CYCLE = 2  # within SETTLED_DISTANCE after SETTLE_ITERATIONS
 UNSTABLE_CYCLE = 3  # either, to a fixed point of Pⁿ that is not stable
 
-# Starts off an unstable cycle along its flip direction (settle_at_budget): at the
+# Starts off an unstable cycle along its flip direction (flip_starts): at the
 # motion's distance from it, then twice, four and eight times that.
 FLIP_STARTS = 4
+# settle_at_budget's second try: the job's tolerances times this (DOP853's steps grow by
+# about 1/PRECISE_FACTOR^(1/8), 2.4 times at 1e-3), the variational part's error
+# controlled too: at the (ω, μkn) tongue's cell (77, 507) at 600² DP² then has SciPy's
+# multiplier 0.9999917 (rtol 1e-12) to 1e-8, where the job's tolerance left it anywhere
+# in 0.9992 … 1.00017 (benchmarks/RESULTS.md, Kernel 8).
+PRECISE_FACTOR = 1e-3
 
 
 @inlined
-def newton_on_period(cw, k, n, base, iterations, p, opt, cs, stats, step_budget):
-    """Newton's method on Pⁿ from section point k: ``iterations`` 1 where the n
-    revolutions before it were integrated from a start with the variational equations, 0
-    where they are the transient's path (whose Jacobian is not the cycle's: its first
-    estimate is not judged). Each iteration jumps to the estimate from DPⁿ over the last n
-    revolutions and integrates n revolutions from it, SETTLE_ITERATIONS at most. Returns
-    (outcome, k, base, iterations, z0, z1, m): the last estimate z and DPⁿ; at
+def newton_on_period(cw, k, n, base, from_start, p, opt, cs, stats, step_budget):
+    """Newton's method on Pⁿ from section point k. ``from_start``: xs[k] is a start, from
+    which n revolutions are integrated with the variational equations first; else the n
+    revolutions before k are the transient's path, whose Jacobian is not the cycle's (its
+    first estimate is not judged). Each iteration jumps to the estimate from DPⁿ over the
+    last n revolutions and integrates n revolutions from it, SETTLE_ITERATIONS at most.
+    Returns (outcome, k, base, iterations, z0, z1, m): the last estimate z and DPⁿ; at
     UNSTABLE_CYCLE, z is the fixed point and m its DPⁿ."""
     rows = cw.jac.shape[0]
+    iterations = 1 if from_start else 0
+    z0 = cw.xs[k, 0]
+    z1 = cw.xs[k, 1]
+    m = (1.0, 0.0, 0.0, 1.0)
+    run = from_start
     while True:
-        m = cycle_jacobian(cw.jac, k, n)
-        z0, z1, dist_now, dist_then = newton_fixed_point(
-            cw.xs[k, 0], cw.xs[k, 1], cw.xs[k - n, 0], cw.xs[k - n, 1], m
-        )
-        if iterations > 0:
-            stable = spectral_radius(m) < 1.0
-            if dist_now <= cs.conv_tol and dist_then <= cs.window_tol:
-                return STABLE_CYCLE if stable else UNSTABLE_CYCLE, k, base, iterations, z0, z1, m
-            if (
-                iterations >= SETTLE_ITERATIONS
-                and dist_now <= SETTLED_DISTANCE
-                and dist_then <= SETTLED_DISTANCE
-            ):
-                return SETTLED_CYCLE if stable else UNSTABLE_CYCLE, k, base, iterations, z0, z1, m
-        if iterations >= SETTLE_ITERATIONS or not dist_now <= cs.jump_cap or k + n > rows:
+        if not run:
+            m = cycle_jacobian(cw.jac, k, n)
+            z0, z1, dist_now, dist_then = newton_fixed_point(
+                cw.xs[k, 0], cw.xs[k, 1], cw.xs[k - n, 0], cw.xs[k - n, 1], m
+            )
+            if iterations > 0:
+                stable = spectral_radius(m) < 1.0
+                found = STABLE_CYCLE if stable else UNSTABLE_CYCLE
+                if dist_now <= cs.conv_tol and dist_then <= cs.window_tol:
+                    return found, k, base, iterations, z0, z1, m
+                if (
+                    iterations >= SETTLE_ITERATIONS
+                    and dist_now <= SETTLED_DISTANCE
+                    and dist_then <= SETTLED_DISTANCE
+                ):
+                    found = SETTLED_CYCLE if stable else UNSTABLE_CYCLE
+                    return found, k, base, iterations, z0, z1, m
+            if iterations >= SETTLE_ITERATIONS or not dist_now <= cs.jump_cap:
+                return NO_CYCLE, k, base, iterations, z0, z1, m
+            cw.xs[k, 0] = z0
+            cw.xs[k, 1] = z1
+            iterations += 1
+        run = False
+        if k + n > rows:
             return NO_CYCLE, k, base, iterations, z0, z1, m
-        cw.xs[k, 0] = z0
-        cw.xs[k, 1] = z1
         base = k
-        iterations += 1
         for _ in range(n):
             if step_revolution(cw, k, True, p, opt, cs, stats, step_budget) != OK:
                 return NO_CYCLE, k, base, iterations, z0, z1, m
@@ -233,17 +251,19 @@ def settle_at_budget(cw, k, base, p, opt, cs, stats, step_budget):
 
     Past a period doubling Newton converges as readily to the cycle that doubled, now
     unstable, as to the stable cycle of twice its period about it: both are fixed points
-    of P²ⁿ. Where it converged to a cycle unstable through a multiplier below −1 (of Pⁿ;
-    or above 1 of Pⁿ on a cycle that repeats every n/2 revolutions: the same flip), the
-    doubled cycle lies on either side of it along that multiplier's eigenvector, at a
-    distance Newton from the unstable cycle's side cannot reach: it starts again on the
-    motion's side along the eigenvector, at the motion's distance and at 2, 4 and 8 times
-    it (FLIP_STARTS), on P²ⁿ (or Pⁿ), and a stable cycle it converges to there is the
-    cell's (its revolutions count those of the start that reached it, not the starts
-    before). period 0: no such cycle; the budget's end is restored (k, its section
-    point, base and the step control): the cell and the cells after it are as they were
-    without the search, but for the revolutions it tried, which stay in the step count.
-    A revolution that fails ends the search so too.
+    of P²ⁿ. Where Newton converged to such a cycle (flip_starts), it starts again off it
+    along its flip direction, on the doubled period, at FLIP_STARTS distances; a stable
+    cycle SETTLED_DISTANCE or more from it is the one (its revolutions count the start
+    that reached it, not the starts before; the steps count all).
+
+    Where neither finds a cycle, all of it is tried once more at the precise tolerance
+    (precise_options), from the budget's end: the job's tolerance controls the error of
+    (y, y') alone, and DPⁿ from the variational equations is good to ~1e-4 there, too
+    coarse where a multiplier lies within that of ±1 to tell which cycle is stable.
+    period 0: no cycle either time; the budget's end is restored (k, its section point,
+    base and the step control): the cell and the cells after it are as they were without
+    the search, but for the revolutions it tried, which stay in the step count. A
+    revolution that fails ends that try.
     """
     n = 0
     for d in range(1, min(cs.n_max, k - base) + 1):
@@ -257,52 +277,86 @@ def settle_at_budget(cw, k, base, p, opt, cs, stats, step_budget):
     end1 = cw.xs[k, 1]
     end_base = base
     copy_step_control(cw.w6.ctrl, cw.w6.h_memory, cw.saved_ctrl, cw.saved_memory)
-    outcome, k, base, iterations, z0, z1, m = newton_on_period(
-        cw, k, n, base, 0, p, opt, cs, stats, step_budget
-    )
-    if outcome in (STABLE_CYCLE, SETTLED_CYCLE):
-        return k, n, base, outcome == SETTLED_CYCLE, iterations
-    if outcome == UNSTABLE_CYCLE:
-        flip, v0, v1 = real_dominant_direction(m)
-        period = 0
-        if flip < -1.0 and 2 * n <= cs.n_max:
-            period = 2 * n
-        elif flip > 1.0 and n % 2 == 0 and section_gap(cw.xs, k, k - n // 2) <= SETTLED_DISTANCE:
-            period = n
-        side = (end0 - z0) * v0 + (end1 - z1) * v1
-        sign = 1.0 if side >= 0.0 else -1.0
-        reach = max(abs(side), cs.conv_tol)
-        # each start takes the rows from here on again (a start and its iterations)
-        first_row = k
-        if first_row + period * (SETTLE_ITERATIONS + 1) > cw.jac.shape[0]:
-            period = 0
-        for _ in range(FLIP_STARTS if period > 0 else 0):
-            if reach > cs.jump_cap:
-                break
-            k = first_row
-            cw.xs[k, 0] = z0 + sign * reach * v0
-            cw.xs[k, 1] = z1 + sign * reach * v1
-            base = k
-            failed = False
-            for _ in range(period):
-                if step_revolution(cw, k, True, p, opt, cs, stats, step_budget) != OK:
-                    failed = True
-                    break
-                k += 1
-            if failed:
-                break
-            found, k, base, tried, c0, c1, _ = newton_on_period(
-                cw, k, period, base, 1, p, opt, cs, stats, step_budget
-            )
-            iterations += tried
-            distinct = max(abs(c0 - z0), abs(c1 - z1)) > SETTLED_DISTANCE
-            if found in (STABLE_CYCLE, SETTLED_CYCLE) and distinct:
-                return k, period, base, found == SETTLED_CYCLE, iterations
+    iterations = 0
+    precise = False  # the try: at the job's tolerance, then at the precise one
+    flip = -1  # the start off a doubled cycle (-1: Newton from the motion itself)
+    period = n
+    first_row = k
+    z0 = z1 = v0 = v1 = reach = 0.0
+    while True:
+        solver = precise_options(opt) if precise else opt
+        from_start = flip >= 0 or precise  # else from the transient's path
+        if from_start:
+            k = first_row if flip >= 0 else end
+            cw.xs[k, 0] = end0 if flip < 0 else z0 + reach * v0
+            cw.xs[k, 1] = end1 if flip < 0 else z1 + reach * v1
+        outcome, k, base, tried, c0, c1, m = newton_on_period(
+            cw, k, period, base, from_start, p, solver, cs, stats, step_budget
+        )
+        iterations += tried
+        distinct = flip < 0 or max(abs(c0 - z0), abs(c1 - z1)) > SETTLED_DISTANCE
+        if outcome in (STABLE_CYCLE, SETTLED_CYCLE) and distinct:
+            return k, period, base, outcome == SETTLED_CYCLE, iterations
+        if flip < 0 and outcome == UNSTABLE_CYCLE:
+            period, v0, v1, reach = flip_starts(cw, k, n, c0, c1, m, end0, end1, cs)
+            if period > 0 and k + period * (SETTLE_ITERATIONS + 1) <= cw.jac.shape[0]:
+                z0 = c0
+                z1 = c1
+                first_row = k
+                flip = 0
+                continue
+        elif flip >= 0 and flip + 1 < FLIP_STARTS and 2.0 * abs(reach) <= cs.jump_cap:
+            flip += 1
             reach *= 2.0
+            continue
+        if precise:
+            break
+        precise = True
+        flip = -1
+        period = n
     cw.xs[end, 0] = end0
     cw.xs[end, 1] = end1
     copy_step_control(cw.saved_ctrl, cw.saved_memory, cw.w6.ctrl, cw.w6.h_memory)
     return end, 0, end_base, False, 0
+
+
+@inlined
+def precise_options(opt):
+    """The solver options of settle_at_budget's second try: tolerances PRECISE_FACTOR of
+    the job's, and the error of the variational equations' Φ controlled besides (y, y')'s."""
+    return SolverOptions(
+        opt.method,
+        opt.rtol * PRECISE_FACTOR,
+        opt.atol * PRECISE_FACTOR,
+        opt.h_fixed,
+        opt.h_min,
+        opt.event_tol,
+        max(opt.n_err, N_STATE_VARIATIONAL),
+    )
+
+
+@inlined
+def flip_starts(cw, k, n, z0, z1, m, end0, end1, cs):
+    """Where Newton starts off z, a fixed point of Pⁿ (DPⁿ m) that is not stable, for the
+    stable cycle born in its period doubling: (period, v0, v1, reach), the start z + reach
+    v, then at twice, four and eight times reach; period 0: z is not such a cycle.
+
+    Where z is unstable through a multiplier below −1 (of Pⁿ; or above 1 of Pⁿ on a cycle
+    that repeats every n/2 revolutions: the same flip), the doubled cycle lies on either
+    side of it along that multiplier's eigenvector v, at a distance Newton from z's side
+    cannot reach: the start lies on the motion's side (end), at its distance from z,
+    and Newton runs on P²ⁿ (or Pⁿ)."""
+    flip, v0, v1 = real_dominant_direction(m)
+    period = 0
+    if flip < -1.0 and 2 * n <= cs.n_max:
+        period = 2 * n
+    elif flip > 1.0 and n % 2 == 0 and section_gap(cw.xs, k, k - n // 2) <= SETTLED_DISTANCE:
+        period = n
+    side = (end0 - z0) * v0 + (end1 - z1) * v1
+    reach = max(abs(side), cs.conv_tol)
+    if side < 0.0:
+        reach = -reach
+    return period, v0, v1, reach
 
 
 @inlined
