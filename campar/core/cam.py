@@ -104,7 +104,8 @@ class TabulatedCam(NamedTuple):
 # A knot whose kink (rough_knots) exceeds this is a breakpoint. Measured on tables of the
 # cosine, cycloidal and modified-trapezoid laws at 720 … 3600 points along 121-cell chains
 # (benchmarks/RESULTS.md, "Tabulated cams"): kinks up to 8e-4 stepped across leave every
-# label and the cycles within 1.2e-7 of the built-in law's; from 1.9e-3 up they did not.
+# label and the cycles within 1.2e-7 of the built-in law's; a table whose kinks reach 2.1e-3
+# (the 3600-point trapezoid) did not.
 ROUGHNESS_LIMIT = 1e-3
 
 
