@@ -58,10 +58,8 @@ def test_the_rough_knots_of_a_coarse_table_lie_where_its_law_bends():
             on_ramp = (inside > start + lo * width) & (inside < start + hi * width)
             assert on_ramp.sum() >= 0.8 * (hi - lo) * 120  # most of the ramp's knots
     for b in breaks:
-        u = [((b - s) / width) for s in (BOUNDS[0], BOUNDS[2])]
-        assert any(
-            lo * width - near <= ui * width <= hi * width + near for ui in u for lo, hi in ramps
-        )
+        offsets = [b - start for start in (BOUNDS[0], BOUNDS[2])]
+        assert any(lo * width - near <= x <= hi * width + near for x in offsets for lo, hi in ramps)
 
 
 def test_a_dense_table_has_no_rough_knot():

@@ -101,23 +101,32 @@ def spectral_radius(m):
 
 
 @hot
+def unit_eigenvector(m, mu):
+    """The unit eigenvector of a real 2×2 matrix M for its real eigenvalue μ, orthogonal to
+    the larger row of M − μI; (0, 0) where M = μI."""
+    a, b, c, d = m[0] - mu, m[1], m[2], m[3] - mu
+    if abs(a) + abs(b) >= abs(c) + abs(d):
+        v0, v1 = -b, a
+    else:
+        v0, v1 = -d, c
+    norm = math.hypot(v0, v1)
+    if not norm > 0.0:
+        return 0.0, 0.0
+    return v0 / norm, v1 / norm
+
+
+@hot
 def real_dominant_direction(m):
     """(λ, v0, v1): the eigenvalue of largest modulus of a real 2×2 matrix and its unit
-    eigenvector; (nan, 0, 0) when the eigenvalues are complex."""
+    eigenvector (any unit vector where M = λI); (nan, 0, 0) when the eigenvalues are
+    complex."""
     re0, im0, _, _ = eig2(m)
     if im0 != 0.0:
         return math.nan, 0.0, 0.0
-    # (M − λI) v = 0: v from the row of M − λI of the larger norm
-    a0, a1 = m[1], re0 - m[0]  # orthogonal to row 0, (m0 − λ, m1)
-    b0, b1 = re0 - m[3], m[2]  # orthogonal to row 1, (m2, m3 − λ)
-    if math.hypot(a0, a1) >= math.hypot(b0, b1):
-        v0, v1 = a0, a1
-    else:
-        v0, v1 = b0, b1
-    norm = math.hypot(v0, v1)
-    if not norm > 0.0:
+    v0, v1 = unit_eigenvector(m, re0)
+    if v0 == 0.0 and v1 == 0.0:
         return re0, 1.0, 0.0
-    return re0, v0 / norm, v1 / norm
+    return re0, v0, v1
 
 
 @hot
@@ -261,15 +270,9 @@ def unstable_cycle_nearby(xs, jac, k, base, n_max, reach):
         z0, z1, dist_now, _ = newton_fixed_point(xs[k, 0], xs[k, 1], xs[k - n, 0], xs[k - n, 1], m)
         if not dist_now <= reach:
             continue
-        # (M − μI) v = 0 from its larger row
-        a, b, c, d = m[0] - mu, m[1], m[2], m[3] - mu
-        if abs(a) + abs(b) >= abs(c) + abs(d):
-            v0, v1 = -b, a
-        else:
-            v0, v1 = -d, c
-        norm = math.hypot(v0, v1)
-        if norm > 0.0:
-            return n, z0, z1, v0 / norm, v1 / norm
+        v0, v1 = unit_eigenvector(m, mu)
+        if v0 != 0.0 or v1 != 0.0:
+            return n, z0, z1, v0, v1
     return 0, 0.0, 0.0, 0.0, 0.0
 
 

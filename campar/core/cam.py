@@ -135,6 +135,7 @@ def rough_knots(knots, coef, bounds) -> np.ndarray:
 def tabulated_cam(knots, coef, bounds) -> TabulatedCam:
     """The TabulatedCam of a spline (campar.model.cam_table) and the cam's phase bounds."""
     knots = np.ascontiguousarray(knots, dtype=np.float64)
+    coef = np.ascontiguousarray(coef, dtype=np.float64)
     breaks = np.append(rough_knots(knots, coef, bounds), math.inf)
     last = len(knots) - 2  # the last interval
     span = np.empty((4, 2), dtype=np.int64)
@@ -142,13 +143,7 @@ def tabulated_cam(knots, coef, bounds) -> TabulatedCam:
         first = int(np.searchsorted(knots, bounds[p], side="right")) - 1
         final = int(np.searchsorted(knots, bounds[p + 1], side="left")) - 1
         span[p] = min(max(first, 0), last), min(max(final, first, 0), last)
-    return TabulatedCam(
-        knots,
-        np.ascontiguousarray(coef, dtype=np.float64),
-        span,
-        tuple(float(b) for b in bounds),
-        breaks,
-    )
+    return TabulatedCam(knots, coef, span, tuple(float(b) for b in bounds), breaks)
 
 
 def segment(name: str, start: float, width: float):
@@ -434,7 +429,9 @@ def _spline_join(law, phase, t, omega):
     breaks = law.breaks
     lo = 0
     hi = breaks.shape[0] - 1  # inf: none left
-    while lo < hi:  # the first break after t
+    # the first break after t, compared in time: the step that ended on a break ended at
+    # breaks[i] / omega, which ω t need not give back exactly
+    while lo < hi:
         mid = (lo + hi) >> 1
         if breaks[mid] / omega > t:
             hi = mid
