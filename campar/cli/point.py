@@ -52,6 +52,14 @@ def add_point(sub):
         help="with --from on a store of chains.direction both: which chain (down)",
     )
     p.add_argument(
+        "--run-on",
+        type=int,
+        metavar="N",
+        help="with --from: run the cell's motion on from its stored final state for up to "
+        "N revolutions with no early chaos or quasi-periodic verdict, and say whether its "
+        "label holds (a chaotic label may be a long transient's)",
+    )
+    p.add_argument(
         "--recompute",
         action="store_true",
         help="with --from on a store another kernel version wrote: compute with this "
@@ -62,15 +70,19 @@ def add_point(sub):
 
 def check_counts(args) -> None:
     """--cycle and --attractors within their bounds, before anything is computed."""
-    from ..model.settings import MAX_PERIOD, MAX_STARTS, check_count
+    from ..model.settings import MAX_COUNT, MAX_PERIOD, MAX_STARTS, check_count
 
     try:
         if args.cycle is not None:
             check_count("--cycle", args.cycle, 1, MAX_PERIOD)
         if args.attractors is not None:
             check_count("--attractors", args.attractors, 2, MAX_STARTS)
+        if args.run_on is not None:
+            check_count("--run-on", args.run_on, 1, MAX_COUNT)
     except ValueError as exc:
         raise JobError(str(exc)) from None
+    if args.run_on is not None and (args.cycle is not None or args.attractors is not None):
+        raise JobError("--run-on runs the cell's own motion on: without --cycle and --attractors")
     if args.cycle is not None and (args.plot or args.lyapunov):
         raise JobError("--cycle reports the cycle's multipliers: without --plot and --lyapunov")
     if args.attractors is not None and args.plot:
@@ -88,8 +100,11 @@ def run_point(args) -> int:
         from .point_from import run_from
 
         return run_from(args)
-    if args.direction or args.recompute:
-        raise JobError("--direction and --recompute go with --from STORE")
+    if args.direction or args.recompute or args.run_on is not None:
+        raise JobError(
+            "--direction, --recompute and --run-on go with --from STORE (without it: "
+            "--revolutions N --chaos-after 0 from --y0 --v0)"
+        )
     if args.omega is None and not args.job:
         raise JobError("give --omega (or --from STORE, or --job FILE with a fixed omega)")
     model = model_of(args, omega=args.omega, **parameter_values(args))

@@ -26,9 +26,14 @@ def coordinates_of(args) -> dict:
         elif key in BASIN_FLAGS:
             coords[BASIN_FLAGS[key]] = float(text)
         else:
+            hint = (
+                "; --run-on N runs the stored cell on for N revolutions"
+                if key == "transient.max_revolutions"
+                else ""
+            )
             raise JobError(
                 f"--from takes the cell's model from the store; {FIELDS[key].flag} "
-                "would change it: leave it out (or compute the cell without --from)"
+                f"would change it: leave it out (or compute the cell without --from){hint}"
             )
     if args.job or args.set:
         raise JobError("--from takes the cell's model from the store: without --job and --set")
@@ -54,12 +59,14 @@ def run_from(args) -> int:
     header = f"cell (row {stored.row}, column {stored.col}) of {args.store} at {where}"
     if stored.direction:
         header += f", chain {stored.direction}"
-    if not stored.current_kernel and not args.recompute:
+    if not stored.current_kernel and not args.recompute and args.run_on is None:
         raise JobError(
             f"{args.store} was written by kernel version {stored.kernel or 'unknown'}, this "
             f"campar's is {KERNEL_VERSION}: its cells do not reproduce bit for bit; "
             "--recompute computes the cell with this kernel and says which values changed"
         )
+    if args.run_on is not None:
+        return run_on(args, stored, header)
     if args.attractors is not None:
         print(header)
         return run_attractors(args, stored.model, stored.state)
@@ -74,11 +81,7 @@ def run_from(args) -> int:
     if args.json:
         data = result.to_dict()
         data["cell"] = {
-            "store": args.store,
-            "row": stored.row,
-            "column": stored.col,
-            "direction": stored.direction,
-            "coordinates": stored.coordinates,
+            **where_of(args, stored),
             "kernel": stored.kernel,
             "reproduced": reproduced,
             "changed": sorted(differences),
@@ -105,4 +108,51 @@ def run_from(args) -> int:
     if differences and stored.current_kernel:
         warn(f"campar point --from: the cell does not reproduce: {', '.join(differences)}")
         return NOT_REPRODUCED
+    return 0
+
+
+def where_of(args, stored) -> dict:
+    """The JSON ``cell`` object's place of the cell: its store, row, column, chain and
+    coordinates."""
+    return {
+        "store": args.store,
+        "row": stored.row,
+        "column": stored.col,
+        "direction": stored.direction,
+        "coordinates": stored.coordinates,
+    }
+
+
+def run_on(args, stored, header: str) -> int:
+    """``--run-on N``: the stored cell's motion run on from its final state (any kernel's
+    store: the stored values are the start, not reproduced), its label against the stored
+    one."""
+    import json
+
+    label, revolutions = stored.label, int(stored.stored["revolutions"])
+    after = stored.run_on(args.run_on, trace=bool(args.plot))
+    holds = after.label == label
+    if args.json:
+        data = after.to_dict()
+        data["cell"] = {
+            **where_of(args, stored),
+            "stored_label": label,
+            "stored_revolutions": revolutions,
+            "run_on": args.run_on,
+            "holds": holds,
+        }
+        print(json.dumps(data))
+    else:
+        print(header)
+        print(f"  stored: {label} after {revolutions} revolutions")
+        print(f"run on from its final state for up to {args.run_on} revolutions:")
+        print(format_point(after))
+        print(
+            f"  the stored label holds ({after.revolutions} revolutions run on)"
+            if holds
+            else f"  the stored label does not hold: the motion is {after.label} after "
+            f"{after.revolutions} more revolutions"
+        )
+    if args.plot:
+        save_orbit(after, args.plot)
     return 0

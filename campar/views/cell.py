@@ -162,6 +162,32 @@ class StoredCell:
         y0, v0 = self.state
         return continue_from_cell(parameter, (start, to), model=self.model, y0=y0, v0=v0, **options)
 
+    def run_on(self, revolutions: int, *, trace: bool = False) -> PointResult:
+        """The cell's motion run on from its stored final state for up to ``revolutions``
+        revolutions with no early verdict (``chaos_after`` and ``quasiperiodic_after``
+        0, the transient converged): whether a chaotic or quasi-periodic label was a long
+        transient's, which later settles on a cycle (``campar point --from --run-on``).
+        The stored values are used as they are: the cell is not replayed.
+
+        Raises
+        ------
+        campar.errors.JobError
+            ``revolutions`` out of range, or the cell failed (it has no final state).
+        """
+        from .point import simulate_point
+
+        if not np.all(np.isfinite(self.stored["state"])):
+            raise JobError("the cell failed: it has no final state to run on from")
+        return simulate_point(
+            self.model,
+            state=self.state,
+            trace=trace,
+            transient="converged",
+            revolutions=revolutions,
+            chaos_after=0,
+            quasiperiodic_after=0,
+        )
+
     def plot(self, path=None):
         """The orbit's figure (phase portrait, ε, Pn, yc against t); saved at ``path`` if
         given. Returns the matplotlib figure."""
@@ -171,6 +197,14 @@ class StoredCell:
         if path is not None:
             figure.savefig(path, dpi=150)
         return figure
+
+    @property
+    def label(self) -> str:
+        """The stored label (``n-p``, ``chaos``, ``QP``, …), as ``campar plot`` reads it."""
+        from ..core.codes import cell_label
+
+        s = self.stored
+        return cell_label(int(s["kind"]), int(s["n"]), int(s["p"]), self.model.classify.chatter_p)
 
     @property
     def state(self) -> tuple[float, float]:
