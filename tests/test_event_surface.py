@@ -15,8 +15,9 @@ from support.jit import cached_njit
 
 from campar.core import model
 from campar.core.codes import OK
-from campar.core.integrator import DOP853, SolverOptions, advance, make_work, method_tag
+from campar.core.integrator import SolverOptions, advance, make_work
 from campar.core.model import FALL, FREE, PAPER_LAW, make_params
+from campar.core.stages import DOP853, method_tag
 
 # The free flight after the detachment of the cell (ω, μcn) = (0.75876…, 0.88030…) of the
 # 600 × 600 (ω, μcn) plane (f0 0.5, μkn 0.8, ζ 0.2), at the detachment, −ε = 5.6e-17.
@@ -30,7 +31,7 @@ ZETA, F0 = 0.2, 0.5
 @cached_njit
 def free_step(t, t_end, y, f, p, mode, opt, w):
     model.rhs(t, y, p, mode, f)
-    return advance(model.rhs, model.events, t, t_end, y, f, p, mode, opt, w)
+    return advance(model.rhs, model.events, model.event_curvature, t, t_end, y, f, p, mode, opt, w)
 
 
 def free_flight(t):

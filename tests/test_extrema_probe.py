@@ -11,15 +11,7 @@ from campar.core.cam import phased_cam
 from campar.core.codes import OK
 from campar.core.contact import contact_law
 from campar.core.extrema import dense_kinematics
-from campar.core.integrator import (
-    DOP853,
-    SolverOptions,
-    advance,
-    dense_eval,
-    make_work,
-    method_tag,
-    prepare_dense,
-)
+from campar.core.integrator import SolverOptions, advance, make_work
 from campar.core.model import (
     FALL,
     FREE,
@@ -31,6 +23,7 @@ from campar.core.model import (
     Law,
     make_params,
 )
+from campar.core.stages import DOP853, dense_eval, method_tag, prepare_dense
 
 LAWS = {
     "paper": PAPER_LAW,
@@ -47,7 +40,7 @@ THETAS = (0.0, 0.137, 0.5, 0.81, 1.0)
 def one_step(t, t_end, y, p, mode, opt, w):
     f = np.zeros(y.shape[0])
     model.rhs(t, y, p, mode, f)
-    return advance(model.rhs, model.events, t, t_end, y, f, p, mode, opt, w)
+    return advance(model.rhs, model.events, model.event_curvature, t, t_end, y, f, p, mode, opt, w)
 
 
 @cached_njit

@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 from numba import njit
 
+from campar.core import dopri5, stages
 from campar.core import integrator as I
+from campar.core.hermite import hermite_extremum
 from campar.core.jit import through_numba
 
 
@@ -39,6 +41,12 @@ def crossing(t, y, f, p, mode, g, dg):
     return 1
 
 
+@njit
+def no_curvature(y, p, mode):
+    """No bound on the event functions' curvature: the cubic model's dip test."""
+    return math.inf
+
+
 def run(rhs, events, y0, t_end, p, opt, max_steps):
     """Step to t_end; returns the final state and the times of events (stopping at each)."""
     return run_compiled(
@@ -58,7 +66,7 @@ def run_compiled(rhs, events, y, t_end, p, opt, max_steps, w):
     for _ in range(max_steps):
         if t >= t_end:
             break
-        status, t, which = I.advance(rhs, events, t, t_end, y, f, p, mode, opt, w)
+        status, t, which = I.advance(rhs, events, no_curvature, t, t_end, y, f, p, mode, opt, w)
         if which >= 0:
             times[n_events] = t
             n_events += 1
@@ -67,20 +75,20 @@ def run_compiled(rhs, events, y, t_end, p, opt, max_steps, w):
     return y, times[:n_events], w.counts.copy()
 
 
-def options(method=I.DP54, rtol=1e-10, h_fixed=0.0):
-    return I.SolverOptions(I.method_tag(method), rtol, rtol * 1e-2, h_fixed, 1e-14, 1e-13, 2)
+def options(method=stages.DP54, rtol=1e-10, h_fixed=0.0):
+    return I.SolverOptions(stages.method_tag(method), rtol, rtol * 1e-2, h_fixed, 1e-14, 1e-13, 2)
 
 
 def test_tableau_invariants():
-    np.testing.assert_allclose(I.A.sum(axis=1), I.C, atol=1e-15)  # row sums are the nodes
-    assert I.B.sum() == pytest.approx(1.0, abs=1e-15)
-    assert I.E.sum() == pytest.approx(0.0, abs=1e-15)  # both solutions are consistent
-    np.testing.assert_allclose(I.A[6], I.B[:6], atol=0)  # FSAL: stage 7 is the solution
+    np.testing.assert_allclose(dopri5.A.sum(axis=1), dopri5.C, atol=1e-15)  # row sums are the nodes
+    assert dopri5.B.sum() == pytest.approx(1.0, abs=1e-15)
+    assert dopri5.E.sum() == pytest.approx(0.0, abs=1e-15)  # both solutions are consistent
+    np.testing.assert_allclose(dopri5.A[6], dopri5.B[:6], atol=0)  # FSAL: stage 7 is the solution
     # the dense output at θ = 1 is the 5th-order solution
-    np.testing.assert_allclose(I.P.sum(axis=1), I.B, atol=1e-14)
+    np.testing.assert_allclose(dopri5.P.sum(axis=1), dopri5.B, atol=1e-14)
     # order conditions of the 5th-order weights up to b·c⁴ = 1/5
     for q in range(5):
-        assert (I.B * I.C**q).sum() == pytest.approx(1.0 / (q + 1), abs=1e-14)
+        assert (dopri5.B * dopri5.C**q).sum() == pytest.approx(1.0 / (q + 1), abs=1e-14)
 
 
 @pytest.mark.parametrize("rtol", [1e-6, 1e-8, 1e-10])
@@ -110,7 +118,13 @@ def test_rk4_fixed_step_error_is_fourth_order():
     errs = []
     for h in (0.1, 0.05):
         y, _, _ = run(
-            oscillator, crossing, np.array([1.0, 0.0]), 1.4, p, options(I.RK4, h_fixed=h), 10**6
+            oscillator,
+            crossing,
+            np.array([1.0, 0.0]),
+            1.4,
+            p,
+            options(stages.RK4, h_fixed=h),
+            10**6,
         )
         errs.append(abs(y[0] - math.cos(1.4)))
     assert 12 < errs[0] / errs[1] < 20
@@ -122,7 +136,7 @@ def test_two_roots_inside_one_step_are_found():
     # (0.8, 1.6] has g > 0 at both ends; on y = t (RK4 exact) the roots are t = 1 ∓ 0.01
     p = Omega(0.0, dip=1.0)
     y0 = np.array([0.0, 1.0])
-    _, times, _ = run(oscillator, crossing, y0, 1.6, p, options(I.RK4, h_fixed=0.8), 100)
+    _, times, _ = run(oscillator, crossing, y0, 1.6, p, options(stages.RK4, h_fixed=0.8), 100)
     np.testing.assert_allclose(times, [0.99, 1.01], rtol=0, atol=1e-9)
 
 
@@ -130,7 +144,7 @@ def test_hermite_extremum_of_a_known_cubic():
     # g(θ) = (θ - 0.5)² - 0.01 has its minimum -0.01 at θ = 0.5
     g0, g1 = 0.24, 0.24
     d0, d1 = -1.0, 1.0
-    theta, value = through_numba(I.hermite_extremum)(g0, d0, g1, d1, True)
+    theta, value = through_numba(hermite_extremum)(g0, d0, g1, d1, True)
     assert theta == pytest.approx(0.5)
     assert value == pytest.approx(-0.01)
-    assert through_numba(I.hermite_extremum)(g0, d0, g1, d1, False)[0] == -1.0
+    assert through_numba(hermite_extremum)(g0, d0, g1, d1, False)[0] == -1.0

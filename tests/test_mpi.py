@@ -310,7 +310,7 @@ def test_a_tile_that_fails_on_two_ranks_ends_the_run_with_where(fault_runs):
 
 COLD_RUN = textwrap.dedent("""
     import json, sys
-    from campar.core import integrator, kernel, revolution
+    from campar.core import dopri5, integrator, kernel, revolution, stages
     from campar.sweep.job import load_job
     from campar.sweep.runner import run_job
     from campar.sweep.wire import mpi_world
@@ -319,7 +319,7 @@ COLD_RUN = textwrap.dedent("""
     def compiled(dispatcher):  # [loaded from the cache, compiled here]
         stats = dispatcher.stats
         return [sum(stats.cache_hits.values()), sum(stats.cache_misses.values())]
-    typed = [integrator.advance, integrator.step_error, integrator.rk4_step, integrator.error_norm]
+    typed = [integrator.advance, stages.step_error, stages.rk4_step, dopri5.error_norm]
     sys.stdout.write(json.dumps({"rank": mpi_world().Get_rank(),
                                  "chain": compiled(kernel.chain_compiled),
                                  "revolution": compiled(revolution.run_revolution),
@@ -350,7 +350,7 @@ def test_ranks_of_a_node_split_a_cold_compile_and_load_each_others_half(write_jo
     assert ranks[0]["chain"] == [0, 1] and ranks[0]["revolution"] == [1, 0], ranks
     assert ranks[1]["chain"] == [1, 0] and ranks[1]["revolution"] == [0, 1], ranks
     # rank 1 typed the integrator under the revolution it compiled, DOP853's step alone:
-    # DP5(4)'s error norm and RK4's step were pruned before typing (integrator.method_tag),
+    # DP5(4)'s error norm and RK4's step were pruned before typing (stages.method_tag),
     # never compiled; rank 0 typed none of it (the chain calls the revolution by address)
     typed = {"advance": 1, "step_error": 1, "rk4_step": 0, "error_norm": 0}
     assert ranks[1]["typed"] == typed, ranks

@@ -59,7 +59,7 @@ def point_revolution(tmp_path):
 COLD_WARM_UP = REVOLUTION_INDEXED + textwrap.dedent("""
     import contextlib, io, json, sys
     from campar.cli import main
-    from campar.core import analysis, integrator, revolution, split_compile
+    from campar.core import analysis, integrator, revolution, split_compile, stages
     from campar.views.point import simulate_point
 
     before = revolution_indexed(sys.argv[1])
@@ -77,9 +77,9 @@ COLD_WARM_UP = REVOLUTION_INDEXED + textwrap.dedent("""
                   analysis.distinct_period, analysis.stable_subperiod, analysis.cycle_jacobian,
                   analysis.near_unit_circle, analysis.multipliers_of, analysis.spectral_radius,
                   analysis.slow_cycle_period, analysis.nonperiodic_kind, analysis.stretch_tangent]
-    revolution_side = [integrator.step_error, integrator.advance]
+    revolution_side = [stages.step_error, integrator.advance]
     # the window's deferred extrema (campar.core.deferred) are refined by the chain
-    both_sides = [analysis.add_step_stats, integrator.dense_eval]
+    both_sides = [analysis.add_step_stats, stages.dense_eval]
     stats = revolution.run_revolution.stats
     print(json.dumps({
         "code": code, "said": said.getvalue(), "indexed_before": before,

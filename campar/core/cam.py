@@ -75,15 +75,24 @@ SEGMENT_LAWS = {
     "modified-sine": ModifiedSine,
 }
 MOTION_LAWS = tuple(SEGMENT_LAWS)
+# Each law's largest |s''(u)| on u ∈ [0, 1]: a phase of angle Φ has |S''| ≤ peak / Φ².
+SEGMENT_PEAKS = {
+    "cosine": math.pi**2 / 2.0,
+    "cycloidal": 2.0 * math.pi,
+    "polynomial-345": 10.0 / math.sqrt(3.0),  # at u = (3 − √3) / 6
+    "modified-trapezoid": TRAPEZOID_PEAK,
+    "modified-sine": SINE_PEAK,
+}
 
 
 class PhasedCam(NamedTuple):
     """A rise and a fall of their own laws between dwells; ``bounds``: the five phase
-    boundaries 0, Φ1, Φ1+Φ2, Φ1+Φ2+Φ3, 2π."""
+    boundaries 0, Φ1, Φ1+Φ2, Φ1+Φ2+Φ3, 2π; ``peak``: each phase's largest |S''|."""
 
     rise: tuple
     fall: tuple
     bounds: tuple
+    peak: tuple
 
 
 class TabulatedCam(NamedTuple):
@@ -91,14 +100,15 @@ class TabulatedCam(NamedTuple):
     d = θ − knots[i] and (a, b, c, e) = coef[i]; knots[-1] = 2π. Phase p uses the
     intervals span[p, 0] … span[p, 1] (those meeting it), so that, as a phased cam's
     formula, a phase's spline piece is used as given a rounding error outside the phase.
-    ``bounds`` as PhasedCam's (the revolution's steps end there); ``breaks``: the rough
-    knots (``rough_knots``), which the steps end on too, then inf."""
+    ``bounds`` and ``peak`` as PhasedCam's (the revolution's steps end on the bounds);
+    ``breaks``: the rough knots (``rough_knots``), which the steps end on too, then inf."""
 
     knots: np.ndarray
     coef: np.ndarray
     span: np.ndarray  # int64 (4, 2)
     bounds: tuple
     breaks: np.ndarray
+    peak: tuple  # each phase's largest |S''| over the intervals it uses
 
 
 # A knot whose kink (rough_knots) exceeds this is a breakpoint. Measured on tables of the
@@ -143,7 +153,12 @@ def tabulated_cam(knots, coef, bounds) -> TabulatedCam:
         first = int(np.searchsorted(knots, bounds[p], side="right")) - 1
         final = int(np.searchsorted(knots, bounds[p + 1], side="left")) - 1
         span[p] = min(max(first, 0), last), min(max(final, first, 0), last)
-    return TabulatedCam(knots, coef, span, tuple(float(b) for b in bounds), breaks)
+    # S'' = 6 a d + 2 b is linear on each interval: its largest |S''| is at an end
+    ends = np.abs(
+        np.stack([2.0 * coef[:, 1], 6.0 * coef[:, 0] * np.diff(knots) + 2.0 * coef[:, 1]])
+    )
+    peak = tuple(float(ends[:, lo : hi + 1].max()) for lo, hi in span)
+    return TabulatedCam(knots, coef, span, tuple(float(b) for b in bounds), breaks, peak)
 
 
 def segment(name: str, start: float, width: float):
@@ -166,9 +181,16 @@ def phase_bounds(angles) -> tuple[float, float, float, float, float]:
 def phased_cam(rise: str = "cosine", fall: str = "cosine", angles=PAPER_ANGLES) -> PhasedCam:
     """The cam of a rise law and a fall law over the four phase angles."""
     bounds = phase_bounds(angles)
+    rise_angle, fall_angle = float(angles[0]), float(angles[2])
+    peak = (
+        SEGMENT_PEAKS[rise] / rise_angle**2,
+        0.0,
+        SEGMENT_PEAKS[fall] / fall_angle**2,
+        0.0,
+    )
     # widths from the angles themselves: bounds[3] − bounds[2] is Φ3 only up to rounding
     return PhasedCam(
-        segment(rise, 0.0, float(angles[0])), segment(fall, bounds[2], float(angles[2])), bounds
+        segment(rise, 0.0, rise_angle), segment(fall, bounds[2], fall_angle), bounds, peak
     )
 
 

@@ -33,9 +33,9 @@ from . import dop853, model
 from .analysis import N_REV_STATS, REV_EPS_MAX, REV_EPS_MIN, REV_PN_MAX, add_step_stats
 from .contact import impact_velocity, note_impact
 from .extrema import refine_extremes, step_model_extremes
-from .integrator import CTRL_DENSE
 from .jit import hot
 from .model import N_STATE
+from .stages import CTRL_DENSE
 
 DEFERRED = N_REV_STATS  # column of a chain's row: steps deferred so far in the revolution
 SLOTS = 16  # steps a revolution defers at most (a revolution holds a few extrema)

@@ -6,7 +6,7 @@ steps per revolution for the same error on this model (measured with SciPy on
 cells of the μcn plane, benchmarks/RESULTS.md). Twelve stages per step plus
 f at the step end (K[12]: row 12 of A is B, the stage at y_new); the dense
 output needs three more (K[13..15]), computed only for steps whose interior
-is read (events, traces). The stages themselves are integrator.rk_stages.
+is read (events, traces). The stages themselves are stages.rk_stages.
 
 Coefficients as in SciPy's scipy/integrate/_ivp/dop853_coefficients.py (BSD),
 which transcribes Hairer's dop853.f; E3 and E5 combine into the error
@@ -217,7 +217,7 @@ def dop853_error(K, h, y, y_new, rtol, atol, n_err):
 @hot
 def dop853_dense_coefficients(y, y_new, h, K, F):
     """The dense output's coefficients F (7, n) of the step from y to y_new, once the
-    extra stages K[13..15] are in K (integrator.prepare_dense)."""
+    extra stages K[13..15] are in K (stages.prepare_dense)."""
     for i in range(y.shape[0]):
         dy = y_new[i] - y[i]
         F[0, i] = dy

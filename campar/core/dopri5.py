@@ -1,6 +1,6 @@
 """Dormand–Prince 5(4) (Dormand & Prince 1980): the tableau as data, its error estimate
 and the 4th-order continuous extension of Shampine (1986), as in SciPy's rk.py.
-The stages themselves are integrator.rk_stages; the step control is integrator.advance's.
+The stages themselves are stages.rk_stages; the step control is integrator.advance's.
 """
 
 import numpy as np

@@ -21,9 +21,9 @@ import math
 import numpy as np
 
 from .hermite import MAXIMUM, MINIMUM, hermite_extremum, quintic_extremum
-from .integrator import dense_eval, prepare_dense
 from .jit import hot
 from .model import N_STATE, PUSH, cam, damping, force_and_rate, pushing
+from .stages import dense_eval, prepare_dense
 
 EXTREMUM_ITER = 16  # Newton or Illinois iterations at most
 # Located to this fraction of the step: the value's error is ~ ε'' (h δθ)², far below
@@ -38,7 +38,7 @@ WANTED = np.bool_(True)  # (not a literal True: numba would compile a variant pe
 @hot
 def dense_kinematics(rhs, method, w, t0, h, theta, p, mode, want_force):
     """model.kinematics (ε, dε/dt, d²ε/dt², Pn, dPn/dt) at t0 + θh on the dense output of
-    the step just accepted from t0 (w.y_old → w.y_new; integrator.prepare_dense done); Pn
+    the step just accepted from t0 (w.y_old → w.y_new; stages.prepare_dense done); Pn
     and its rate 0 unless ``want_force``.
 
     One body with one cam evaluation, the arithmetic of model.acceleration and

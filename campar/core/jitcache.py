@@ -28,6 +28,8 @@ COMPILED_MODULES = (
     "cam",
     "contact",
     "model",
+    "stages",
+    "event_roots",
     "integrator",
     "analysis",
     "extrema",

@@ -410,7 +410,7 @@ def chain_signature(law, x_init, solver, cs, out) -> tuple:
 def chain_loaded(solver, law) -> bool:
     """This process holds ``chain_compiled`` for these solver options and this law: compiled
     here or loaded from the cache. Of the chain's arguments only the types of these two
-    differ between jobs (the method tag, integrator.method_tag; the laws, model.Law);
+    differ between jobs (the method tag, stages.method_tag; the laws, model.Law);
     every other one is fixed."""
     solver_type, law_type = typeof(solver), typeof(kernel_law(law))
     return any(

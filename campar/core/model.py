@@ -159,15 +159,19 @@ def law_parts(law):
 @overload(law_parts, jit_options=OPTIONS)
 def _law_parts(law):
     if isinstance(law, (types.Integer, types.Boolean)):
-        rise, fall, bounds = PAPER_CAM
+        rise, fall, bounds, peak = PAPER_CAM
         r0, r1, r2, r3 = rise
         f0_, f1, f2, f3 = fall
         b0, b1, b2, b3, b4 = bounds
+        q0, q1, q2, q3 = peak
         n = HERTZ.n
 
         def paper(law):
             the_cam = PhasedCam(
-                Cosine(r0, r1, r2, r3), Cosine(f0_, f1, f2, f3), (b0, b1, b2, b3, b4)
+                Cosine(r0, r1, r2, r3),
+                Cosine(f0_, f1, f2, f3),
+                (b0, b1, b2, b3, b4),
+                (q0, q1, q2, q3),
             )
             return int(law), the_cam, HuntCrossleyHertz(n)
 
@@ -311,6 +315,24 @@ def events(t, y, f, p, mode, g, dg):
     g[1] = sign * (1.0 + c * deps)
     dg[1] = sign * c * d2eps
     return 2
+
+
+@hot
+def event_curvature(y, p, mode):
+    """A bound on |g0''| (in time) over any step from y in this mode: in free flight,
+    where the field does not see the cam, g0 = −ε = y − yc and the step size knows
+    nothing of the cam's lift (the integrator's event search uses the bound there); inf
+    in the contact modes, whose field has the cam.
+
+    The free follower's (y + f0)² + y'² does not grow (its rate is −4ζ y'²), so
+    |y''| = |y + f0 + 2ζ y'| ≤ √(1 + 4ζ²) √((y + f0)² + y'²) all along the step, and
+    |d²yc/dt²| ≤ ω² times the phase's largest |S''| (the cam's ``peak``).
+    """
+    if mode[1] != FREE:
+        return math.inf
+    energy = (y[0] + p.f0) ** 2 + y[1] ** 2
+    follower = math.sqrt((1.0 + 4.0 * p.zeta * p.zeta) * energy)
+    return p.omega * p.omega * p.cam.peak[mode[0]] + follower
 
 
 @hot

@@ -18,7 +18,7 @@ from .codes import EVENT_LOOP, OK, STEP_LIMIT
 from .contact import impact_velocity, note_impact
 from .deferred import clear_deferred, defer_step
 from .extrema import step_extremes, step_models
-from .integrator import CTRL_DENSE, SolverOptions, advance, dense_eval, prepare_dense
+from .integrator import SolverOptions, advance
 from .jit import hot
 from .model import (
     FREE,
@@ -37,6 +37,7 @@ from .model import (
     mode_after_event,
     released,
 )
+from .stages import CTRL_DENSE, dense_eval, prepare_dense
 
 MAX_STUCK_EVENTS = 8  # zero-length events in a row before a cell is declared stuck
 
@@ -162,7 +163,9 @@ def run_revolution(x, f, p, opt, w, mode, row, stats, step_limit, rec):
             if rec is not None:
                 rec.prev[0] = x[0]
                 rec.prev[1] = x[1]
-            status, t, which = advance(model.rhs, model.events, t, t_end, x, f, p, mode, opt, w)
+            status, t, which = advance(
+                model.rhs, model.events, model.event_curvature, t, t_end, x, f, p, mode, opt, w
+            )
             if status != OK:
                 return status
             if t > t_prev:

@@ -6,4 +6,4 @@ records which kernel wrote it and `campar point --from` can tell a store compute
 another kernel from one it reproduces bit for bit.
 """
 
-KERNEL_VERSION = 8
+KERNEL_VERSION = 9

@@ -12,7 +12,7 @@ from statistics import NormalDist
 import numpy as np
 
 from ..core import split_compile
-from ..core.integrator import DOP853, DP54, RK4, SolverOptions, method_tag
+from ..core.integrator import SolverOptions
 from ..core.jit import collector_paused
 from ..core.jitcache import ensure_fresh_cache
 from ..core.kernel import (
@@ -31,6 +31,7 @@ from ..core.kernel import (
     run_chain,
 )
 from ..core.model import N_STATE
+from ..core.stages import DOP853, DP54, RK4, method_tag
 from ..core.tracer import compile_tracer
 from .laws import kernel_law
 from .model import Model

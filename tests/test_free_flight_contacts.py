@@ -1,0 +1,161 @@
+"""A contact inside one free-flight step is found: the first root of ε, not a later one.
+
+In free flight the field does not see the cam, so the step size knows nothing of the
+cam's lift: a step over most of a cycloidal fall (0.75 rad at ω ≈ 1.35, μkn 0.95) held a
+whole contact of 0.17 rad, ε up to 0.07, between two ends in flight, and a step that
+ended in contact had three roots of ε, of which the event search took the last. The
+search now bounds |ε''| by the phase's largest |S''| and the free follower's energy
+(model.event_curvature, event_roots.may_cross) and reads the dense output where the bound
+cannot rule a root out. Independent references: the free flight in closed form with the
+cycloidal fall (brentq), and SciPy's shooting of the cell's cycle.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+from support.jit import cached_njit
+
+import campar
+from campar.core import event_roots, model
+from campar.core.integrator import SolverOptions, advance, make_work
+from campar.core.jit import through_numba
+from campar.core.model import FALL, FREE, make_params
+from campar.core.stages import DOP853, method_tag
+from campar.model.compute import model_law
+from campar.model.model import Model
+
+ZETA, F0, MU_KN, MU_CN = 0.2, 0.5, 0.95, 0.8
+OMEGA = 1.3541666666666667  # a cell of the chain ω 6 → 1 (241 cells) at μkn 0.95
+CYCLOIDAL = {"model": {"cam": {"rise": "cycloidal", "fall": "cycloidal"}}}
+FALL_START, FALL_WIDTH = math.pi, math.pi / 3.0  # the paper's angles
+# The follower at the fall's start, in flight (ε = −0.097), on that cell's cycle.
+Y0 = (1.0970359770278213, -1.2355374019733933)
+
+
+def free_flight(t, t0):
+    """y(t) of y'' + 2ζ y' + y = −f0 from Y0 at t0, in closed form."""
+    wd = math.sqrt(1.0 - ZETA * ZETA)
+    a = Y0[0] + F0
+    b = (Y0[1] + ZETA * a) / wd
+    s = t - t0
+    return -F0 + math.exp(-ZETA * s) * (a * math.cos(wd * s) + b * math.sin(wd * s))
+
+
+def cycloidal_fall(theta):
+    u = (theta - FALL_START) / FALL_WIDTH
+    return 1.0 - (u - math.sin(2.0 * math.pi * u) / (2.0 * math.pi))
+
+
+def first_contact(t0, t_end):
+    """The first root of ε = yc − y after t0: a sign change on a fine grid, then brentq."""
+
+    def eps(t):
+        return cycloidal_fall(OMEGA * t) - free_flight(t, t0)
+
+    grid = np.linspace(t0, t_end, 20001)
+    values = np.array([eps(t) for t in grid])
+    k = int(np.flatnonzero(values > 0.0)[0])
+    return brentq(eps, grid[k - 1], grid[k], xtol=1e-14), int(np.sum(np.diff(values > 0) != 0))
+
+
+@cached_njit
+def free_step(t, t_end, y, p, mode, opt, w):
+    f = np.zeros(y.shape[0])
+    model.rhs(t, y, p, mode, f)
+    return advance(model.rhs, model.events, model.event_curvature, t, t_end, y, f, p, mode, opt, w)
+
+
+def cell_model(omega=OMEGA):
+    return Model.build({"omega": omega, "f0": F0, "mu_kn": MU_KN, "mu_cn": MU_CN, **CYCLOIDAL})
+
+
+@pytest.mark.slow  # compiles the integrator for the cycloidal cam
+@pytest.mark.parametrize("h", [0.05, 0.55, 1.0])
+def test_a_free_flight_step_over_a_cycloidal_fall_ends_at_the_first_contact(h):
+    t0 = FALL_START / OMEGA
+    t_end = (FALL_START + FALL_WIDTH) / OMEGA  # the fall's end; h = 1 stretches to it
+    impact, crossings = first_contact(t0, t_end)
+    assert crossings == 3  # in, out and in again within the fall: the case at hand
+    p = make_params(OMEGA, ZETA, F0, MU_KN, MU_CN, model_law(cell_model()))
+    opt = SolverOptions(method_tag(DOP853), 1e-7, 1e-10, 0.0, 1e-11, 1e-11, 2)
+    y = np.array(Y0)
+    mode = np.array([FALL, FREE], dtype=np.int64)
+    w = make_work(2, 2, h)
+    t = t0
+    which = -1
+    for _ in range(200):
+        status, t, which = free_step(t, t_end, y, p, mode, opt, w)
+        assert status == 0
+        if which >= 0 or t >= t_end:
+            break
+    assert which == 0
+    assert t == pytest.approx(impact, abs=1e-7)
+    assert y[0] == pytest.approx(free_flight(t, t0), abs=1e-7)
+
+
+@pytest.mark.slow  # SciPy's shooting at rtol 1e-12
+def test_the_cell_is_scipys_cycle_with_its_three_detachments():
+    from campar.bench import scipy_shooting
+    from campar.bench.scipy_model import Model as ScipyModel
+    from campar.bench.scipy_model import integrate
+
+    cell = campar.simulate_point(cell_model(), state=(0.04699127614187787, 0.08432856508758493))
+    parameters = {"omega": OMEGA, "f0": F0, "mu_kn": MU_KN, "mu_cn": MU_CN}
+    parameters.update(rise="cycloidal", fall="cycloidal")
+    x, jac = scipy_shooting.fixed_point(parameters, cell.state, 1)
+    assert np.max(np.abs(np.linalg.eigvals(jac))) < 1.0
+    # SciPy's events with steps of at most 0.005: no contact shorter than that is missed
+    _, events, _ = integrate(ScipyModel(**parameters), x, 1, rtol=1e-11, max_step=0.005)
+    detachments = sum(kind == "detachment" for _, kind in events)
+    assert (cell.label, detachments) == ("1-3", 3)
+    np.testing.assert_allclose(cell.state, x, atol=1e-6)
+
+
+@pytest.mark.slow  # SciPy's shooting at rtol 1e-12
+def test_a_contact_between_a_detachment_and_the_next_flight_is_scipys():
+    """3-4-5 laws, rise Φ1 = 0.806 (the design_rise_polynomial-345 job's row 82 at 400²): a
+    flight of 0.06 rad after a detachment, then a contact of 0.5 rad, both inside one
+    free-flight step that starts on the surface ε = 0."""
+    from campar.bench import scipy_shooting
+    from campar.bench.scipy_model import Model as ScipyModel
+    from campar.bench.scipy_model import integrate
+
+    angles = (0.8055137844611528, math.pi / 3.0, 2.0 * math.pi / 3.0)
+    angles = (*angles, 2.0 * math.pi - sum(angles))
+    cam = {"rise": "polynomial-345", "fall": "polynomial-345"}
+    cam.update(zip(("phi1", "phi2", "phi3", "phi4"), angles))
+    omega = 1.2428571428571429
+    cell = campar.simulate_point({"omega": omega, "model": {"cam": cam}})
+    parameters = {"omega": omega, "rise": cam["rise"], "fall": cam["fall"], "angles": angles}
+    x, jac = scipy_shooting.fixed_point(parameters, cell.state, 1)
+    assert np.max(np.abs(np.linalg.eigvals(jac))) < 1.0
+    _, events, _ = integrate(ScipyModel(**parameters), x, 1, rtol=1e-11, max_step=0.005)
+    detachments = sum(kind == "detachment" for _, kind in events)
+    assert (cell.label, detachments) == ("1-2", 2)
+    np.testing.assert_allclose(cell.state, x, atol=1e-7)
+
+
+def lower_envelope_minimum(g0, d0, g1, d1, bound):
+    s = np.linspace(0.0, 1.0, 200001)
+    left = g0 + d0 * s - 0.5 * bound * s * s
+    right = g1 - d1 * (1.0 - s) - 0.5 * bound * (1.0 - s) ** 2
+    return float(np.min(np.maximum(left, right)))
+
+
+def test_may_cross_says_whether_the_lowest_g_the_bound_allows_reaches_zero():
+    may_cross = through_numba(event_roots.may_cross)
+    rng = np.random.default_rng(9)
+    decided = {True: 0, False: 0}
+    for _ in range(2000):
+        g0, g1 = rng.uniform(1e-3, 1.0, 2)
+        d0, d1 = rng.uniform(-2.0, 2.0, 2)
+        bound = 10.0 ** rng.uniform(-2.0, 1.5)
+        lowest = lower_envelope_minimum(g0, d0, g1, d1, bound)
+        if abs(lowest) < 1e-6:
+            continue  # at the grid's resolution
+        assert may_cross(g0, d0, g1, d1, bound) == (lowest < 0.0), (g0, d0, g1, d1, bound)
+        decided[lowest < 0.0] += 1
+    assert min(decided.values()) > 200
+    assert not may_cross(0.5, -0.3, 0.4, 0.2, 0.0)  # a linear g between positive ends
