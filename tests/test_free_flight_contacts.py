@@ -125,7 +125,7 @@ def test_a_contact_between_a_detachment_and_the_next_flight_is_scipys():
     angles = (0.8055137844611528, math.pi / 3.0, 2.0 * math.pi / 3.0)
     angles = (*angles, 2.0 * math.pi - sum(angles))
     cam = {"rise": "polynomial-345", "fall": "polynomial-345"}
-    cam.update(zip(("phi1", "phi2", "phi3", "phi4"), angles))
+    cam.update(zip(("phi1", "phi2", "phi3", "phi4"), angles, strict=True))
     omega = 1.2428571428571429
     cell = campar.simulate_point({"omega": omega, "model": {"cam": cam}})
     parameters = {"omega": omega, "rise": cam["rise"], "fall": cam["fall"], "angles": angles}
