@@ -7,8 +7,10 @@ jobs, files, MPI or figures:
 - ``jit``, ``jitcache``: how the core is compiled, and keeping numba's cache honest;
 - ``model``: the cam law, Hunt–Crossley contact force, the vector field;
 - ``hermite``: cubic and quintic Hermite models over one step (event roots, where extremes lie);
-- ``integrator``: DP5(4), DOP853 and RK4 with dense output, breakpoints and events
-  (knows no cam: it sees a field, breakpoints and event functions);
+- ``integrator``: DP5(4), DOP853 and RK4 step control, breakpoints and events (knows no
+  cam: it sees a field, breakpoints and event functions);
+- ``stages``: one Runge–Kutta step's stages, error norm and dense output;
+- ``event_roots``: the first root of an event function inside a trial step;
 - ``dop853``, ``dopri5``: the Dormand–Prince 8(5,3) and 5(4) tableaux, error estimates and
   dense outputs;
 - ``analysis``: section maps, period and detachments, multipliers, Lyapunov exponent;
