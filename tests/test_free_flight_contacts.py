@@ -95,20 +95,26 @@ def test_a_free_flight_step_over_a_cycloidal_fall_ends_at_the_first_contact(h):
     assert y[0] == pytest.approx(free_flight(t, t0), abs=1e-7)
 
 
-@pytest.mark.slow  # SciPy's shooting at rtol 1e-12
-def test_the_cell_is_scipys_cycle_with_its_three_detachments():
+def scipy_stable_cycle(parameters: dict, guess) -> tuple[np.ndarray, int]:
+    """SciPy's 1-cycle near ``guess`` (campar.bench.scipy_shooting), asserted stable, and its
+    detachments counted with SciPy's steps of at most 0.005: no contact shorter than that
+    is missed."""
     from campar.bench import scipy_shooting
     from campar.bench.scipy_model import Model as ScipyModel
     from campar.bench.scipy_model import integrate
 
+    x, jac = scipy_shooting.fixed_point(parameters, guess, 1)
+    assert np.max(np.abs(np.linalg.eigvals(jac))) < 1.0
+    _, events, _ = integrate(ScipyModel(**parameters), x, 1, rtol=1e-11, max_step=0.005)
+    return x, sum(kind == "detachment" for _, kind in events)
+
+
+@pytest.mark.slow  # SciPy's shooting at rtol 1e-12
+def test_the_cell_is_scipys_cycle_with_its_three_detachments():
     cell = campar.simulate_point(cell_model(), state=(0.04699127614187787, 0.08432856508758493))
     parameters = {"omega": OMEGA, "f0": F0, "mu_kn": MU_KN, "mu_cn": MU_CN}
     parameters.update(rise="cycloidal", fall="cycloidal")
-    x, jac = scipy_shooting.fixed_point(parameters, cell.state, 1)
-    assert np.max(np.abs(np.linalg.eigvals(jac))) < 1.0
-    # SciPy's events with steps of at most 0.005: no contact shorter than that is missed
-    _, events, _ = integrate(ScipyModel(**parameters), x, 1, rtol=1e-11, max_step=0.005)
-    detachments = sum(kind == "detachment" for _, kind in events)
+    x, detachments = scipy_stable_cycle(parameters, cell.state)
     assert (cell.label, detachments) == ("1-3", 3)
     np.testing.assert_allclose(cell.state, x, atol=1e-6)
 
@@ -118,10 +124,6 @@ def test_a_contact_between_a_detachment_and_the_next_flight_is_scipys():
     """3-4-5 laws, rise Φ1 = 0.806 (the design_rise_polynomial-345 job's row 82 at 400²): a
     flight of 0.06 rad after a detachment, then a contact of 0.5 rad, both inside one
     free-flight step that starts on the surface ε = 0."""
-    from campar.bench import scipy_shooting
-    from campar.bench.scipy_model import Model as ScipyModel
-    from campar.bench.scipy_model import integrate
-
     angles = (0.8055137844611528, math.pi / 3.0, 2.0 * math.pi / 3.0)
     angles = (*angles, 2.0 * math.pi - sum(angles))
     cam = {"rise": "polynomial-345", "fall": "polynomial-345"}
@@ -129,10 +131,7 @@ def test_a_contact_between_a_detachment_and_the_next_flight_is_scipys():
     omega = 1.2428571428571429
     cell = campar.simulate_point({"omega": omega, "model": {"cam": cam}})
     parameters = {"omega": omega, "rise": cam["rise"], "fall": cam["fall"], "angles": angles}
-    x, jac = scipy_shooting.fixed_point(parameters, cell.state, 1)
-    assert np.max(np.abs(np.linalg.eigvals(jac))) < 1.0
-    _, events, _ = integrate(ScipyModel(**parameters), x, 1, rtol=1e-11, max_step=0.005)
-    detachments = sum(kind == "detachment" for _, kind in events)
+    x, detachments = scipy_stable_cycle(parameters, cell.state)
     assert (cell.label, detachments) == ("1-2", 2)
     np.testing.assert_allclose(cell.state, x, atol=1e-7)
 

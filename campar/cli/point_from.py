@@ -59,14 +59,14 @@ def run_from(args) -> int:
     header = f"cell (row {stored.row}, column {stored.col}) of {args.store} at {where}"
     if stored.direction:
         header += f", chain {stored.direction}"
-    if not stored.current_kernel and not args.recompute and args.run_on is None:
+    if args.run_on is not None:
+        return run_on(args, stored, header)  # from the stored state: any kernel's store
+    if not stored.current_kernel and not args.recompute:
         raise JobError(
             f"{args.store} was written by kernel version {stored.kernel or 'unknown'}, this "
             f"campar's is {KERNEL_VERSION}: its cells do not reproduce bit for bit; "
             "--recompute computes the cell with this kernel and says which values changed"
         )
-    if args.run_on is not None:
-        return run_on(args, stored, header)
     if args.attractors is not None:
         print(header)
         return run_attractors(args, stored.model, stored.state)
