@@ -1,10 +1,10 @@
 """A contact inside one free-flight step is found: the first root of ε, not a later one.
 
 In free flight the field does not see the cam, so the step size knows nothing of the
-cam's lift: a step over most of a cycloidal fall (0.75 rad at ω ≈ 1.35, μkn 0.95) held a
-whole contact of 0.17 rad, ε up to 0.07, between two ends in flight, and a step that
-ended in contact had three roots of ε, of which the event search took the last. The
-search now bounds |ε''| by the phase's largest |S''| and the free follower's energy
+cam's lift: a step over most of a cycloidal fall (0.75 rad at ω ≈ 1.35, μkn 0.95) can hold
+a whole contact of 0.17 rad, ε up to 0.07, between two ends in flight, and a step that
+ends in contact can hold three roots of ε, of which the first is the event. The search
+bounds |ε''| by the phase's largest |S''| and the free follower's energy
 (model.event_curvature, event_roots.may_cross) and reads the dense output where the bound
 cannot rule a root out. Independent references: the free flight in closed form with the
 cycloidal fall (brentq), and SciPy's shooting of the cell's cycle.
