@@ -11,11 +11,9 @@ import math
 import numpy as np
 import pytest
 from scipy.optimize import brentq
-from support.jit import cached_njit
+from support.free_flight import damped_flight, step_to_event
 
-from campar.core import model
-from campar.core.codes import OK
-from campar.core.integrator import SolverOptions, advance, make_work
+from campar.core.integrator import SolverOptions
 from campar.core.model import FALL, FREE, PAPER_LAW, make_params
 from campar.core.stages import DOP853, method_tag
 
@@ -28,19 +26,7 @@ Y0 = (0.26850804780352705, -0.6694702171548769)
 ZETA, F0 = 0.2, 0.5
 
 
-@cached_njit
-def free_step(t, t_end, y, f, p, mode, opt, w):
-    model.rhs(t, y, p, mode, f)
-    return advance(model.rhs, model.events, model.event_curvature, t, t_end, y, f, p, mode, opt, w)
-
-
-def free_flight(t):
-    """y(t) of y'' + 2ζ y' + y = −f0 from Y0 at T0, in closed form."""
-    wd = math.sqrt(1.0 - ZETA * ZETA)
-    a = Y0[0] + F0
-    b = (Y0[1] + ZETA * a) / wd
-    s = t - T0
-    return -F0 + math.exp(-ZETA * s) * (a * math.cos(wd * s) + b * math.sin(wd * s))
+free_flight = damped_flight(Y0, T0, ZETA, F0)
 
 
 def cam_fall(t):
@@ -56,14 +42,7 @@ def test_a_free_flight_entered_on_the_surface_ends_at_the_impact(h):
     y = np.array(Y0)
     assert 0.0 < -(cam_fall(T0) - y[0]) < 1e-15  # on the surface, by rounding
     mode = np.array([FALL, FREE], dtype=np.int64)
-    w = make_work(2, 2, h)
-    t = T0
-    which = -1
-    for _ in range(100):
-        status, t, which = free_step(t, t_end, y, np.zeros(2), p, mode, opt, w)
-        assert status == OK
-        if which >= 0 or t >= t_end:
-            break
+    t, which = step_to_event(T0, t_end, y, p, mode, opt, h)
     impact = brentq(lambda s: cam_fall(s) - free_flight(s), T0 + 1e-3, t_end)
     assert which == 0
     assert t == pytest.approx(impact, abs=1e-7)
