@@ -23,8 +23,9 @@ from campar.core.integrator import SolverOptions
 from campar.core.jit import through_numba
 from campar.core.model import FALL, FREE, make_params
 from campar.core.stages import DOP853, method_tag
-from campar.model.compute import model_law
+from campar.model.compute import model_law, run_cells
 from campar.model.model import Model
+from campar.views.point import SAMPLES_PER_STEP
 
 ZETA, F0, MU_KN, MU_CN = 0.2, 0.5, 0.95, 0.8
 OMEGA = 1.3541666666666667  # a cell of the chain ω 6 → 1 (241 cells) at μkn 0.95
@@ -138,3 +139,33 @@ def test_may_cross_says_whether_the_lowest_g_the_bound_allows_reaches_zero():
         decided[lowest < 0.0] += 1
     assert min(decided.values()) > 200
     assert not may_cross(0.5, -0.3, 0.4, 0.2, 0.0)  # a linear g between positive ends
+
+
+def wrong_steps(trace) -> np.ndarray:
+    """Steps of an OrbitTrace whose dense samples leave their mode's side of ε = 0 (beyond
+    1e-9, ε's rounding near an event): in flight ε ≤ 0, in contact ε ≥ 0."""
+    per_step = SAMPLES_PER_STEP
+    keep = np.ones(trace.t.size, bool)
+    keep[0] = False
+    keep[1:] &= trace.t[1:] != trace.t[:-1]  # each revolution opens with its start again
+    eps = trace.eps[keep].reshape(-1, per_step)[:, :-1]
+    mode = trace.contact[keep].reshape(-1, per_step)[:, -1]
+    return np.where(mode == FREE, eps.max(axis=1) > 1e-9, eps.min(axis=1) < -1e-9)
+
+
+@pytest.mark.slow  # compiles the orbit tracer for the cycloidal cam
+def test_no_step_of_a_steady_orbit_holds_a_contact_or_a_flight_without_its_events():
+    """Cycloidal laws at μkn 0.95, f0 1.0, the chain ω 1.60 → 1.46 from rest: at ω 1.52 the
+    steady orbit's flight over the fall holds a second contact (1-2); every step of every
+    cell's orbit, read on its dense output against the cam's exact lift, stays on its
+    mode's side of ε = 0."""
+    omega = np.linspace(6.0, 1.0, 241)[211:219]
+    model = Model.build({"omega": omega[0], "f0": 1.0, "mu_kn": MU_KN, "mu_cn": MU_CN, **CYCLOIDAL})
+    out = run_cells(model, omega=omega, outputs=("label",))
+    labels = []
+    for i, w in enumerate(omega):
+        cell = model.replace(omega=w)
+        result = campar.simulate_point(cell, state=tuple(out.state[i]), trace=True)
+        labels.append(result.label)
+        assert not wrong_steps(result.trace).any(), (w, result.label)
+    assert labels == ["1-1"] * 4 + ["1-2"] * 4

@@ -307,14 +307,20 @@ def point_result(model: Model, cell: dict) -> PointResult:
 
 
 def trace_steady(
-    model: Model, state, revolutions: int, steps: int = 0, law=None
+    model: Model,
+    state,
+    revolutions: int,
+    steps: int = 0,
+    law=None,
+    per_step: int = SAMPLES_PER_STEP,
 ) -> OrbitTrace | None:
     """``revolutions`` revolutions of ``model`` from ``state`` (y, y') at θ = 0, sampled
     densely with the model's integrator settings; ``steps`` the cell's step count (sizes
-    the buffer); ``law`` the kernel's Law (default the model's). None when the
-    integration fails."""
-    max_samples = SAMPLES_PER_STEP * max(steps, 1000) * 4 + 16
-    rec = make_trace(max_samples, 64 * revolutions + 64, SAMPLES_PER_STEP)
+    the buffer); ``law`` the kernel's Law (default the model's); ``per_step`` samples a
+    step, its end included (each revolution opens with a sample of its start). None when
+    the integration fails."""
+    max_samples = per_step * max(steps, 1000) * 4 + 16
+    rec = make_trace(max_samples, 64 * revolutions + 64, per_step)
     status, _, _ = trace_orbit(
         model.omega,
         model.zeta,
