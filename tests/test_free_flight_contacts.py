@@ -7,7 +7,8 @@ ends in contact can hold three roots of ε, of which the first is the event. The
 bounds |ε''| by the phase's largest |S''| and the free follower's energy
 (model.event_curvature, event_roots.may_cross) and reads the dense output where the bound
 cannot rule a root out. Independent references: the free flight in closed form with the
-cycloidal fall (brentq), and SciPy's shooting of the cell's cycle.
+cycloidal fall (brentq), SciPy's shooting of the cell's cycle, and along a chain every
+step's dense output read against the cam's exact lift.
 """
 
 import math
