@@ -38,12 +38,7 @@ def steady_steps(cell) -> tuple[np.ndarray, np.ndarray]:
     trace = trace_steady(cell.model, cell.state, revolutions, steps, per_step=SAMPLES)
     if trace is None:
         raise RuntimeError(f"the trace of {cell.coordinates} failed")
-    # each revolution opens with a sample of its start, the last revolution's end again
-    keep = np.ones(trace.t.size, bool)
-    keep[0] = False
-    keep[1:] &= trace.t[1:] != trace.t[:-1]
-    eps = trace.eps[keep].reshape(-1, SAMPLES)
-    return eps, trace.contact[keep].reshape(-1, SAMPLES)[:, -1]
+    return trace.by_step(trace.eps), trace.by_step(trace.contact)[:, -1]
 
 
 def scan(path: str, cells: int, seed: int) -> None:

@@ -26,7 +26,6 @@ from campar.core.model import FALL, FREE, make_params
 from campar.core.stages import DOP853, method_tag
 from campar.model.compute import model_law, run_cells
 from campar.model.model import Model
-from campar.views.point import SAMPLES_PER_STEP
 
 ZETA, F0, MU_KN, MU_CN = 0.2, 0.5, 0.95, 0.8
 OMEGA = 1.3541666666666667  # a cell of the chain ω 6 → 1 (241 cells) at μkn 0.95
@@ -145,12 +144,8 @@ def test_may_cross_says_whether_the_lowest_g_the_bound_allows_reaches_zero():
 def wrong_steps(trace) -> np.ndarray:
     """Steps of an OrbitTrace whose dense samples leave their mode's side of ε = 0 (beyond
     1e-9, ε's rounding near an event): in flight ε ≤ 0, in contact ε ≥ 0."""
-    per_step = SAMPLES_PER_STEP
-    keep = np.ones(trace.t.size, bool)
-    keep[0] = False
-    keep[1:] &= trace.t[1:] != trace.t[:-1]  # each revolution opens with its start again
-    eps = trace.eps[keep].reshape(-1, per_step)[:, :-1]
-    mode = trace.contact[keep].reshape(-1, per_step)[:, -1]
+    eps = trace.by_step(trace.eps)[:, :-1]
+    mode = trace.by_step(trace.contact)[:, -1]
     return np.where(mode == FREE, eps.max(axis=1) > 1e-9, eps.min(axis=1) < -1e-9)
 
 

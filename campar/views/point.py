@@ -49,6 +49,16 @@ class OrbitTrace:
     events: np.ndarray  # (M, 4): t, y, y', code
     period: float  # one cam revolution, 2π/ω
     cam_phases: tuple[tuple[str, float, float], ...]  # (name, start θ, end θ), CAM_PHASES
+    per_step: int = SAMPLES_PER_STEP  # samples a step, its end included
+
+    def by_step(self, values: np.ndarray) -> np.ndarray:
+        """One of the sampled arrays (``eps``, ``contact``, …) as (steps, per_step): a row
+        a step's samples, its end last. The sample each revolution opens with (the last
+        one's end again, or the start) is left out."""
+        keep = np.ones(self.t.size, bool)
+        keep[0] = False
+        keep[1:] = self.t[1:] != self.t[:-1]
+        return values[keep].reshape(-1, self.per_step)
 
     def events_named(self, name: str) -> np.ndarray:
         """Rows (t, y, y') of the events called ``name`` ("impact", "detachment", …)."""
@@ -348,6 +358,7 @@ def trace_steady(
         events=rec.events[: rec.count[1]].copy(),
         period=2 * math.pi / model.omega,
         cam_phases=cam_phases(model),
+        per_step=per_step,
     )
 
 
